@@ -1,0 +1,594 @@
+//! The occupancy grid: log-odds cells on a fixed-capacity array.
+//!
+//! Cells hold log-odds occupancy `l = ln(p / (1 - p))`, with the prior `p = 0.5` (`l = 0`).
+//! Evidence is added by Bayes' rule in log-odds form (`l <- l + Δ`), saturating at configurable
+//! bounds so a cell can still change its mind (Thrun, Burgard & Fox, *Probabilistic Robotics*,
+//! 2005, ch. 9). Classification follows the thesis (Bendahmane 2023): Occupied if `l > 0`, Free
+//! if `l < 0`, Unknown if exactly 0.
+//!
+//! Geometry: cell `(col, row)` covers `[origin.x + col·res, origin.x + (col+1)·res)` east and
+//! `[origin.y + row·res, origin.y + (row+1)·res)` north; row 0 is the south edge. The flat index
+//! is `row · width + col`.
+//!
+//! The capacity `N` [cells] is a compile-time constant; width and height are chosen at run time
+//! and must fit it. Counters of free, occupied and known cells are kept up to date on every
+//! change, so no query ever scans the grid.
+
+use crate::geometry::Point2;
+use crate::math;
+
+/// Cells in the grid the onboard binary uses: a 30 m x 50 m map at 10 cm (300 x 500 cells)
+/// fits, and so does a 24 m x 24 m map (240 x 240).
+pub const DEFAULT_CELL_CAPACITY: usize = 150_000;
+
+/// Default cell size [m].
+pub const DEFAULT_RESOLUTION_M: f32 = 0.10;
+
+/// A grid cell address: column (east) and row (north), row 0 at the south edge.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Cell {
+    /// Column [cells], growing east.
+    pub col: i32,
+    /// Row [cells], growing north.
+    pub row: i32,
+}
+
+impl Cell {
+    /// The cell at `(col, row)`.
+    pub const fn new(col: i32, row: i32) -> Self {
+        Self { col, row }
+    }
+}
+
+/// What a cell is believed to be.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CellClass {
+    /// Log-odds below 0.
+    Free,
+    /// Log-odds exactly 0: never observed, or evidence cancelled out.
+    Unknown,
+    /// Log-odds above 0.
+    Occupied,
+}
+
+impl CellClass {
+    /// The thesis's rule: Occupied if `l > 0`, Free if `l < 0`, Unknown if `l == 0`.
+    #[inline]
+    pub fn of_log_odds(l: f32) -> Self {
+        if l > 0.0 {
+            CellClass::Occupied
+        } else if l < 0.0 {
+            CellClass::Free
+        } else {
+            CellClass::Unknown
+        }
+    }
+
+    /// Free or Occupied.
+    #[inline]
+    pub fn is_known(self) -> bool {
+        self != CellClass::Unknown
+    }
+}
+
+/// Errors from building or addressing a grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum GridError {
+    /// The requested size needs more cells than the grid's capacity.
+    CapacityExceeded {
+        /// Cells the geometry needs.
+        needed: usize,
+        /// Cells the grid type holds.
+        capacity: usize,
+    },
+    /// Width or height is zero.
+    EmptyGrid,
+    /// The resolution is not a positive finite number [m].
+    BadResolution(f32),
+    /// The origin is not finite.
+    BadOrigin,
+    /// Log-odds bounds must satisfy `min < 0 < max`.
+    BadBounds {
+        /// Lower bound.
+        min: f32,
+        /// Upper bound.
+        max: f32,
+    },
+}
+
+impl core::fmt::Display for GridError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            GridError::CapacityExceeded { needed, capacity } => write!(
+                f,
+                "grid needs {needed} cells but its capacity is {capacity} cells"
+            ),
+            GridError::EmptyGrid => write!(f, "grid width and height must be at least one cell"),
+            GridError::BadResolution(r) => {
+                write!(f, "grid resolution must be a positive number of metres, got {r}")
+            }
+            GridError::BadOrigin => write!(f, "grid origin must be finite"),
+            GridError::BadBounds { min, max } => write!(
+                f,
+                "log-odds bounds must satisfy min < 0 < max, got min {min}, max {max}"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for GridError {}
+
+/// Size and placement of a grid in the map frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridGeometry {
+    /// Columns [cells].
+    pub width: usize,
+    /// Rows [cells].
+    pub height: usize,
+    /// Cell side [m].
+    pub resolution_m: f32,
+    /// Map-frame position of the south-west corner of cell (0, 0) [m].
+    pub origin: Point2,
+}
+
+impl GridGeometry {
+    /// A checked geometry.
+    pub fn new(
+        width: usize,
+        height: usize,
+        resolution_m: f32,
+        origin: Point2,
+    ) -> Result<Self, GridError> {
+        if width == 0 || height == 0 {
+            return Err(GridError::EmptyGrid);
+        }
+        if !(resolution_m.is_finite() && resolution_m > 0.0) {
+            return Err(GridError::BadResolution(resolution_m));
+        }
+        if !(origin.x.is_finite() && origin.y.is_finite()) {
+            return Err(GridError::BadOrigin);
+        }
+        Ok(Self {
+            width,
+            height,
+            resolution_m,
+            origin,
+        })
+    }
+
+    /// A geometry covering `width_m` x `height_m` metres from `origin` (sizes rounded up to
+    /// whole cells).
+    pub fn from_extent(
+        width_m: f32,
+        height_m: f32,
+        resolution_m: f32,
+        origin: Point2,
+    ) -> Result<Self, GridError> {
+        if !(resolution_m.is_finite() && resolution_m > 0.0) {
+            return Err(GridError::BadResolution(resolution_m));
+        }
+        // Tolerate float noise such as 24.0 / 0.1 = 240.00001.
+        let cols = math::ceil(width_m / resolution_m - 1e-3).max(0.0) as usize;
+        let rows = math::ceil(height_m / resolution_m - 1e-3).max(0.0) as usize;
+        Self::new(cols, rows, resolution_m, origin)
+    }
+
+    /// Number of cells.
+    #[inline]
+    pub fn cell_count(&self) -> usize {
+        self.width * self.height
+    }
+
+    /// Width [m].
+    pub fn width_m(&self) -> f32 {
+        self.width as f32 * self.resolution_m
+    }
+
+    /// Height [m].
+    pub fn height_m(&self) -> f32 {
+        self.height as f32 * self.resolution_m
+    }
+
+    /// Whether the cell lies inside the grid.
+    #[inline]
+    pub fn contains(&self, cell: Cell) -> bool {
+        cell.col >= 0
+            && cell.row >= 0
+            && (cell.col as usize) < self.width
+            && (cell.row as usize) < self.height
+    }
+
+    /// Flat index of a cell inside the grid.
+    #[inline]
+    pub fn index(&self, cell: Cell) -> Option<usize> {
+        if self.contains(cell) {
+            Some(cell.row as usize * self.width + cell.col as usize)
+        } else {
+            None
+        }
+    }
+
+    /// The cell at a flat index (the index must be below [`Self::cell_count`]).
+    #[inline]
+    pub fn cell(&self, index: usize) -> Cell {
+        Cell {
+            col: (index % self.width) as i32,
+            row: (index / self.width) as i32,
+        }
+    }
+
+    /// The cell containing a map-frame point, whether or not it is inside the grid.
+    #[inline]
+    pub fn cell_at_unchecked(&self, p: Point2) -> Cell {
+        Cell {
+            col: math::floor((p.x - self.origin.x) / self.resolution_m) as i32,
+            row: math::floor((p.y - self.origin.y) / self.resolution_m) as i32,
+        }
+    }
+
+    /// The cell containing a map-frame point, if it is inside the grid.
+    #[inline]
+    pub fn cell_at(&self, p: Point2) -> Option<Cell> {
+        let c = self.cell_at_unchecked(p);
+        self.contains(c).then_some(c)
+    }
+
+    /// Map-frame centre of a cell [m].
+    #[inline]
+    pub fn cell_center(&self, cell: Cell) -> Point2 {
+        Point2 {
+            x: self.origin.x + (cell.col as f32 + 0.5) * self.resolution_m,
+            y: self.origin.y + (cell.row as f32 + 0.5) * self.resolution_m,
+        }
+    }
+
+    /// Whether a map-frame point lies inside the grid's extent.
+    pub fn contains_point(&self, p: Point2) -> bool {
+        self.cell_at(p).is_some()
+    }
+}
+
+/// Saturation bounds of the log-odds.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+pub struct LogOddsBounds {
+    /// Lowest value (most certainly free); negative.
+    pub min: f32,
+    /// Highest value (most certainly occupied); positive.
+    pub max: f32,
+}
+
+impl Default for LogOddsBounds {
+    /// ±3.5, i.e. p in [0.03, 0.97]: certain enough to plan on, yet a few contrary readings
+    /// (a door that opens) flip a cell.
+    fn default() -> Self {
+        Self {
+            min: -3.5,
+            max: 3.5,
+        }
+    }
+}
+
+impl LogOddsBounds {
+    fn check(self) -> Result<Self, GridError> {
+        if self.min < 0.0 && self.max > 0.0 && self.min.is_finite() && self.max.is_finite() {
+            Ok(self)
+        } else {
+            Err(GridError::BadBounds {
+                min: self.min,
+                max: self.max,
+            })
+        }
+    }
+}
+
+/// Counters of cell classes, maintained incrementally.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CellCounts {
+    /// Free cells.
+    pub free: usize,
+    /// Occupied cells.
+    pub occupied: usize,
+}
+
+impl CellCounts {
+    /// Known (free or occupied) cells.
+    #[inline]
+    pub fn known(&self) -> usize {
+        self.free + self.occupied
+    }
+}
+
+/// Told about every cell whose class changes, so derived layers (the planner's inflation, a
+/// frontier set, a change log) stay current without rescanning the grid.
+pub trait CellObserver {
+    /// Cell `index` went from `old` to `new` (`old != new`).
+    fn class_changed(&mut self, index: usize, old: CellClass, new: CellClass);
+}
+
+/// Observes nothing.
+impl CellObserver for () {
+    #[inline]
+    fn class_changed(&mut self, _index: usize, _old: CellClass, _new: CellClass) {}
+}
+
+impl<F: FnMut(usize, CellClass, CellClass)> CellObserver for F {
+    #[inline]
+    fn class_changed(&mut self, index: usize, old: CellClass, new: CellClass) {
+        self(index, old, new)
+    }
+}
+
+/// An occupancy grid holding up to `N` cells.
+#[derive(Clone)]
+pub struct OccupancyGrid<const N: usize> {
+    geometry: GridGeometry,
+    bounds: LogOddsBounds,
+    counts: CellCounts,
+    log_odds: [f32; N],
+}
+
+impl<const N: usize> core::fmt::Debug for OccupancyGrid<N> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("OccupancyGrid")
+            .field("geometry", &self.geometry)
+            .field("bounds", &self.bounds)
+            .field("counts", &self.counts)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<const N: usize> OccupancyGrid<N> {
+    /// Capacity [cells].
+    pub const CAPACITY: usize = N;
+
+    /// An all-Unknown grid, built on the stack. For large `N` on a host, prefer
+    /// [`Self::new_boxed`].
+    pub fn new(geometry: GridGeometry, bounds: LogOddsBounds) -> Result<Self, GridError> {
+        Self::check_fits(&geometry)?;
+        Ok(Self {
+            geometry,
+            bounds: bounds.check()?,
+            counts: CellCounts::default(),
+            log_odds: [0.0; N],
+        })
+    }
+
+    /// An all-Unknown grid built directly on the heap (never on the stack, whatever `N`).
+    #[cfg(feature = "std")]
+    pub fn new_boxed(
+        geometry: GridGeometry,
+        bounds: LogOddsBounds,
+    ) -> Result<std::boxed::Box<Self>, GridError> {
+        Self::check_fits(&geometry)?;
+        let bounds = bounds.check()?;
+        let zeroed = std::boxed::Box::<Self>::new_zeroed();
+        // SAFETY: every field of `Self` is plain data (`usize`, `f32` and arrays of them) for
+        // which the all-zero bit pattern is a valid value; zero log-odds is Unknown and the
+        // zero counters match it.
+        let mut grid = unsafe { zeroed.assume_init() };
+        grid.geometry = geometry;
+        grid.bounds = bounds;
+        Ok(grid)
+    }
+
+    fn check_fits(geometry: &GridGeometry) -> Result<(), GridError> {
+        if geometry.cell_count() > N {
+            return Err(GridError::CapacityExceeded {
+                needed: geometry.cell_count(),
+                capacity: N,
+            });
+        }
+        Ok(())
+    }
+
+    /// Forgets everything and takes a new geometry: all cells Unknown.
+    pub fn reset(&mut self, geometry: GridGeometry) -> Result<(), GridError> {
+        Self::check_fits(&geometry)?;
+        self.geometry = geometry;
+        self.log_odds[..geometry.cell_count()].fill(0.0);
+        self.counts = CellCounts::default();
+        Ok(())
+    }
+
+    /// Size and placement.
+    #[inline]
+    pub fn geometry(&self) -> &GridGeometry {
+        &self.geometry
+    }
+
+    /// Saturation bounds.
+    #[inline]
+    pub fn bounds(&self) -> LogOddsBounds {
+        self.bounds
+    }
+
+    /// Incrementally maintained class counters.
+    #[inline]
+    pub fn counts(&self) -> CellCounts {
+        self.counts
+    }
+
+    /// Number of cells in use.
+    #[inline]
+    pub fn cell_count(&self) -> usize {
+        self.geometry.cell_count()
+    }
+
+    /// Log-odds of the cells in use, in flat-index order.
+    #[inline]
+    pub fn log_odds(&self) -> &[f32] {
+        &self.log_odds[..self.geometry.cell_count()]
+    }
+
+    /// Log-odds at a flat index (panics on an index past [`Self::cell_count`], a caller bug).
+    #[inline]
+    pub fn log_odds_at(&self, index: usize) -> f32 {
+        self.log_odds[index]
+    }
+
+    /// Class at a flat index.
+    #[inline]
+    pub fn class(&self, index: usize) -> CellClass {
+        CellClass::of_log_odds(self.log_odds[index])
+    }
+
+    /// Class of a cell; `None` outside the grid.
+    #[inline]
+    pub fn class_of(&self, cell: Cell) -> Option<CellClass> {
+        self.geometry.index(cell).map(|i| self.class(i))
+    }
+
+    /// Adds log-odds evidence `delta` to a cell (Bayes' rule in log-odds form), saturating at
+    /// the bounds. Returns the cell's class before and after.
+    #[inline]
+    pub fn add_evidence(
+        &mut self,
+        index: usize,
+        delta: f32,
+        observer: &mut impl CellObserver,
+    ) -> (CellClass, CellClass) {
+        let value = (self.log_odds[index] + delta).clamp(self.bounds.min, self.bounds.max);
+        self.set_log_odds(index, value, observer)
+    }
+
+    /// Sets a cell's log-odds (clamped to the bounds). Returns its class before and after.
+    pub fn set_log_odds(
+        &mut self,
+        index: usize,
+        value: f32,
+        observer: &mut impl CellObserver,
+    ) -> (CellClass, CellClass) {
+        let value = if value.is_nan() {
+            0.0
+        } else {
+            value.clamp(self.bounds.min, self.bounds.max)
+        };
+        let old = self.class(index);
+        self.log_odds[index] = value;
+        let new = CellClass::of_log_odds(value);
+        if old != new {
+            self.count(old, -1);
+            self.count(new, 1);
+            observer.class_changed(index, old, new);
+        }
+        (old, new)
+    }
+
+    /// Sets a cell to a class with the bounds' certainty (Occupied: max, Free: min, Unknown: 0).
+    pub fn set_class(
+        &mut self,
+        index: usize,
+        class: CellClass,
+        observer: &mut impl CellObserver,
+    ) -> (CellClass, CellClass) {
+        let value = match class {
+            CellClass::Free => self.bounds.min,
+            CellClass::Unknown => 0.0,
+            CellClass::Occupied => self.bounds.max,
+        };
+        self.set_log_odds(index, value, observer)
+    }
+
+    #[inline]
+    fn count(&mut self, class: CellClass, delta: isize) {
+        let slot = match class {
+            CellClass::Free => &mut self.counts.free,
+            CellClass::Occupied => &mut self.counts.occupied,
+            CellClass::Unknown => return,
+        };
+        *slot = slot.wrapping_add_signed(delta);
+    }
+
+    /// Recounts every cell (for tests and after bulk loads; normal updates keep the counters).
+    pub fn recount(&mut self) -> CellCounts {
+        let mut counts = CellCounts::default();
+        for &l in self.log_odds() {
+            match CellClass::of_log_odds(l) {
+                CellClass::Free => counts.free += 1,
+                CellClass::Occupied => counts.occupied += 1,
+                CellClass::Unknown => {}
+            }
+        }
+        self.counts = counts;
+        counts
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small() -> OccupancyGrid<100> {
+        let g = GridGeometry::new(10, 10, 0.1, Point2::new(0.0, 0.0)).unwrap();
+        OccupancyGrid::new(g, LogOddsBounds::default()).unwrap()
+    }
+
+    #[test]
+    fn classification_follows_the_sign_of_the_log_odds() {
+        assert_eq!(CellClass::of_log_odds(0.0), CellClass::Unknown);
+        assert_eq!(CellClass::of_log_odds(-0.0), CellClass::Unknown);
+        assert_eq!(CellClass::of_log_odds(1e-6), CellClass::Occupied);
+        assert_eq!(CellClass::of_log_odds(-1e-6), CellClass::Free);
+    }
+
+    #[test]
+    fn capacity_is_checked() {
+        let g = GridGeometry::new(11, 10, 0.1, Point2::default()).unwrap();
+        assert_eq!(
+            OccupancyGrid::<100>::new(g, LogOddsBounds::default()).unwrap_err(),
+            GridError::CapacityExceeded {
+                needed: 110,
+                capacity: 100
+            }
+        );
+    }
+
+    #[test]
+    fn default_capacity_fits_the_thesis_and_factory_maps() {
+        let house = GridGeometry::from_extent(24.0, 24.0, 0.1, Point2::default()).unwrap();
+        let factory = GridGeometry::from_extent(30.0, 50.0, 0.1, Point2::default()).unwrap();
+        assert_eq!((house.width, house.height), (240, 240));
+        assert_eq!((factory.width, factory.height), (300, 500));
+        assert!(house.cell_count() <= DEFAULT_CELL_CAPACITY);
+        assert!(factory.cell_count() <= DEFAULT_CELL_CAPACITY);
+    }
+
+    #[test]
+    fn evidence_saturates_and_counters_follow() {
+        let mut g = small();
+        let mut changes = 0;
+        let mut obs = |_i: usize, _o: CellClass, _n: CellClass| changes += 1;
+        for _ in 0..100 {
+            g.add_evidence(5, 0.9, &mut obs);
+        }
+        assert_eq!(g.log_odds_at(5), g.bounds().max);
+        assert_eq!(g.counts().occupied, 1);
+        g.add_evidence(5, -10.0, &mut obs);
+        assert_eq!(g.class(5), CellClass::Free);
+        assert_eq!(g.counts(), CellCounts { free: 1, occupied: 0 });
+        assert_eq!(changes, 2);
+    }
+
+    #[test]
+    fn cell_addressing_puts_row_zero_south() {
+        let geom = GridGeometry::new(4, 3, 0.5, Point2::new(-1.0, 2.0)).unwrap();
+        assert_eq!(geom.cell_at(Point2::new(-0.9, 2.1)), Some(Cell::new(0, 0)));
+        assert_eq!(geom.cell_at(Point2::new(0.9, 3.4)), Some(Cell::new(3, 2)));
+        assert_eq!(geom.cell_at(Point2::new(1.1, 2.1)), None);
+        assert_eq!(geom.index(Cell::new(3, 2)), Some(11));
+        assert_eq!(geom.cell(11), Cell::new(3, 2));
+        let c = geom.cell_center(Cell::new(1, 1));
+        assert!((c.x - (-0.25)).abs() < 1e-6 && (c.y - 2.75).abs() < 1e-6);
+    }
+
+    #[cfg(feature = "std")]
+    #[test]
+    fn boxed_grid_of_default_capacity_starts_unknown() {
+        let geom = GridGeometry::from_extent(30.0, 50.0, 0.1, Point2::default()).unwrap();
+        let g = OccupancyGrid::<DEFAULT_CELL_CAPACITY>::new_boxed(geom, LogOddsBounds::default())
+            .unwrap();
+        assert_eq!(g.counts().known(), 0);
+        assert!(g.log_odds().iter().all(|&l| l == 0.0));
+    }
+}

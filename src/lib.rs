@@ -1,0 +1,37 @@
+//! Papillon: autonomous exploration for the Pioneer P3-DX.
+//!
+//! The core is sans-IO, `no_std` and allocation-free: it is fed time, bytes, scans and a seeded
+//! random number generator, and returns commands. The onboard runtime (feature `onboard`) and
+//! the host simulator (`papillon-sim`) are two pumps around it. See `docs/architecture.md`.
+//!
+//! Layers, bottom up:
+//! - [`math`], [`units`], [`geometry`], [`random`]: numbers, units and frames.
+//! - [`grid`], [`raycast`], [`sensor`], [`frontier`]: the occupancy grid and the LIDAR model.
+//! - [`planner`]: traversability, A*, distance fields, waypoints.
+//! - [`optim`]: xBOA and the methods the thesis compares.
+//! - [`explore`]: the exploration objective and target selectors.
+//! - [`control`]: odometry, PID, path following, safety.
+//! - [`mission`]: the mission state machine, one or several robots.
+//! - [`wire`]: ARCOS, SICK LMS1xx (CoLa-A) and LMS200 wire formats.
+#![cfg_attr(not(feature = "std"), no_std)]
+#![warn(missing_docs)]
+
+pub mod control;
+pub mod explore;
+pub mod frontier;
+pub mod geometry;
+pub mod grid;
+#[cfg(feature = "std")]
+pub mod mapfile;
+pub mod math;
+pub mod mission;
+pub mod optim;
+pub mod planner;
+pub mod random;
+pub mod raycast;
+pub mod sensor;
+pub mod units;
+pub mod wire;
+
+#[cfg(feature = "onboard")]
+pub mod onboard;
