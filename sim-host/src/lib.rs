@@ -1,1 +1,4 @@
+//! The host simulator: worlds, physics, laser simulation, emulated hardware, experiments.
+#![warn(missing_docs)]
 
+pub mod cli;

@@ -1,1 +1,31 @@
-fn main(){}
+//! `papillon-sim`: the host simulator's command line.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use papillon_sim::cli;
+
+/// Papillon's host simulator: missions, experiments, emulated hardware and benchmarks.
+#[derive(Parser)]
+#[command(name = "papillon-sim", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the optimizers on standard test functions.
+    Optimize(cli::optimize::Args),
+    /// Solve a Moving AI path-finding benchmark with Papillon's A*.
+    Plan(cli::plan::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Optimize(args) => cli::optimize::run(args),
+        Command::Plan(args) => cli::plan::run(args),
+    }
+}

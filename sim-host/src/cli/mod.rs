@@ -1,0 +1,4 @@
+//! Subcommands of `papillon-sim`, one module each.
+
+pub mod optimize;
+pub mod plan;
