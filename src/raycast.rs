@@ -421,7 +421,7 @@ mod tests {
             // Fine end points, or coarse ones (multiples of half a cell) that hit grid corners
             // and run along grid lines; some start or end outside the grid.
             let quantum = if case % 2 == 0 { 1 } else { S / 2 };
-            let mut point = |rng: &mut _| {
+            let point = |rng: &mut _| {
                 let x = range_f32(rng, -6.0, 29.0);
                 let y = range_f32(rng, -6.0, 23.0);
                 let q = |v: f32| ((v * S as f32) as i64 / quantum) * quantum;
