@@ -119,6 +119,35 @@ impl core::fmt::Display for GridError {
 
 impl core::error::Error for GridError {}
 
+/// Errors from [`OccupancyGrid::coverage`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum CoverageError {
+    /// The mask must hold one entry per grid cell.
+    MaskLength {
+        /// Cells in the grid.
+        expected: usize,
+        /// Entries in the mask.
+        got: usize,
+    },
+    /// The mask selects no cell, so coverage is undefined.
+    EmptyMask,
+}
+
+impl core::fmt::Display for CoverageError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            CoverageError::MaskLength { expected, got } => write!(
+                f,
+                "coverage mask has {got} entries but the grid has {expected} cells"
+            ),
+            CoverageError::EmptyMask => write!(f, "coverage mask selects no cell"),
+        }
+    }
+}
+
+impl core::error::Error for CoverageError {}
+
 /// Size and placement of a grid in the map frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridGeometry {
@@ -500,6 +529,27 @@ impl<const N: usize> OccupancyGrid<N> {
         *slot = slot.wrapping_add_signed(delta);
     }
 
+    /// Coverage: the fraction of the cells selected by `truth_mask` (one entry per cell, in
+    /// flat-index order; `true` = a cell that can be observed, as supplied by the simulator)
+    /// that are known (Free or Occupied). In `[0, 1]`.
+    pub fn coverage(&self, truth_mask: &[bool]) -> Result<f32, CoverageError> {
+        if truth_mask.len() != self.cell_count() {
+            return Err(CoverageError::MaskLength {
+                expected: self.cell_count(),
+                got: truth_mask.len(),
+            });
+        }
+        let (mut selected, mut known) = (0usize, 0usize);
+        for (&l, &m) in self.log_odds().iter().zip(truth_mask) {
+            selected += m as usize;
+            known += (m && l != 0.0) as usize;
+        }
+        if selected == 0 {
+            return Err(CoverageError::EmptyMask);
+        }
+        Ok(known as f32 / selected as f32)
+    }
+
     /// Recounts every cell (for tests and after bulk loads; normal updates keep the counters).
     pub fn recount(&mut self) -> CellCounts {
         let mut counts = CellCounts::default();
@@ -580,6 +630,66 @@ mod tests {
         assert_eq!(geom.cell(11), Cell::new(3, 2));
         let c = geom.cell_center(Cell::new(1, 1));
         assert!((c.x - (-0.25)).abs() < 1e-6 && (c.y - 2.75).abs() < 1e-6);
+    }
+
+    #[test]
+    fn counters_equal_a_full_recount_after_random_updates() {
+        use crate::random::{below, range_f32, seeded};
+        let mut rng = seeded(3);
+        let mut g = small();
+        let mut changes = 0usize;
+        for step in 0..20_000 {
+            let i = below(&mut rng, 100);
+            let mut obs = |_i: usize, o: CellClass, n: CellClass| {
+                assert_ne!(o, n);
+                changes += 1;
+            };
+            match below(&mut rng, 4) {
+                0 => {
+                    g.add_evidence(i, range_f32(&mut rng, -2.0, 2.0), &mut obs);
+                }
+                1 => {
+                    let class = [CellClass::Free, CellClass::Unknown, CellClass::Occupied]
+                        [below(&mut rng, 3)];
+                    g.set_class(i, class, &mut obs);
+                }
+                2 => {
+                    g.set_log_odds(i, 0.0, &mut obs);
+                }
+                _ => {
+                    // Evidence that exactly cancels brings a cell back to Unknown.
+                    let l = g.log_odds_at(i);
+                    g.add_evidence(i, -l, &mut obs);
+                }
+            }
+            if step % 97 == 0 {
+                let kept = g.counts();
+                assert_eq!(kept, g.clone().recount(), "step {step}");
+            }
+        }
+        let kept = g.counts();
+        assert_eq!(kept, g.recount());
+        assert!(changes > 1000);
+    }
+
+    #[test]
+    fn coverage_counts_known_cells_in_the_mask() {
+        let mut g = small();
+        let mut mask = [false; 100];
+        mask[..10].fill(true);
+        assert_eq!(g.coverage(&mask), Ok(0.0));
+        g.set_class(0, CellClass::Free, &mut ());
+        g.set_class(1, CellClass::Occupied, &mut ());
+        g.set_class(50, CellClass::Free, &mut ());
+        assert_eq!(g.coverage(&mask), Ok(0.2));
+        assert_eq!(
+            g.coverage(&mask[..5]),
+            Err(CoverageError::MaskLength {
+                expected: 100,
+                got: 5
+            })
+        );
+        assert_eq!(g.coverage(&[false; 100]), Err(CoverageError::EmptyMask));
     }
 
     #[cfg(feature = "std")]
