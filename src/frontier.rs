@@ -136,10 +136,9 @@ impl<const CELLS: usize, const FRONTIERS: usize> FrontierWorkspace<CELLS, FRONTI
     /// An empty workspace built directly on the heap.
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
-        let zeroed = std::boxed::Box::<Self>::new_zeroed();
         // SAFETY: every field is an integer, an `f32` or an array of plain structs of them,
         // for which all-zero bits are valid; zero lengths mean empty.
-        unsafe { zeroed.assume_init() }
+        unsafe { crate::grid::boxed_zeroed::<Self>() }
     }
 
     /// The frontiers of the last search, in the order of their lowest flat index.
@@ -189,9 +188,9 @@ pub fn is_frontier_cell<const N: usize>(grid: &OccupancyGrid<N>, index: usize) -
     }
     let geom = grid.geometry();
     let c = geom.cell(index);
-    [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|&(dc, dr)| {
-        grid.class_of(Cell::new(c.col + dc, c.row + dr)) == Some(CellClass::Free)
-    })
+    [(1, 0), (-1, 0), (0, 1), (0, -1)]
+        .iter()
+        .any(|&(dc, dr)| grid.class_of(Cell::new(c.col + dc, c.row + dr)) == Some(CellClass::Free))
 }
 
 /// Finds the frontiers of `grid` with at least `config.min_size_cells` cells, and in each the

@@ -106,7 +106,10 @@ impl core::fmt::Display for GridError {
             ),
             GridError::EmptyGrid => write!(f, "grid width and height must be at least one cell"),
             GridError::BadResolution(r) => {
-                write!(f, "grid resolution must be a positive number of metres, got {r}")
+                write!(
+                    f,
+                    "grid resolution must be a positive number of metres, got {r}"
+                )
             }
             GridError::BadOrigin => write!(f, "grid origin must be finite"),
             GridError::BadBounds { min, max } => write!(
@@ -278,6 +281,29 @@ impl GridGeometry {
     }
 }
 
+/// A zero-filled `T` allocated directly on the heap, never on the stack (for large
+/// fixed-capacity structures on a host).
+///
+/// # Safety
+/// The all-zero bit pattern must be a valid `T`.
+#[cfg(feature = "std")]
+pub(crate) unsafe fn boxed_zeroed<T>() -> std::boxed::Box<T> {
+    let layout = std::alloc::Layout::new::<T>();
+    if layout.size() == 0 {
+        // SAFETY: the caller guarantees zero bits are a valid `T`; a zero-sized value
+        // occupies no stack.
+        return std::boxed::Box::new(unsafe { core::mem::zeroed() });
+    }
+    // SAFETY: the layout has a non-zero size.
+    let ptr = unsafe { std::alloc::alloc_zeroed(layout) } as *mut T;
+    if ptr.is_null() {
+        std::alloc::handle_alloc_error(layout);
+    }
+    // SAFETY: `ptr` was allocated by the global allocator with `T`'s layout and holds a valid
+    // (all-zero) `T`, as the caller guarantees.
+    unsafe { std::boxed::Box::from_raw(ptr) }
+}
+
 /// Saturation bounds of the log-odds.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
 pub struct LogOddsBounds {
@@ -391,11 +417,10 @@ impl<const N: usize> OccupancyGrid<N> {
     ) -> Result<std::boxed::Box<Self>, GridError> {
         Self::check_fits(&geometry)?;
         let bounds = bounds.check()?;
-        let zeroed = std::boxed::Box::<Self>::new_zeroed();
         // SAFETY: every field of `Self` is plain data (`usize`, `f32` and arrays of them) for
         // which the all-zero bit pattern is a valid value; zero log-odds is Unknown and the
         // zero counters match it.
-        let mut grid = unsafe { zeroed.assume_init() };
+        let mut grid = unsafe { boxed_zeroed::<Self>() };
         grid.geometry = geometry;
         grid.bounds = bounds;
         Ok(grid)
@@ -616,7 +641,13 @@ mod tests {
         assert_eq!(g.counts().occupied, 1);
         g.add_evidence(5, -10.0, &mut obs);
         assert_eq!(g.class(5), CellClass::Free);
-        assert_eq!(g.counts(), CellCounts { free: 1, occupied: 0 });
+        assert_eq!(
+            g.counts(),
+            CellCounts {
+                free: 1,
+                occupied: 0
+            }
+        );
         assert_eq!(changes, 2);
     }
 

@@ -248,11 +248,15 @@ pub fn write_map_image(map: &MapImage, yaml_path: &Path) -> Result<(), MapFileEr
     pgm.reserve(g.cell_count());
     for image_row in 0..g.height {
         let row = g.height - 1 - image_row;
-        pgm.extend(map.cells[row * g.width..(row + 1) * g.width].iter().map(|c| match c {
-            CellClass::Free => PIXEL_FREE,
-            CellClass::Occupied => PIXEL_OCCUPIED,
-            CellClass::Unknown => PIXEL_UNKNOWN,
-        }));
+        pgm.extend(
+            map.cells[row * g.width..(row + 1) * g.width]
+                .iter()
+                .map(|c| match c {
+                    CellClass::Free => PIXEL_FREE,
+                    CellClass::Occupied => PIXEL_OCCUPIED,
+                    CellClass::Unknown => PIXEL_UNKNOWN,
+                }),
+        );
     }
     write_atomically(&pgm_path, &pgm)?;
     let image_name = pgm_path
@@ -420,7 +424,11 @@ pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
         let (image_row, col) = (k / pgm.width, k % pgm.width);
         let row = pgm.height - 1 - image_row;
         let v = v as f32;
-        let p = if negate { v / maxval } else { (maxval - v) / maxval };
+        let p = if negate {
+            v / maxval
+        } else {
+            (maxval - v) / maxval
+        };
         cells[row * pgm.width + col] = if p > occupied_thresh {
             CellClass::Occupied
         } else if p < free_thresh {
@@ -503,10 +511,7 @@ fn parse_pgm(path: &Path, bytes: &[u8]) -> Result<Pgm, MapFileError> {
         let mut rest = &bytes[pos..];
         let mut offset = pos;
         while pixels.len() < count {
-            let skip = rest
-                .iter()
-                .take_while(|b| b.is_ascii_whitespace())
-                .count();
+            let skip = rest.iter().take_while(|b| b.is_ascii_whitespace()).count();
             rest = &rest[skip..];
             offset += skip;
             if rest.is_empty() {
@@ -517,10 +522,7 @@ fn parse_pgm(path: &Path, bytes: &[u8]) -> Result<Pgm, MapFileError> {
                 .ok()
                 .and_then(|s| s.parse::<u32>().ok())
                 .filter(|&v| v as usize <= maxval)
-                .ok_or(MapFileError::BadPixel {
-                    path: p(),
-                    offset,
-                })?;
+                .ok_or(MapFileError::BadPixel { path: p(), offset })?;
             pixels.push(v as u16);
             rest = &rest[len..];
             offset += len;
@@ -538,11 +540,13 @@ fn parse_pgm(path: &Path, bytes: &[u8]) -> Result<Pgm, MapFileError> {
         let wide = maxval > 255;
         let per = if wide { 2 } else { 1 };
         let available = data.len() / per;
-        pixels.extend(
-            data.chunks_exact(per)
-                .take(count)
-                .map(|c| if wide { u16::from_be_bytes([c[0], c[1]]) } else { c[0] as u16 }),
-        );
+        pixels.extend(data.chunks_exact(per).take(count).map(|c| {
+            if wide {
+                u16::from_be_bytes([c[0], c[1]])
+            } else {
+                c[0] as u16
+            }
+        }));
         if available >= count
             && let Some(k) = pixels.iter().position(|&v| v as usize > maxval)
         {
@@ -574,7 +578,8 @@ mod tests {
     use crate::random::{below, seeded};
 
     fn temp_dir(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("papillon-mapfile-{name}-{}", std::process::id()));
+        let d =
+            std::env::temp_dir().join(format!("papillon-mapfile-{name}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&d);
         fs::create_dir_all(&d).unwrap();
         d
@@ -620,7 +625,11 @@ mod tests {
     fn ascii_pgm_negate_and_thresholds_are_honoured() {
         let dir = temp_dir("ascii");
         // 3 x 2, maxval 100, comment in the header; negate: p = v / maxval.
-        fs::write(dir.join("w.pgm"), "P2\n# a comment\n3 2\n100\n0 50 100\n10 90 64\n").unwrap();
+        fs::write(
+            dir.join("w.pgm"),
+            "P2\n# a comment\n3 2\n100\n0 50 100\n10 90 64\n",
+        )
+        .unwrap();
         fs::write(
             dir.join("w.yaml"),
             "image: w.pgm\nresolution: 0.5\norigin: [1.0, -2, 0.0]\nnegate: 1\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
@@ -650,14 +659,32 @@ mod tests {
         let e = error_of(GOOD_YAML, b"P6\n2 2\n255\n\0\0\0\0");
         assert!(e.contains("m.pgm") && e.contains("`P6`"), "{e}");
         let e = error_of(GOOD_YAML, b"P5\n2 2\n255\n\0\0\0");
-        assert!(e.contains("m.pgm") && e.contains("truncated") && e.contains("3 of 4"), "{e}");
+        assert!(
+            e.contains("m.pgm") && e.contains("truncated") && e.contains("3 of 4"),
+            "{e}"
+        );
         let e = error_of(GOOD_YAML, b"P5\n2 x\n255\n\0\0\0\0");
-        assert!(e.contains("m.pgm") && e.contains("byte 5") && e.contains("height"), "{e}");
-        let e = error_of(&GOOD_YAML.replace("resolution: 0.1\n", ""), b"P5\n1 1\n255\n\0");
-        assert!(e.contains("m.yaml") && e.contains("missing key `resolution`"), "{e}");
+        assert!(
+            e.contains("m.pgm") && e.contains("byte 5") && e.contains("height"),
+            "{e}"
+        );
+        let e = error_of(
+            &GOOD_YAML.replace("resolution: 0.1\n", ""),
+            b"P5\n1 1\n255\n\0",
+        );
+        assert!(
+            e.contains("m.yaml") && e.contains("missing key `resolution`"),
+            "{e}"
+        );
         let e = error_of(&GOOD_YAML.replace("0.1", "ten cm"), b"P5\n1 1\n255\n\0");
-        assert!(e.contains("m.yaml:2") && e.contains("`ten cm`") && e.contains("a number"), "{e}");
-        let e = error_of(&GOOD_YAML.replace("[0.0, 0.0, 0.0]", "[0.0, 0.0]"), b"P5\n1 1\n255\n\0");
+        assert!(
+            e.contains("m.yaml:2") && e.contains("`ten cm`") && e.contains("a number"),
+            "{e}"
+        );
+        let e = error_of(
+            &GOOD_YAML.replace("[0.0, 0.0, 0.0]", "[0.0, 0.0]"),
+            b"P5\n1 1\n255\n\0",
+        );
         assert!(e.contains("m.yaml:3") && e.contains("origin"), "{e}");
         let e = error_of(GOOD_YAML, b"P2\n2 1\n255\n3 300\n");
         assert!(e.contains("m.pgm") && e.contains("maxval"), "{e}");

@@ -74,7 +74,7 @@ pub fn traverse(
 ) -> Traversal {
     let mut ray = RayCells::new(geom, from, to);
     let mut visited = 0;
-    while let Some((cell, index)) = ray.next() {
+    for (cell, index) in ray.by_ref() {
         visited += 1;
         if visit(cell, index).is_break() {
             return Traversal {
@@ -270,9 +270,7 @@ impl RayCells {
     fn advance(&mut self) {
         let (step_x, step_y) = if self.left_col == 0 {
             (false, true)
-        } else if self.left_row == 0 {
-            (true, false)
-        } else if self.next_x < self.next_y {
+        } else if self.left_row == 0 || self.next_x < self.next_y {
             (true, false)
         } else if self.next_y < self.next_x {
             (false, true)
@@ -463,7 +461,10 @@ mod tests {
                 assert_eq!(got.last(), Some(&end));
             }
         }
-        assert!(corner_cases > 50, "only {corner_cases} diagonal steps exercised");
+        assert!(
+            corner_cases > 50,
+            "only {corner_cases} diagonal steps exercised"
+        );
     }
 
     #[test]
@@ -528,7 +529,9 @@ mod tests {
             []
         );
         assert_eq!(
-            walk(&geom, Point2::new(f32::NAN, 0.0), Point2::new(0.5, 0.5)).1.end,
+            walk(&geom, Point2::new(f32::NAN, 0.0), Point2::new(0.5, 0.5))
+                .1
+                .end,
             TraversalEnd::Clipped
         );
     }

@@ -234,7 +234,10 @@ impl core::fmt::Display for IntegrationError {
                 "sensor model increments must be free < 0 < occupied, got free {free_log_odds}, occupied {occupied_log_odds}"
             ),
             IntegrationError::BadSigma(s) => {
-                write!(f, "sensor model sigma must be a positive number of metres, got {s}")
+                write!(
+                    f,
+                    "sensor model sigma must be a positive number of metres, got {s}"
+                )
             }
             IntegrationError::BadRanges {
                 min_range_m,
@@ -482,7 +485,10 @@ mod tests {
         // Blind zone: nothing happens.
         let mut g = grid();
         let r = integrate_scan(&mut g, &beam(Some(0.2)), pose, &laser, &model, &mut ()).unwrap();
-        assert_eq!((r.beams_ignored, r.updates, g.counts()), (1, 0, CellCounts::default()));
+        assert_eq!(
+            (r.beams_ignored, r.updates, g.counts()),
+            (1, 0, CellCounts::default())
+        );
         // Beyond the usable range: free up to 4 m, no occupied cell.
         let mut g = grid();
         let r = integrate_scan(&mut g, &beam(Some(4.5)), pose, &laser, &model, &mut ()).unwrap();
@@ -524,7 +530,11 @@ mod tests {
         let i = g.geometry().index(Cell::new(20, 30)).unwrap();
         let d: f32 = 0.03;
         let want = model.free_log_odds * math::exp(-d * d / (2.0 * 0.05 * 0.05));
-        assert!((g.log_odds_at(i) - want).abs() < 1e-4, "{} vs {want}", g.log_odds_at(i));
+        assert!(
+            (g.log_odds_at(i) - want).abs() < 1e-4,
+            "{} vs {want}",
+            g.log_odds_at(i)
+        );
         integrate_scan(&mut g, &s, pose, &laser, &model, &mut ()).unwrap();
         assert!((g.log_odds_at(i) - 2.0 * want).abs() < 1e-4);
     }
