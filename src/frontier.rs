@@ -2,7 +2,7 @@
 //!
 //! A frontier cell is an Unknown cell with at least one Free 4-neighbour (Yamauchi, "A
 //! Frontier-Based Approach for Autonomous Exploration", IEEE CIRA 1997). Frontier cells group
-//! into 8-connected frontiers, each with its size [cells], its centroid [m] and the frontier
+//! into 8-connected frontiers, each with its size \[cells\], its centroid \[m\] and the frontier
 //! cell nearest a given point.
 //!
 //! Grouping is a two-pass connected-component labelling with union-find (Rosenfeld & Pfaltz,
@@ -18,7 +18,7 @@ use crate::grid::{Cell, CellClass, OccupancyGrid};
 /// Frontier search settings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 pub struct FrontierConfig {
-    /// Frontiers with fewer cells than this are dropped [cells].
+    /// Frontiers with fewer cells than this are dropped \[cells\].
     pub min_size_cells: usize,
 }
 
@@ -71,15 +71,15 @@ impl core::error::Error for FrontierError {}
 /// One 8-connected frontier.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frontier {
-    /// Number of cells [cells].
+    /// Number of cells \[cells\].
     pub size_cells: usize,
-    /// Mean of the cell centres, map frame [m].
+    /// Mean of the cell centres, map frame \[m\].
     pub centroid: Point2,
     /// The frontier cell whose centre is nearest the query point.
     pub nearest_cell: Cell,
     /// Flat index of [`Self::nearest_cell`].
     pub nearest_index: usize,
-    /// Distance from the query point to the centre of [`Self::nearest_cell`] [m].
+    /// Distance from the query point to the centre of [`Self::nearest_cell`] \[m\].
     pub nearest_distance_m: f32,
     /// Where this frontier's cells start in the workspace's grouped list.
     first: u32,
@@ -194,7 +194,7 @@ pub fn is_frontier_cell<const N: usize>(grid: &OccupancyGrid<N>, index: usize) -
 }
 
 /// Finds the frontiers of `grid` with at least `config.min_size_cells` cells, and in each the
-/// cell nearest `query` (map frame [m]). The results live in `workspace` and are returned as a
+/// cell nearest `query` (map frame \[m\]). The results live in `workspace` and are returned as a
 /// slice. Allocation-free; a workspace too small for the grid's frontier is an error.
 pub fn find_frontiers<'w, const N: usize, const CELLS: usize, const FRONTIERS: usize>(
     grid: &OccupancyGrid<N>,

@@ -10,7 +10,7 @@
 //! `[origin.y + row·res, origin.y + (row+1)·res)` north; row 0 is the south edge. The flat index
 //! is `row · width + col`.
 //!
-//! The capacity `N` [cells] is a compile-time constant; width and height are chosen at run time
+//! The capacity `N` \[cells\] is a compile-time constant; width and height are chosen at run time
 //! and must fit it. Counters of free, occupied and known cells are kept up to date on every
 //! change, so no query ever scans the grid.
 
@@ -21,15 +21,15 @@ use crate::math;
 /// fits, and so does a 24 m x 24 m map (240 x 240).
 pub const DEFAULT_CELL_CAPACITY: usize = 150_000;
 
-/// Default cell size [m].
+/// Default cell size \[m\].
 pub const DEFAULT_RESOLUTION_M: f32 = 0.10;
 
 /// A grid cell address: column (east) and row (north), row 0 at the south edge.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Cell {
-    /// Column [cells], growing east.
+    /// Column \[cells\], growing east.
     pub col: i32,
-    /// Row [cells], growing north.
+    /// Row \[cells\], growing north.
     pub row: i32,
 }
 
@@ -84,7 +84,7 @@ pub enum GridError {
     },
     /// Width or height is zero.
     EmptyGrid,
-    /// The resolution is not a positive finite number [m].
+    /// The resolution is not a positive finite number \[m\].
     BadResolution(f32),
     /// The origin is not finite.
     BadOrigin,
@@ -154,13 +154,13 @@ impl core::error::Error for CoverageError {}
 /// Size and placement of a grid in the map frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridGeometry {
-    /// Columns [cells].
+    /// Columns \[cells\].
     pub width: usize,
-    /// Rows [cells].
+    /// Rows \[cells\].
     pub height: usize,
-    /// Cell side [m].
+    /// Cell side \[m\].
     pub resolution_m: f32,
-    /// Map-frame position of the south-west corner of cell (0, 0) [m].
+    /// Map-frame position of the south-west corner of cell (0, 0) \[m\].
     pub origin: Point2,
 }
 
@@ -212,12 +212,12 @@ impl GridGeometry {
         self.width * self.height
     }
 
-    /// Width [m].
+    /// Width \[m\].
     pub fn width_m(&self) -> f32 {
         self.width as f32 * self.resolution_m
     }
 
-    /// Height [m].
+    /// Height \[m\].
     pub fn height_m(&self) -> f32 {
         self.height as f32 * self.resolution_m
     }
@@ -266,7 +266,7 @@ impl GridGeometry {
         self.contains(c).then_some(c)
     }
 
-    /// Map-frame centre of a cell [m].
+    /// Map-frame centre of a cell \[m\].
     #[inline]
     pub fn cell_center(&self, cell: Cell) -> Point2 {
         Point2 {
@@ -314,7 +314,7 @@ pub struct LogOddsBounds {
 }
 
 impl Default for LogOddsBounds {
-    /// ±3.5, i.e. p in [0.03, 0.97]: certain enough to plan on, yet a few contrary readings
+    /// ±3.5, i.e. p in \[0.03, 0.97\]: certain enough to plan on, yet a few contrary readings
     /// (a door that opens) flip a cell.
     fn default() -> Self {
         Self {
@@ -394,7 +394,7 @@ impl<const N: usize> core::fmt::Debug for OccupancyGrid<N> {
 }
 
 impl<const N: usize> OccupancyGrid<N> {
-    /// Capacity [cells].
+    /// Capacity \[cells\].
     pub const CAPACITY: usize = N;
 
     /// An all-Unknown grid, built on the stack. For large `N` on a host, prefer

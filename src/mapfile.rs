@@ -1,7 +1,7 @@
 //! Map files in the ROS `map_server` format: a PGM image plus a YAML description.
 //!
-//! Format (ROS wiki, `map_server`): the YAML names the `image`, its `resolution` [m/pixel],
-//! the `origin` `[x, y, yaw]` of the lower-left pixel [m, rad], `negate`, `occupied_thresh`,
+//! Format (ROS wiki, `map_server`): the YAML names the `image`, its `resolution` \[m/pixel\],
+//! the `origin` `[x, y, yaw]` of the lower-left pixel \[m, rad\], `negate`, `occupied_thresh`,
 //! `free_thresh` and `mode`. A pixel value `v` of maximum `maxval` reads as occupancy
 //! `p = (maxval - v) / maxval` (or `v / maxval` when `negate`); Occupied if
 //! `p > occupied_thresh`, Free if `p < free_thresh`, Unknown otherwise. Written maps use 254

@@ -61,7 +61,7 @@ pub struct Traversal {
     pub end: TraversalEnd,
 }
 
-/// Visits, in order, every grid cell the segment `from`–`to` (map frame [m]) crosses, handing
+/// Visits, in order, every grid cell the segment `from`–`to` (map frame \[m\]) crosses, handing
 /// each cell and its flat index to `visit`; `visit` returns [`ControlFlow::Break`] to stop
 /// early (a laser ray stopping at an occupied cell). See the module documentation for the exact
 /// rule.
@@ -119,7 +119,7 @@ pub struct RayCells {
 }
 
 impl RayCells {
-    /// The walk from `from` to `to` (map frame [m]) over `geom`.
+    /// The walk from `from` to `to` (map frame \[m\]) over `geom`.
     pub fn new(geom: &GridGeometry, from: Point2, to: Point2) -> Self {
         let mut ray = RayCells {
             width: geom.width as i64,

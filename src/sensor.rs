@@ -12,7 +12,7 @@
 //! before the return gain Free evidence, the return cell gains Occupied evidence, and a beam
 //! with no return within the usable range gives Free evidence up to that range. As in the
 //! thesis (Bendahmane 2023), each piece of evidence is weighted by how close the beam passes to
-//! the cell centre, `w = exp(-d² / 2σ²)` with `d` the perpendicular distance [m], and the
+//! the cell centre, `w = exp(-d² / 2σ²)` with `d` the perpendicular distance \[m\], and the
 //! evidence of all beams crossing a cell accumulates.
 
 use core::f32::consts::PI;
@@ -30,9 +30,9 @@ pub const MAX_BEAMS: usize = 1081;
 /// One laser beam.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Beam {
-    /// Direction in the laser frame [rad], counter-clockwise from the laser's forward axis.
+    /// Direction in the laser frame \[rad\], counter-clockwise from the laser's forward axis.
     pub angle_rad: f32,
-    /// Measured range [m]; `None` when nothing returned within the laser's range.
+    /// Measured range \[m\]; `None` when nothing returned within the laser's range.
     pub range_m: Option<f32>,
 }
 
@@ -111,17 +111,17 @@ impl Scan {
 pub struct LaserConfig {
     /// Number of beams per scan.
     pub beam_count: u16,
-    /// Angle of the first beam in the laser frame [rad].
+    /// Angle of the first beam in the laser frame \[rad\].
     pub first_angle_rad: f32,
-    /// Angle between consecutive beams [rad].
+    /// Angle between consecutive beams \[rad\].
     pub step_rad: f32,
-    /// Usable range [m]: returns beyond it are treated as no return.
+    /// Usable range \[m\]: returns beyond it are treated as no return.
     pub max_range_m: f32,
-    /// Blind zone [m]: readings below it are ignored.
+    /// Blind zone \[m\]: readings below it are ignored.
     pub min_range_m: f32,
     /// Standard deviation of the range noise as a fraction of the range (0.05 = 5 %).
     pub noise_fraction: f32,
-    /// Laser pose on the robot (base frame: x forward, y left) [m, rad].
+    /// Laser pose on the robot (base frame: x forward, y left) \[m, rad\].
     pub mount: Pose2,
     /// Scans per second.
     pub rate_hz: f32,
@@ -157,13 +157,13 @@ impl LaserConfig {
         }
     }
 
-    /// Angle of beam `i` in the laser frame [rad].
+    /// Angle of beam `i` in the laser frame \[rad\].
     #[inline]
     pub fn beam_angle(&self, i: usize) -> f32 {
         self.first_angle_rad + i as f32 * self.step_rad
     }
 
-    /// Angle of the last beam [rad].
+    /// Angle of the last beam \[rad\].
     pub fn last_angle_rad(&self) -> f32 {
         self.beam_angle(self.beam_count.saturating_sub(1) as usize)
     }
@@ -182,7 +182,7 @@ pub struct SensorModel {
     pub free_log_odds: f32,
     /// Log-odds added to the cell holding a beam's return (positive).
     pub occupied_log_odds: f32,
-    /// Standard deviation [m] of the Gaussian weighting evidence by the perpendicular distance
+    /// Standard deviation \[m\] of the Gaussian weighting evidence by the perpendicular distance
     /// between the beam and the cell centre.
     pub sigma_m: f32,
 }
@@ -214,9 +214,9 @@ pub enum IntegrationError {
     BadSigma(f32),
     /// The laser's ranges must satisfy `0 <= min_range_m < max_range_m`, both finite.
     BadRanges {
-        /// Blind zone seen [m].
+        /// Blind zone seen \[m\].
         min_range_m: f32,
-        /// Usable range seen [m].
+        /// Usable range seen \[m\].
         max_range_m: f32,
     },
     /// The robot pose or the laser mount is not finite.
@@ -276,9 +276,9 @@ impl SensorModel {
 /// What integrating a scan did to the grid.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ScanIntegration {
-    /// Cells that went from Unknown to Free or Occupied: the exploration gain [cells].
+    /// Cells that went from Unknown to Free or Occupied: the exploration gain \[cells\].
     pub newly_known: usize,
-    /// Cells whose class changed in any way [cells].
+    /// Cells whose class changed in any way \[cells\].
     pub changed: usize,
     /// Evidence updates applied (a cell crossed by several beams counts once per beam).
     pub updates: usize,
@@ -296,7 +296,7 @@ pub struct ScanIntegration {
 ///   this beam);
 /// - a return beyond `laser.max_range_m`, or no return: Free evidence up to the usable range.
 ///
-/// Each update is weighted by `exp(-d² / 2σ²)`, `d` the distance [m] from the cell centre to
+/// Each update is weighted by `exp(-d² / 2σ²)`, `d` the distance \[m\] from the cell centre to
 /// the beam's line. Cells outside the grid are skipped. Every class change is reported to
 /// `observer`. Allocation-free.
 pub fn integrate_scan<const N: usize>(
