@@ -1,5 +1,5 @@
 //! Occupancy grid benchmarks: integrating one thesis scan (181 beams, 4 m) into a 240 x 240
-//! grid at 10 cm, and tracing the same 181 rays alone.
+//! grid at 10 cm, tracing the same 181 rays alone, and finding the frontiers afterwards.
 //!
 //! `cargo bench -p papillon --bench grid -- --warm-up-time 1 --measurement-time 3`
 
@@ -7,6 +7,7 @@ use std::hint::black_box;
 use std::ops::ControlFlow;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use papillon::frontier::{FrontierConfig, FrontierWorkspace, find_frontiers};
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::{GridGeometry, LogOddsBounds, OccupancyGrid};
 use papillon::math;
@@ -65,6 +66,17 @@ fn grid_benches(c: &mut Criterion) {
                 .visited;
             }
             cells
+        })
+    });
+
+    let mut ws = FrontierWorkspace::<16384, 512>::new_boxed();
+    let query = Point2::new(12.0, 12.0);
+    let cfg = FrontierConfig::default();
+    c.bench_function("find_frontiers 240x240 after one scan", |b| {
+        b.iter(|| {
+            find_frontiers(&grid, black_box(query), &cfg, &mut ws)
+                .unwrap()
+                .len()
         })
     });
 }

@@ -181,9 +181,10 @@ impl<const CELLS: usize, const FRONTIERS: usize> FrontierWorkspace<CELLS, FRONTI
     }
 }
 
-/// Whether the cell at flat index `index` is a frontier cell: Unknown with a Free 4-neighbour.
+/// Whether the cell at flat index `index` is a frontier cell: Unknown with a Free 4-neighbour
+/// (false for an index outside the grid).
 pub fn is_frontier_cell<const N: usize>(grid: &OccupancyGrid<N>, index: usize) -> bool {
-    if grid.class(index) != CellClass::Unknown {
+    if index >= grid.cell_count() || grid.class(index) != CellClass::Unknown {
         return false;
     }
     let geom = grid.geometry();
