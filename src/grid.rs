@@ -10,7 +10,7 @@
 //! `[origin.y + row·res, origin.y + (row+1)·res)` north; row 0 is the south edge. The flat index
 //! is `row · width + col`.
 //!
-//! The capacity `N` [cells] is a compile-time constant; width and height are chosen at run time
+//! The capacity `N` \[cells\] is a compile-time constant; width and height are chosen at run time
 //! and must fit it. Counters of free, occupied and known cells are kept up to date on every
 //! change, so no query ever scans the grid.
 
@@ -21,15 +21,15 @@ use crate::math;
 /// fits, and so does a 24 m x 24 m map (240 x 240).
 pub const DEFAULT_CELL_CAPACITY: usize = 150_000;
 
-/// Default cell size [m].
+/// Default cell size \[m\].
 pub const DEFAULT_RESOLUTION_M: f32 = 0.10;
 
 /// A grid cell address: column (east) and row (north), row 0 at the south edge.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Cell {
-    /// Column [cells], growing east.
+    /// Column \[cells\], growing east.
     pub col: i32,
-    /// Row [cells], growing north.
+    /// Row \[cells\], growing north.
     pub row: i32,
 }
 
@@ -84,7 +84,7 @@ pub enum GridError {
     },
     /// Width or height is zero.
     EmptyGrid,
-    /// The resolution is not a positive finite number [m].
+    /// The resolution is not a positive finite number \[m\].
     BadResolution(f32),
     /// The origin is not finite.
     BadOrigin,
@@ -106,7 +106,10 @@ impl core::fmt::Display for GridError {
             ),
             GridError::EmptyGrid => write!(f, "grid width and height must be at least one cell"),
             GridError::BadResolution(r) => {
-                write!(f, "grid resolution must be a positive number of metres, got {r}")
+                write!(
+                    f,
+                    "grid resolution must be a positive number of metres, got {r}"
+                )
             }
             GridError::BadOrigin => write!(f, "grid origin must be finite"),
             GridError::BadBounds { min, max } => write!(
@@ -119,16 +122,45 @@ impl core::fmt::Display for GridError {
 
 impl core::error::Error for GridError {}
 
+/// Errors from [`OccupancyGrid::coverage`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum CoverageError {
+    /// The mask must hold one entry per grid cell.
+    MaskLength {
+        /// Cells in the grid.
+        expected: usize,
+        /// Entries in the mask.
+        got: usize,
+    },
+    /// The mask selects no cell, so coverage is undefined.
+    EmptyMask,
+}
+
+impl core::fmt::Display for CoverageError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            CoverageError::MaskLength { expected, got } => write!(
+                f,
+                "coverage mask has {got} entries but the grid has {expected} cells"
+            ),
+            CoverageError::EmptyMask => write!(f, "coverage mask selects no cell"),
+        }
+    }
+}
+
+impl core::error::Error for CoverageError {}
+
 /// Size and placement of a grid in the map frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridGeometry {
-    /// Columns [cells].
+    /// Columns \[cells\].
     pub width: usize,
-    /// Rows [cells].
+    /// Rows \[cells\].
     pub height: usize,
-    /// Cell side [m].
+    /// Cell side \[m\].
     pub resolution_m: f32,
-    /// Map-frame position of the south-west corner of cell (0, 0) [m].
+    /// Map-frame position of the south-west corner of cell (0, 0) \[m\].
     pub origin: Point2,
 }
 
@@ -180,12 +212,12 @@ impl GridGeometry {
         self.width * self.height
     }
 
-    /// Width [m].
+    /// Width \[m\].
     pub fn width_m(&self) -> f32 {
         self.width as f32 * self.resolution_m
     }
 
-    /// Height [m].
+    /// Height \[m\].
     pub fn height_m(&self) -> f32 {
         self.height as f32 * self.resolution_m
     }
@@ -234,7 +266,7 @@ impl GridGeometry {
         self.contains(c).then_some(c)
     }
 
-    /// Map-frame centre of a cell [m].
+    /// Map-frame centre of a cell \[m\].
     #[inline]
     pub fn cell_center(&self, cell: Cell) -> Point2 {
         Point2 {
@@ -249,6 +281,29 @@ impl GridGeometry {
     }
 }
 
+/// A zero-filled `T` allocated directly on the heap, never on the stack (for large
+/// fixed-capacity structures on a host).
+///
+/// # Safety
+/// The all-zero bit pattern must be a valid `T`.
+#[cfg(feature = "std")]
+pub(crate) unsafe fn boxed_zeroed<T>() -> std::boxed::Box<T> {
+    let layout = std::alloc::Layout::new::<T>();
+    if layout.size() == 0 {
+        // SAFETY: the caller guarantees zero bits are a valid `T`; a zero-sized value
+        // occupies no stack.
+        return std::boxed::Box::new(unsafe { core::mem::zeroed() });
+    }
+    // SAFETY: the layout has a non-zero size.
+    let ptr = unsafe { std::alloc::alloc_zeroed(layout) } as *mut T;
+    if ptr.is_null() {
+        std::alloc::handle_alloc_error(layout);
+    }
+    // SAFETY: `ptr` was allocated by the global allocator with `T`'s layout and holds a valid
+    // (all-zero) `T`, as the caller guarantees.
+    unsafe { std::boxed::Box::from_raw(ptr) }
+}
+
 /// Saturation bounds of the log-odds.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
 pub struct LogOddsBounds {
@@ -259,7 +314,7 @@ pub struct LogOddsBounds {
 }
 
 impl Default for LogOddsBounds {
-    /// ±3.5, i.e. p in [0.03, 0.97]: certain enough to plan on, yet a few contrary readings
+    /// ±3.5, i.e. p in \[0.03, 0.97\]: certain enough to plan on, yet a few contrary readings
     /// (a door that opens) flip a cell.
     fn default() -> Self {
         Self {
@@ -339,7 +394,7 @@ impl<const N: usize> core::fmt::Debug for OccupancyGrid<N> {
 }
 
 impl<const N: usize> OccupancyGrid<N> {
-    /// Capacity [cells].
+    /// Capacity \[cells\].
     pub const CAPACITY: usize = N;
 
     /// An all-Unknown grid, built on the stack. For large `N` on a host, prefer
@@ -362,11 +417,10 @@ impl<const N: usize> OccupancyGrid<N> {
     ) -> Result<std::boxed::Box<Self>, GridError> {
         Self::check_fits(&geometry)?;
         let bounds = bounds.check()?;
-        let zeroed = std::boxed::Box::<Self>::new_zeroed();
         // SAFETY: every field of `Self` is plain data (`usize`, `f32` and arrays of them) for
         // which the all-zero bit pattern is a valid value; zero log-odds is Unknown and the
         // zero counters match it.
-        let mut grid = unsafe { zeroed.assume_init() };
+        let mut grid = unsafe { boxed_zeroed::<Self>() };
         grid.geometry = geometry;
         grid.bounds = bounds;
         Ok(grid)
@@ -500,6 +554,27 @@ impl<const N: usize> OccupancyGrid<N> {
         *slot = slot.wrapping_add_signed(delta);
     }
 
+    /// Coverage: the fraction of the cells selected by `truth_mask` (one entry per cell, in
+    /// flat-index order; `true` = a cell that can be observed, as supplied by the simulator)
+    /// that are known (Free or Occupied). In `[0, 1]`.
+    pub fn coverage(&self, truth_mask: &[bool]) -> Result<f32, CoverageError> {
+        if truth_mask.len() != self.cell_count() {
+            return Err(CoverageError::MaskLength {
+                expected: self.cell_count(),
+                got: truth_mask.len(),
+            });
+        }
+        let (mut selected, mut known) = (0usize, 0usize);
+        for (&l, &m) in self.log_odds().iter().zip(truth_mask) {
+            selected += m as usize;
+            known += (m && l != 0.0) as usize;
+        }
+        if selected == 0 {
+            return Err(CoverageError::EmptyMask);
+        }
+        Ok(known as f32 / selected as f32)
+    }
+
     /// Recounts every cell (for tests and after bulk loads; normal updates keep the counters).
     pub fn recount(&mut self) -> CellCounts {
         let mut counts = CellCounts::default();
@@ -566,7 +641,13 @@ mod tests {
         assert_eq!(g.counts().occupied, 1);
         g.add_evidence(5, -10.0, &mut obs);
         assert_eq!(g.class(5), CellClass::Free);
-        assert_eq!(g.counts(), CellCounts { free: 1, occupied: 0 });
+        assert_eq!(
+            g.counts(),
+            CellCounts {
+                free: 1,
+                occupied: 0
+            }
+        );
         assert_eq!(changes, 2);
     }
 
@@ -580,6 +661,66 @@ mod tests {
         assert_eq!(geom.cell(11), Cell::new(3, 2));
         let c = geom.cell_center(Cell::new(1, 1));
         assert!((c.x - (-0.25)).abs() < 1e-6 && (c.y - 2.75).abs() < 1e-6);
+    }
+
+    #[test]
+    fn counters_equal_a_full_recount_after_random_updates() {
+        use crate::random::{below, range_f32, seeded};
+        let mut rng = seeded(3);
+        let mut g = small();
+        let mut changes = 0usize;
+        for step in 0..20_000 {
+            let i = below(&mut rng, 100);
+            let mut obs = |_i: usize, o: CellClass, n: CellClass| {
+                assert_ne!(o, n);
+                changes += 1;
+            };
+            match below(&mut rng, 4) {
+                0 => {
+                    g.add_evidence(i, range_f32(&mut rng, -2.0, 2.0), &mut obs);
+                }
+                1 => {
+                    let class = [CellClass::Free, CellClass::Unknown, CellClass::Occupied]
+                        [below(&mut rng, 3)];
+                    g.set_class(i, class, &mut obs);
+                }
+                2 => {
+                    g.set_log_odds(i, 0.0, &mut obs);
+                }
+                _ => {
+                    // Evidence that exactly cancels brings a cell back to Unknown.
+                    let l = g.log_odds_at(i);
+                    g.add_evidence(i, -l, &mut obs);
+                }
+            }
+            if step % 97 == 0 {
+                let kept = g.counts();
+                assert_eq!(kept, g.clone().recount(), "step {step}");
+            }
+        }
+        let kept = g.counts();
+        assert_eq!(kept, g.recount());
+        assert!(changes > 1000);
+    }
+
+    #[test]
+    fn coverage_counts_known_cells_in_the_mask() {
+        let mut g = small();
+        let mut mask = [false; 100];
+        mask[..10].fill(true);
+        assert_eq!(g.coverage(&mask), Ok(0.0));
+        g.set_class(0, CellClass::Free, &mut ());
+        g.set_class(1, CellClass::Occupied, &mut ());
+        g.set_class(50, CellClass::Free, &mut ());
+        assert_eq!(g.coverage(&mask), Ok(0.2));
+        assert_eq!(
+            g.coverage(&mask[..5]),
+            Err(CoverageError::MaskLength {
+                expected: 100,
+                got: 5
+            })
+        );
+        assert_eq!(g.coverage(&[false; 100]), Err(CoverageError::EmptyMask));
     }
 
     #[cfg(feature = "std")]

@@ -5,10 +5,23 @@
 //! beam layout, the usable range, the blind zone, the range noise and the mount offset on the
 //! robot; the defaults are the thesis's simulated laser (181 beams over 180° at 1°, 4 m usable
 //! range, 0.30 m blind zone, 5 % Gaussian range noise).
+//!
+//! The inverse sensor model ([`integrate_scan`]) turns a scan taken at a known robot pose into
+//! log-odds evidence on the occupancy grid (Thrun, Burgard & Fox, *Probabilistic Robotics*,
+//! 2005, §9.2): every beam is traced with the exact grid traversal of [`crate::raycast`]; cells
+//! before the return gain Free evidence, the return cell gains Occupied evidence, and a beam
+//! with no return within the usable range gives Free evidence up to that range. As in the
+//! thesis (Bendahmane 2023), each piece of evidence is weighted by how close the beam passes to
+//! the cell centre, `w = exp(-d² / 2σ²)` with `d` the perpendicular distance \[m\], and the
+//! evidence of all beams crossing a cell accumulates.
 
 use core::f32::consts::PI;
+use core::ops::ControlFlow;
 
-use crate::geometry::Pose2;
+use crate::geometry::{Point2, Pose2};
+use crate::grid::{CellClass, CellObserver, OccupancyGrid};
+use crate::math;
+use crate::raycast;
 use crate::units::deg_to_rad;
 
 /// Beams a scan can hold: an LMS1xx at 0.25° over 270° (1081 beams).
@@ -17,9 +30,9 @@ pub const MAX_BEAMS: usize = 1081;
 /// One laser beam.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Beam {
-    /// Direction in the laser frame [rad], counter-clockwise from the laser's forward axis.
+    /// Direction in the laser frame \[rad\], counter-clockwise from the laser's forward axis.
     pub angle_rad: f32,
-    /// Measured range [m]; `None` when nothing returned within the laser's range.
+    /// Measured range \[m\]; `None` when nothing returned within the laser's range.
     pub range_m: Option<f32>,
 }
 
@@ -98,17 +111,17 @@ impl Scan {
 pub struct LaserConfig {
     /// Number of beams per scan.
     pub beam_count: u16,
-    /// Angle of the first beam in the laser frame [rad].
+    /// Angle of the first beam in the laser frame \[rad\].
     pub first_angle_rad: f32,
-    /// Angle between consecutive beams [rad].
+    /// Angle between consecutive beams \[rad\].
     pub step_rad: f32,
-    /// Usable range [m]: returns beyond it are treated as no return.
+    /// Usable range \[m\]: returns beyond it are treated as no return.
     pub max_range_m: f32,
-    /// Blind zone [m]: readings below it are ignored.
+    /// Blind zone \[m\]: readings below it are ignored.
     pub min_range_m: f32,
     /// Standard deviation of the range noise as a fraction of the range (0.05 = 5 %).
     pub noise_fraction: f32,
-    /// Laser pose on the robot (base frame: x forward, y left) [m, rad].
+    /// Laser pose on the robot (base frame: x forward, y left) \[m, rad\].
     pub mount: Pose2,
     /// Scans per second.
     pub rate_hz: f32,
@@ -144,13 +157,13 @@ impl LaserConfig {
         }
     }
 
-    /// Angle of beam `i` in the laser frame [rad].
+    /// Angle of beam `i` in the laser frame \[rad\].
     #[inline]
     pub fn beam_angle(&self, i: usize) -> f32 {
         self.first_angle_rad + i as f32 * self.step_rad
     }
 
-    /// Angle of the last beam [rad].
+    /// Angle of the last beam \[rad\].
     pub fn last_angle_rad(&self) -> f32 {
         self.beam_angle(self.beam_count.saturating_sub(1) as usize)
     }
@@ -159,5 +172,393 @@ impl LaserConfig {
 impl Default for LaserConfig {
     fn default() -> Self {
         Self::thesis()
+    }
+}
+
+/// Log-odds increments and distance weighting of the inverse sensor model.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+pub struct SensorModel {
+    /// Log-odds added to a cell a beam passes through before its return (negative).
+    pub free_log_odds: f32,
+    /// Log-odds added to the cell holding a beam's return (positive).
+    pub occupied_log_odds: f32,
+    /// Standard deviation \[m\] of the Gaussian weighting evidence by the perpendicular distance
+    /// between the beam and the cell centre.
+    pub sigma_m: f32,
+}
+
+impl Default for SensorModel {
+    /// Free `ln(0.4/0.6) ≈ -0.41`, occupied `ln(0.7/0.3) ≈ 0.85` (the textbook values of
+    /// Thrun et al.), σ = 0.05 m (half a 10 cm cell).
+    fn default() -> Self {
+        Self {
+            free_log_odds: -0.405,
+            occupied_log_odds: 0.847,
+            sigma_m: 0.05,
+        }
+    }
+}
+
+/// Why a scan could not be integrated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum IntegrationError {
+    /// The free increment must be negative and the occupied one positive, both finite.
+    BadIncrements {
+        /// The free increment seen.
+        free_log_odds: f32,
+        /// The occupied increment seen.
+        occupied_log_odds: f32,
+    },
+    /// σ must be a positive finite number of metres.
+    BadSigma(f32),
+    /// The laser's ranges must satisfy `0 <= min_range_m < max_range_m`, both finite.
+    BadRanges {
+        /// Blind zone seen \[m\].
+        min_range_m: f32,
+        /// Usable range seen \[m\].
+        max_range_m: f32,
+    },
+    /// The robot pose or the laser mount is not finite.
+    BadPose,
+}
+
+impl core::fmt::Display for IntegrationError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            IntegrationError::BadIncrements {
+                free_log_odds,
+                occupied_log_odds,
+            } => write!(
+                f,
+                "sensor model increments must be free < 0 < occupied, got free {free_log_odds}, occupied {occupied_log_odds}"
+            ),
+            IntegrationError::BadSigma(s) => {
+                write!(
+                    f,
+                    "sensor model sigma must be a positive number of metres, got {s}"
+                )
+            }
+            IntegrationError::BadRanges {
+                min_range_m,
+                max_range_m,
+            } => write!(
+                f,
+                "laser ranges must satisfy 0 <= blind zone < usable range, got {min_range_m} m and {max_range_m} m"
+            ),
+            IntegrationError::BadPose => write!(f, "robot pose or laser mount is not finite"),
+        }
+    }
+}
+
+impl core::error::Error for IntegrationError {}
+
+impl SensorModel {
+    /// Checks the increments and σ.
+    pub fn validate(&self) -> Result<(), IntegrationError> {
+        if !(self.free_log_odds < 0.0
+            && self.occupied_log_odds > 0.0
+            && self.free_log_odds.is_finite()
+            && self.occupied_log_odds.is_finite())
+        {
+            return Err(IntegrationError::BadIncrements {
+                free_log_odds: self.free_log_odds,
+                occupied_log_odds: self.occupied_log_odds,
+            });
+        }
+        if !(self.sigma_m > 0.0 && self.sigma_m.is_finite()) {
+            return Err(IntegrationError::BadSigma(self.sigma_m));
+        }
+        Ok(())
+    }
+}
+
+/// What integrating a scan did to the grid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ScanIntegration {
+    /// Cells that went from Unknown to Free or Occupied: the exploration gain \[cells\].
+    pub newly_known: usize,
+    /// Cells whose class changed in any way \[cells\].
+    pub changed: usize,
+    /// Evidence updates applied (a cell crossed by several beams counts once per beam).
+    pub updates: usize,
+    /// Beams traced.
+    pub beams_used: usize,
+    /// Beams ignored: reading in the blind zone, or not a number.
+    pub beams_ignored: usize,
+}
+
+/// Integrates a scan taken at `robot_pose_map` (map frame) into the grid with the inverse
+/// sensor model. The laser pose is the robot pose composed with `laser.mount`. Per beam:
+/// - a reading below `laser.min_range_m` (blind zone) or not a number is ignored;
+/// - a return within `laser.max_range_m`: cells from the laser up to the return get Free
+///   evidence and the cell holding the return gets Occupied evidence (and only that, from
+///   this beam);
+/// - a return beyond `laser.max_range_m`, or no return: Free evidence up to the usable range.
+///
+/// Each update is weighted by `exp(-d² / 2σ²)`, `d` the distance \[m\] from the cell centre to
+/// the beam's line. Cells outside the grid are skipped. Every class change is reported to
+/// `observer`. Allocation-free.
+pub fn integrate_scan<const N: usize>(
+    grid: &mut OccupancyGrid<N>,
+    scan: &Scan,
+    robot_pose_map: Pose2,
+    laser: &LaserConfig,
+    model: &SensorModel,
+    observer: &mut impl CellObserver,
+) -> Result<ScanIntegration, IntegrationError> {
+    model.validate()?;
+    if !(laser.min_range_m >= 0.0
+        && laser.max_range_m > laser.min_range_m
+        && laser.max_range_m.is_finite())
+    {
+        return Err(IntegrationError::BadRanges {
+            min_range_m: laser.min_range_m,
+            max_range_m: laser.max_range_m,
+        });
+    }
+    let pose = robot_pose_map.compose(laser.mount);
+    if !(pose.x.is_finite() && pose.y.is_finite() && pose.theta.is_finite()) {
+        return Err(IntegrationError::BadPose);
+    }
+    let origin = pose.position();
+    let inv_two_sigma_sq = 1.0 / (2.0 * model.sigma_m * model.sigma_m);
+    let mut out = ScanIntegration::default();
+
+    for beam in scan.beams() {
+        let (length_m, hit) = match beam.range_m {
+            Some(r) if r.is_nan() || r < laser.min_range_m => {
+                out.beams_ignored += 1;
+                continue;
+            }
+            Some(r) if r <= laser.max_range_m => (r, true),
+            _ => (laser.max_range_m, false),
+        };
+        if !beam.angle_rad.is_finite() {
+            out.beams_ignored += 1;
+            continue;
+        }
+        out.beams_used += 1;
+        let angle = pose.theta + beam.angle_rad;
+        let (dir_x, dir_y) = (math::cos(angle), math::sin(angle));
+        let end = Point2::new(origin.x + dir_x * length_m, origin.y + dir_y * length_m);
+        let hit_cell = grid.geometry().cell_at_unchecked(end);
+        let geom = *grid.geometry();
+        raycast::traverse(&geom, origin, end, |cell, index| {
+            let centre = geom.cell_center(cell);
+            // Perpendicular distance from the cell centre to the beam's line.
+            let d = (centre.x - origin.x) * dir_y - (centre.y - origin.y) * dir_x;
+            let weight = math::exp(-d * d * inv_two_sigma_sq);
+            let delta = if hit && cell == hit_cell {
+                model.occupied_log_odds
+            } else {
+                model.free_log_odds
+            };
+            let (old, new) = grid.add_evidence(index, delta * weight, observer);
+            out.updates += 1;
+            if old != new {
+                out.changed += 1;
+                if old == CellClass::Unknown {
+                    out.newly_known += 1;
+                }
+            }
+            ControlFlow::Continue(())
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{Cell, CellCounts, GridGeometry, LogOddsBounds};
+
+    type Grid = OccupancyGrid<{ 60 * 60 }>;
+
+    /// A 6 m x 6 m grid at 10 cm with the robot in the middle of a walled room (walls on the
+    /// lines x = 1.05, x = 4.95, y = 1.05, y = 4.95: through columns and rows 10 and 49).
+    fn room_scan(pose: Pose2, laser: &LaserConfig) -> Scan {
+        let mut scan = Scan::new();
+        for i in 0..laser.beam_count as usize {
+            let a = laser.beam_angle(i);
+            let world = pose.theta + a;
+            let (c, s) = (math::cos(world), math::sin(world));
+            let mut r = f32::INFINITY;
+            for (t, ok) in [
+                ((4.95 - pose.x) / c, c > 0.0),
+                ((1.05 - pose.x) / c, c < 0.0),
+                ((4.95 - pose.y) / s, s > 0.0),
+                ((1.05 - pose.y) / s, s < 0.0),
+            ] {
+                if ok && t < r {
+                    r = t;
+                }
+            }
+            scan.push(Beam {
+                angle_rad: a,
+                range_m: (r <= laser.max_range_m).then_some(r),
+            })
+            .unwrap();
+        }
+        scan
+    }
+
+    fn grid() -> Grid {
+        let g = GridGeometry::new(60, 60, 0.1, Point2::new(0.0, 0.0)).unwrap();
+        Grid::new(g, LogOddsBounds::default()).unwrap()
+    }
+
+    #[test]
+    fn a_walled_room_shows_occupied_walls_and_a_free_interior() {
+        let mut g = grid();
+        let mut laser = LaserConfig::thesis();
+        laser.beam_count = 360;
+        laser.first_angle_rad = -PI;
+        let mut changes = 0;
+        let mut total = ScanIntegration::default();
+        for &theta in &[0.0, PI / 2.0, PI, -PI / 2.0] {
+            let pose = Pose2::new(3.0, 3.0, theta);
+            let scan = room_scan(pose, &laser);
+            let r = integrate_scan(
+                &mut g,
+                &scan,
+                pose,
+                &laser,
+                &SensorModel::default(),
+                &mut |_i: usize, _o: CellClass, _n: CellClass| changes += 1,
+            )
+            .unwrap();
+            total.newly_known += r.newly_known;
+            total.changed += r.changed;
+        }
+        assert_eq!(total.changed, changes);
+        assert_eq!(total.newly_known, g.counts().known());
+        // Wall cells, corners apart (beams graze the corner cells).
+        let geom = *g.geometry();
+        let mut wall_occupied = 0;
+        let mut wall_cells = 0;
+        for k in 12..48 {
+            for cell in [
+                Cell::new(49, k),
+                Cell::new(10, k),
+                Cell::new(k, 49),
+                Cell::new(k, 10),
+            ] {
+                wall_cells += 1;
+                if g.class_of(cell) == Some(CellClass::Occupied) {
+                    wall_occupied += 1;
+                }
+            }
+        }
+        assert_eq!(wall_occupied, wall_cells, "every wall cell is occupied");
+        // Interior: every cell strictly inside the walls is free.
+        for row in 11..49 {
+            for col in 11..49 {
+                let c = Cell::new(col, row);
+                assert_eq!(g.class_of(c), Some(CellClass::Free), "{c:?}");
+            }
+        }
+        // Outside the room nothing is known.
+        for i in 0..geom.cell_count() {
+            let c = geom.cell(i);
+            if c.col < 10 || c.col > 49 || c.row < 10 || c.row > 49 {
+                assert_eq!(g.class(i), CellClass::Unknown, "{c:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn blind_zone_and_out_of_range_readings() {
+        let laser = LaserConfig::thesis();
+        let model = SensorModel::default();
+        // Along the centres of row 30 (y = 3.05 m).
+        let pose = Pose2::new(1.0, 3.05, 0.0);
+        let beam = |r: Option<f32>| {
+            let mut s = Scan::new();
+            s.push(Beam {
+                angle_rad: 0.0,
+                range_m: r,
+            })
+            .unwrap();
+            s
+        };
+        // Blind zone: nothing happens.
+        let mut g = grid();
+        let r = integrate_scan(&mut g, &beam(Some(0.2)), pose, &laser, &model, &mut ()).unwrap();
+        assert_eq!(
+            (r.beams_ignored, r.updates, g.counts()),
+            (1, 0, CellCounts::default())
+        );
+        // Beyond the usable range: free up to 4 m, no occupied cell.
+        let mut g = grid();
+        let r = integrate_scan(&mut g, &beam(Some(4.5)), pose, &laser, &model, &mut ()).unwrap();
+        assert_eq!(g.counts().occupied, 0);
+        assert_eq!(g.counts().free, r.newly_known);
+        assert_eq!(g.class_of(Cell::new(49, 30)), Some(CellClass::Free));
+        assert_eq!(g.class_of(Cell::new(51, 30)), Some(CellClass::Unknown));
+        // No return behaves the same.
+        let mut g2 = grid();
+        integrate_scan(&mut g2, &beam(None), pose, &laser, &model, &mut ()).unwrap();
+        assert_eq!(g2.log_odds(), g.log_odds());
+        // A return at 2.05 m: cells before free, the return cell occupied only.
+        let mut g = grid();
+        integrate_scan(&mut g, &beam(Some(2.05)), pose, &laser, &model, &mut ()).unwrap();
+        assert_eq!(g.class_of(Cell::new(30, 30)), Some(CellClass::Occupied));
+        assert_eq!(g.counts().occupied, 1);
+        assert_eq!(g.class_of(Cell::new(29, 30)), Some(CellClass::Free));
+        assert_eq!(g.class_of(Cell::new(31, 30)), Some(CellClass::Unknown));
+        let w = g.log_odds_at(g.geometry().index(Cell::new(30, 30)).unwrap());
+        // The beam runs through the cell centre: full weight.
+        assert!((w - model.occupied_log_odds).abs() < 1e-3, "{w}");
+    }
+
+    #[test]
+    fn evidence_is_weighted_by_distance_to_the_cell_centre_and_accumulates() {
+        let laser = LaserConfig::thesis();
+        let model = SensorModel::default();
+        let mut g = grid();
+        // Beam along y = 3.02 (2 cm north of the centres of row 30 at y = 3.05 ... centres of
+        // row 30 lie at 3.05: distance 3 cm).
+        let pose = Pose2::new(1.0, 3.02, 0.0);
+        let mut s = Scan::new();
+        s.push(Beam {
+            angle_rad: 0.0,
+            range_m: Some(3.0),
+        })
+        .unwrap();
+        integrate_scan(&mut g, &s, pose, &laser, &model, &mut ()).unwrap();
+        let i = g.geometry().index(Cell::new(20, 30)).unwrap();
+        let d: f32 = 0.03;
+        let want = model.free_log_odds * math::exp(-d * d / (2.0 * 0.05 * 0.05));
+        assert!(
+            (g.log_odds_at(i) - want).abs() < 1e-4,
+            "{} vs {want}",
+            g.log_odds_at(i)
+        );
+        integrate_scan(&mut g, &s, pose, &laser, &model, &mut ()).unwrap();
+        assert!((g.log_odds_at(i) - 2.0 * want).abs() < 1e-4);
+    }
+
+    #[test]
+    fn invalid_configuration_is_an_error() {
+        let mut g = grid();
+        let laser = LaserConfig::thesis();
+        let bad = SensorModel {
+            sigma_m: 0.0,
+            ..SensorModel::default()
+        };
+        let s = Scan::new();
+        assert_eq!(
+            integrate_scan(&mut g, &s, Pose2::default(), &laser, &bad, &mut ()),
+            Err(IntegrationError::BadSigma(0.0))
+        );
+        let pose = Pose2 {
+            x: f32::NAN,
+            ..Pose2::default()
+        };
+        assert_eq!(
+            integrate_scan(&mut g, &s, pose, &laser, &SensorModel::default(), &mut ()),
+            Err(IntegrationError::BadPose)
+        );
     }
 }
