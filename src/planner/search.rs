@@ -53,11 +53,6 @@ impl<const N: usize> SearchMemory<N> {
     }
 
     #[inline]
-    pub(crate) fn is_closed(&self, i: usize) -> bool {
-        self.stamp[i] == 2 * self.generation + 1
-    }
-
-    #[inline]
     pub(crate) fn is_closed_in(&self, i: usize, generation: u32) -> bool {
         self.stamp[i] == 2 * generation + 1
     }
