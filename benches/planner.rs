@@ -121,7 +121,7 @@ fn house() -> Map {
     let n = HOUSE_SIDE;
     let mut rng = random::seeded(2023);
     let mut blocked = vec![false; n * n];
-    let mut wall = |c0: usize, r0: usize, c1: usize, r1: usize, b: &mut Vec<bool>| {
+    let wall = |c0: usize, r0: usize, c1: usize, r1: usize, b: &mut Vec<bool>| {
         for r in r0..r1.min(n) {
             for c in c0..c1.min(n) {
                 b[r * n + c] = true;
@@ -133,7 +133,7 @@ fn house() -> Map {
     wall(0, 0, 2, n, &mut blocked);
     wall(n - 2, 0, n, n, &mut blocked);
     // Room boundaries along each axis.
-    let mut cuts = |rng: &mut random::ProjectRng| {
+    let cuts = |rng: &mut random::ProjectRng| {
         let mut v = vec![0usize];
         let mut x = 0usize;
         loop {
@@ -225,11 +225,21 @@ fn check_same_costs<const N: usize>(
     astar: &mut AStar<N>,
     queries: &[(Cell, Cell)],
 ) {
+    let mut expansions = 0u64;
     for &(a, b) in queries {
-        let (ours, _) = astar.path_cost(trav, a, b).unwrap();
+        let (ours, e) = astar.path_cost(trav, a, b).unwrap();
+        expansions += e as u64;
         let theirs = pathfinding_cost(map, a, b).unwrap() as f32 / ORTHO as f32;
         assert!((ours - theirs).abs() < 1e-2, "{a:?}->{b:?}: {ours} vs {theirs}");
     }
+    eprintln!(
+        "{} queries on {} x {}: mean {:.0} expansions, {} passable cells",
+        queries.len(),
+        map.width,
+        map.height,
+        expansions as f64 / queries.len() as f64,
+        map.blocked.iter().filter(|b| !**b).count()
+    );
 }
 
 fn bench_planner(c: &mut Criterion) {

@@ -105,9 +105,10 @@ impl<const N: usize> AStar<N> {
         }
         let (s, t) = trav.check_endpoints(start, goal)?;
         let w = trav.geometry().width;
+        let (gc, gr) = (t % w, t / w);
         let mem = &mut self.memory;
         mem.begin();
-        mem.open_source(s, octile(s, t, w));
+        mem.open_source(s, octile(s % w, s / w, gc, gr));
         let mut expansions = 0u32;
         while let Some(i) = mem.pop_and_close() {
             expansions += 1;
@@ -115,8 +116,10 @@ impl<const N: usize> AStar<N> {
                 return Ok((mem.g(i), expansions, t));
             }
             let gi = mem.g(i);
-            for_each_move(trav, i, |j, step| {
-                mem.relax(i, j, gi + step, octile(j, t, w));
+            let (ic, ir) = (i % w, i / w);
+            let fi = gi + octile(ic, ir, gc, gr);
+            for_each_move(trav, i, ic, ir, |j, jc, jr, step| {
+                mem.relax(i, j, gi + step, || octile(jc, jr, gc, gr), fi);
             });
         }
         Err(PlanError::NoPath { start, goal })

@@ -55,7 +55,7 @@ impl<const N: usize> DistanceField<N> {
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
         let zeroed = std::boxed::Box::<Self>::new_zeroed();
-        // SAFETY: the memory is integers, floats and arrays of them; `Option<GridGeometry>`
+        // SAFETY: the memory is integers, floats and arrays of structs of them; `Option<GridGeometry>`
         // is overwritten below before any read, through a raw pointer so no invalid value is
         // ever read or dropped (GridGeometry has no drop glue); `Cell` and `u32` are integers.
         unsafe {
@@ -91,12 +91,13 @@ impl<const N: usize> DistanceField<N> {
         let mem = &mut self.memory;
         mem.begin();
         mem.open_source(s, 0.0);
+        let w = trav.geometry().width;
         let mut reached = 0u32;
         while let Some(i) = mem.pop_and_close() {
             reached += 1;
             let gi = mem.g(i);
-            for_each_move(trav, i, |j, step| {
-                mem.relax(i, j, gi + step, 0.0);
+            for_each_move(trav, i, i % w, i / w, |j, _, _, step| {
+                mem.relax(i, j, gi + step, || 0.0, gi);
             });
         }
         self.geometry = Some(*trav.geometry());
