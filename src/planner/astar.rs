@@ -12,7 +12,7 @@
 //! and is reused across queries through generation stamps: a query neither clears nor
 //! allocates anything.
 
-use super::search::{SearchMemory, for_each_move, octile};
+use super::search::{Move, SearchMemory, moves, octile};
 use super::{PlanError, PlannedPath, Planner, Traversability, path_length_m};
 use crate::grid::Cell;
 
@@ -110,6 +110,7 @@ impl<const N: usize> AStar<N> {
         mem.begin();
         mem.open_source(s, octile(s % w, s / w, gc, gr));
         let mut expansions = 0u32;
+        let mut buf = [Move::default(); 8];
         while let Some(i) = mem.pop_and_close() {
             expansions += 1;
             if i == t {
@@ -118,9 +119,10 @@ impl<const N: usize> AStar<N> {
             let gi = mem.g(i);
             let (ic, ir) = (i % w, i / w);
             let fi = gi + octile(ic, ir, gc, gr);
-            for_each_move(trav, i, ic, ir, |j, jc, jr, step| {
-                mem.relax(i, j, gi + step, || octile(jc, jr, gc, gr), fi);
-            });
+            let count = moves(trav, i, ic, ir, &mut buf);
+            for m in &buf[..count] {
+                mem.relax(i, m.to, gi + m.step, || octile(m.col, m.row, gc, gr), fi);
+            }
         }
         Err(PlanError::NoPath { start, goal })
     }

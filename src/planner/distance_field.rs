@@ -9,7 +9,7 @@
 //!
 //! Working memory of capacity `N` is reused across sweeps through generation stamps.
 
-use super::search::{SearchMemory, for_each_move};
+use super::search::{Move, SearchMemory, moves};
 use super::{PlanError, PlannedPath, Planner, Traversability, path_length_m};
 use crate::grid::{Cell, GridGeometry};
 
@@ -93,12 +93,14 @@ impl<const N: usize> DistanceField<N> {
         mem.open_source(s, 0.0);
         let w = trav.geometry().width;
         let mut reached = 0u32;
+        let mut buf = [Move::default(); 8];
         while let Some(i) = mem.pop_and_close() {
             reached += 1;
             let gi = mem.g(i);
-            for_each_move(trav, i, i % w, i / w, |j, _, _, step| {
-                mem.relax(i, j, gi + step, || 0.0, gi);
-            });
+            let count = moves(trav, i, i % w, i / w, &mut buf);
+            for m in &buf[..count] {
+                mem.relax(i, m.to, gi + m.step, || 0.0, gi);
+            }
         }
         self.geometry = Some(*trav.geometry());
         self.source = source;

@@ -267,51 +267,66 @@ fn make_key(f: f32, g: f32) -> u64 {
     ((f.to_bits() as u64) << 32) | (!g.to_bits()) as u64
 }
 
-/// Calls `visit(neighbour, col, row, step)` for every legal move out of cell `i` = (`col`,
-/// `row`): orthogonal steps into passable cells, diagonal steps into passable cells whose two
-/// orthogonal neighbours are passable too (no corner cutting). `step` is the move's cost in
-/// cells, already multiplied by the entered cell's cost factor.
+/// One legal move: the entered cell's index and coordinates, and the step cost [cells]
+/// already multiplied by the entered cell's cost factor.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Move {
+    pub(crate) to: usize,
+    pub(crate) col: usize,
+    pub(crate) row: usize,
+    pub(crate) step: f32,
+}
+
+/// Writes into `out` every legal move out of cell `i` = (`col`, `row`) and returns how many:
+/// orthogonal steps into passable cells, diagonal steps into passable cells whose two
+/// orthogonal neighbours are passable too (no corner cutting).
 #[inline(always)]
-pub(crate) fn for_each_move<const N: usize>(
+pub(crate) fn moves<const N: usize>(
     trav: &Traversability<N>,
     i: usize,
     col: usize,
     row: usize,
-    mut visit: impl FnMut(usize, usize, usize, f32),
-) {
+    out: &mut [Move; 8],
+) -> usize {
     let codes = trav.codes();
     let w = trav.geometry().width;
     let h = trav.geometry().height;
     let uf = trav.unknown_factor();
     let factor = |c: u8| if c == CODE_FREE { 1.0 } else { uf };
+    let mut n = 0;
+    let mut add = |to: usize, col: usize, row: usize, step: f32| {
+        out[n] = Move { to, col, row, step };
+        n += 1;
+    };
     let west = col > 0 && codes[i - 1] != CODE_BLOCKED;
     let east = col + 1 < w && codes[i + 1] != CODE_BLOCKED;
     let south = row > 0 && codes[i - w] != CODE_BLOCKED;
     let north = row + 1 < h && codes[i + w] != CODE_BLOCKED;
     if west {
-        visit(i - 1, col - 1, row, factor(codes[i - 1]));
+        add(i - 1, col - 1, row, factor(codes[i - 1]));
     }
     if east {
-        visit(i + 1, col + 1, row, factor(codes[i + 1]));
+        add(i + 1, col + 1, row, factor(codes[i + 1]));
     }
     if south {
-        visit(i - w, col, row - 1, factor(codes[i - w]));
+        add(i - w, col, row - 1, factor(codes[i - w]));
         if west && codes[i - w - 1] != CODE_BLOCKED {
-            visit(i - w - 1, col - 1, row - 1, DIAGONAL * factor(codes[i - w - 1]));
+            add(i - w - 1, col - 1, row - 1, DIAGONAL * factor(codes[i - w - 1]));
         }
         if east && codes[i - w + 1] != CODE_BLOCKED {
-            visit(i - w + 1, col + 1, row - 1, DIAGONAL * factor(codes[i - w + 1]));
+            add(i - w + 1, col + 1, row - 1, DIAGONAL * factor(codes[i - w + 1]));
         }
     }
     if north {
-        visit(i + w, col, row + 1, factor(codes[i + w]));
+        add(i + w, col, row + 1, factor(codes[i + w]));
         if west && codes[i + w - 1] != CODE_BLOCKED {
-            visit(i + w - 1, col - 1, row + 1, DIAGONAL * factor(codes[i + w - 1]));
+            add(i + w - 1, col - 1, row + 1, DIAGONAL * factor(codes[i + w - 1]));
         }
         if east && codes[i + w + 1] != CODE_BLOCKED {
-            visit(i + w + 1, col + 1, row + 1, DIAGONAL * factor(codes[i + w + 1]));
+            add(i + w + 1, col + 1, row + 1, DIAGONAL * factor(codes[i + w + 1]));
         }
     }
+    n
 }
 
 /// Octile distance between cells `(c0, r0)` and `(c1, r1)` [cells]: the exact cost on an
