@@ -10,15 +10,12 @@ pub(crate) const DIAGONAL: f32 = core::f32::consts::SQRT_2;
 
 const NO_PARENT: u32 = u32::MAX;
 
-/// Per-cell search state, kept together so a relaxation touches one cache line.
+/// Per-cell state read on every relaxation.
 #[derive(Clone, Copy)]
 struct Node {
     /// `2 * generation` when the cell was reached this query, `+ 1` once it is closed.
     stamp: u32,
     g: f32,
-    parent: u32,
-    /// Position in the heap while open.
-    pos: u32,
 }
 
 /// An open-list entry.
@@ -28,16 +25,11 @@ struct Entry {
     idx: u32,
 }
 
-const ZERO_NODE: Node = Node {
-    stamp: 0,
-    g: 0.0,
-    parent: 0,
-    pos: 0,
-};
+const ZERO_NODE: Node = Node { stamp: 0, g: 0.0 };
 
 const ZERO_ENTRY: Entry = Entry { key: 0, idx: 0 };
 
-/// `Node::pos` of a cell waiting on the bypass stack rather than in the heap.
+/// `pos` of a cell waiting on the bypass stack rather than in the heap.
 const ON_STACK: u32 = u32::MAX;
 
 /// Open list: a binary heap growing from the front of `heap`, plus a bypass stack of cell
@@ -49,7 +41,12 @@ const ON_STACK: u32 = u32::MAX;
 /// constant. Heap and stack never hold more than the
 /// open cells, fewer than `N`, so they share one array.
 pub(crate) struct SearchMemory<const N: usize> {
+    /// Read on every relaxation: kept small.
     nodes: [Node; N],
+    /// Parent of each reached cell (`NO_PARENT` for the source).
+    parents: [u32; N],
+    /// Heap position of each open cell (or `ON_STACK`).
+    pos: [u32; N],
     heap: [Entry; N],
     heap_len: usize,
     stack_len: usize,
@@ -60,6 +57,8 @@ impl<const N: usize> SearchMemory<N> {
     pub(crate) const fn new() -> Self {
         Self {
             nodes: [ZERO_NODE; N],
+            parents: [0; N],
+            pos: [0; N],
             heap: [ZERO_ENTRY; N],
             heap_len: 0,
             stack_len: 0,
@@ -95,7 +94,7 @@ impl<const N: usize> SearchMemory<N> {
 
     #[inline]
     pub(crate) fn parent(&self, i: usize) -> Option<usize> {
-        let p = self.nodes[i].parent;
+        let p = self.parents[i];
         (p != NO_PARENT).then_some(p as usize)
     }
 
@@ -104,9 +103,8 @@ impl<const N: usize> SearchMemory<N> {
         self.nodes[i] = Node {
             stamp: 2 * self.generation,
             g: 0.0,
-            parent: NO_PARENT,
-            pos: 0,
         };
+        self.parents[i] = NO_PARENT;
         self.push(i, make_key(key, 0.0));
     }
 
@@ -132,20 +130,20 @@ impl<const N: usize> SearchMemory<N> {
                 return;
             }
             node.g = g;
-            node.parent = from as u32;
-            if node.pos == ON_STACK {
+            self.parents[to] = from as u32;
+            if self.pos[to] == ON_STACK {
                 return; // expanded before any heap entry anyway
             }
-            let p = node.pos as usize;
+            let p = self.pos[to] as usize;
             self.heap[p].key = make_key(g + h(), g);
             self.sift_up(p);
         } else {
             node.stamp = seen;
             node.g = g;
-            node.parent = from as u32;
+            self.parents[to] = from as u32;
             let f = g + h();
             if f <= f_current {
-                node.pos = ON_STACK;
+                self.pos[to] = ON_STACK;
                 self.stack_len += 1;
                 self.heap[N - self.stack_len].idx = to as u32;
             } else {
@@ -196,11 +194,11 @@ impl<const N: usize> SearchMemory<N> {
                 break;
             }
             self.heap[p] = up;
-            self.nodes[up.idx as usize].pos = p as u32;
+            self.pos[up.idx as usize] = p as u32;
             p = parent;
         }
         self.heap[p] = e;
-        self.nodes[e.idx as usize].pos = p as u32;
+        self.pos[e.idx as usize] = p as u32;
     }
 
     /// Fills the hole at `p` with the last-moved entry: Floyd's bottom-up variant (the hole
@@ -220,7 +218,7 @@ impl<const N: usize> SearchMemory<N> {
             }
             let down = self.heap[child];
             self.heap[p] = down;
-            self.nodes[down.idx as usize].pos = p as u32;
+            self.pos[down.idx as usize] = p as u32;
             p = child;
         }
         self.heap[p] = e;
