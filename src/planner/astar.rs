@@ -8,7 +8,7 @@
 //! cell is reopened. Ties on f are broken towards larger g (deeper nodes first), which cuts
 //! expansions on open ground without changing the cost found.
 //!
-//! Working memory (binary-heap open list, g-values, parents, closed flags) has capacity `N`
+//! Working memory (4-ary heap open list, g-values, parents, closed flags) has capacity `N`
 //! and is reused across queries through generation stamps: a query neither clears nor
 //! allocates anything.
 
