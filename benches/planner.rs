@@ -182,7 +182,10 @@ fn house() -> Map {
             for _ in 0..2 {
                 let c = wx[0] + 12 + random::below(&mut rng, wx[1] - wx[0] - 30);
                 let r = wy[0] + 12 + random::below(&mut rng, wy[1] - wy[0] - 30);
-                let (dw, dh) = (4 + random::below(&mut rng, 8), 4 + random::below(&mut rng, 8));
+                let (dw, dh) = (
+                    4 + random::below(&mut rng, 8),
+                    4 + random::below(&mut rng, 8),
+                );
                 wall(c, r, c + dw, r + dh, &mut blocked);
             }
         }
@@ -230,7 +233,10 @@ fn check_same_costs<const N: usize>(
         let (ours, e) = astar.path_cost(trav, a, b).unwrap();
         expansions += e as u64;
         let theirs = pathfinding_cost(map, a, b).unwrap() as f32 / ORTHO as f32;
-        assert!((ours - theirs).abs() < 1e-2, "{a:?}->{b:?}: {ours} vs {theirs}");
+        assert!(
+            (ours - theirs).abs() < 1e-2,
+            "{a:?}->{b:?}: {ours} vs {theirs}"
+        );
     }
     eprintln!(
         "{} queries on {} x {}: mean {:.0} expansions, {} passable cells",

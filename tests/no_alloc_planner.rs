@@ -39,7 +39,8 @@ const CAP: usize = 120 * 100;
 fn queries_and_updates_do_not_allocate() {
     let geometry = GridGeometry::new(120, 100, 0.1, Point2::new(0.0, 0.0)).unwrap();
     let mut grid = OccupancyGrid::<CAP>::new_boxed(geometry, LogOddsBounds::default()).unwrap();
-    let mut trav = Traversability::<CAP>::new_boxed(geometry, TraversabilityConfig::default()).unwrap();
+    let mut trav =
+        Traversability::<CAP>::new_boxed(geometry, TraversabilityConfig::default()).unwrap();
     let mut astar = AStar::<CAP>::new_boxed();
     let mut field = DistanceField::<CAP>::new_boxed();
     let mut path = vec![Cell::default(); CAP];
@@ -74,5 +75,10 @@ fn queries_and_updates_do_not_allocate() {
     }
     let after = ALLOCATIONS.load(Ordering::SeqCst);
     assert!(solved > 50, "only {solved} queries solved");
-    assert_eq!(after - before, 0, "planner allocated {} times", after - before);
+    assert_eq!(
+        after - before,
+        0,
+        "planner allocated {} times",
+        after - before
+    );
 }

@@ -119,7 +119,10 @@ impl MovingAiMap {
 
     /// Parses `.map` text; `path` names the source in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self, MovingAiError> {
-        let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
         let mut next = |expected: &str| {
             lines
                 .next()
@@ -207,7 +210,7 @@ pub struct Problem {
     pub goal_x: usize,
     /// Goal row (from the top).
     pub goal_y: usize,
-    /// Published optimal length [cells].
+    /// Published optimal length \[cells\].
     pub optimal: f64,
 }
 
@@ -228,7 +231,10 @@ impl Scenario {
 
     /// Parses `.scen` text; `path` names the source in errors.
     pub fn parse(text: &str, path: &Path, map: &MovingAiMap) -> Result<Self, MovingAiError> {
-        let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
         match lines.next() {
             Some((_, l)) if matches!(l.trim(), "version 1" | "version 1.0") => {}
             Some((n, l)) => return Err(malformed(path, n, "`version 1`", l)),
@@ -247,10 +253,14 @@ impl Scenario {
                 return Err(malformed(path, n, expected, l));
             }
             let int = |k: usize, what: &str| {
-                fields[k]
-                    .trim()
-                    .parse::<usize>()
-                    .map_err(|_| malformed(path, n, format!("{what} as a non-negative integer"), fields[k]))
+                fields[k].trim().parse::<usize>().map_err(|_| {
+                    malformed(
+                        path,
+                        n,
+                        format!("{what} as a non-negative integer"),
+                        fields[k],
+                    )
+                })
             };
             let bucket = int(0, "bucket")? as u32;
             let (w, h) = (int(2, "map width")?, int(3, "map height")?);
@@ -282,9 +292,18 @@ impl Scenario {
                     ));
                 }
             }
-            let optimal = fields[8].trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v >= 0.0);
+            let optimal = fields[8]
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v >= 0.0);
             let Some(optimal) = optimal else {
-                return Err(malformed(path, n, "optimal length as a non-negative number", fields[8]));
+                return Err(malformed(
+                    path,
+                    n,
+                    "optimal length as a non-negative number",
+                    fields[8],
+                ));
             };
             problems.push(Problem {
                 line: n,
@@ -306,8 +325,11 @@ mod tests {
     use super::*;
 
     fn map() -> MovingAiMap {
-        MovingAiMap::parse("type octile\nheight 2\nwidth 3\nmap\n.@T\nGS.\n", Path::new("t.map"))
-            .unwrap()
+        MovingAiMap::parse(
+            "type octile\nheight 2\nwidth 3\nmap\n.@T\nGS.\n",
+            Path::new("t.map"),
+        )
+        .unwrap()
     }
 
     #[test]
@@ -322,30 +344,61 @@ mod tests {
 
     #[test]
     fn malformed_maps_name_file_and_line() {
-        let e = MovingAiMap::parse("type octile\nheight 2\nwidth 3\nmap\n.@T\nGX.\n", Path::new("a.map"))
-            .unwrap_err();
-        assert!(e.to_string().starts_with("a.map:6: expected map row 1"), "{e}");
+        let e = MovingAiMap::parse(
+            "type octile\nheight 2\nwidth 3\nmap\n.@T\nGX.\n",
+            Path::new("a.map"),
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string().starts_with("a.map:6: expected map row 1"),
+            "{e}"
+        );
         let e = MovingAiMap::parse("type octile\nheight two\n", Path::new("a.map")).unwrap_err();
-        assert!(e.to_string().starts_with("a.map:2: expected `height N`"), "{e}");
-        let e = MovingAiMap::parse("type octile\nheight 2\nwidth 3\nmap\n.@T\n", Path::new("a.map"))
-            .unwrap_err();
+        assert!(
+            e.to_string().starts_with("a.map:2: expected `height N`"),
+            "{e}"
+        );
+        let e = MovingAiMap::parse(
+            "type octile\nheight 2\nwidth 3\nmap\n.@T\n",
+            Path::new("a.map"),
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("found \"end of file\""), "{e}");
     }
 
     #[test]
     fn scenarios_are_checked_against_the_map() {
         let m = map();
-        let ok = Scenario::parse("version 1\n0\tt.map\t3\t2\t0\t1\t2\t1\t2.0\n", Path::new("s"), &m)
-            .unwrap();
+        let ok = Scenario::parse(
+            "version 1\n0\tt.map\t3\t2\t0\t1\t2\t1\t2.0\n",
+            Path::new("s"),
+            &m,
+        )
+        .unwrap();
         assert_eq!(ok.problems[0].goal_x, 2);
         assert_eq!(ok.problems[0].line, 2);
-        let e = Scenario::parse("version 1\n0\tt.map\t3\t2\t1\t0\t2\t1\t2.0\n", Path::new("s"), &m)
-            .unwrap_err();
-        assert!(e.to_string().starts_with("s:2: expected start on a passable cell"), "{e}");
-        let e = Scenario::parse("version 1\n0\tt.map\t4\t2\t0\t1\t2\t1\t2.0\n", Path::new("s"), &m)
-            .unwrap_err();
+        let e = Scenario::parse(
+            "version 1\n0\tt.map\t3\t2\t1\t0\t2\t1\t2.0\n",
+            Path::new("s"),
+            &m,
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("s:2: expected start on a passable cell"),
+            "{e}"
+        );
+        let e = Scenario::parse(
+            "version 1\n0\tt.map\t4\t2\t0\t1\t2\t1\t2.0\n",
+            Path::new("s"),
+            &m,
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("map size 3 x 2"), "{e}");
         let e = Scenario::parse("version 2\n", Path::new("s"), &m).unwrap_err();
-        assert!(e.to_string().starts_with("s:1: expected `version 1`"), "{e}");
+        assert!(
+            e.to_string().starts_with("s:1: expected `version 1`"),
+            "{e}"
+        );
     }
 }

@@ -12,7 +12,11 @@ use papillon_sim::movingai::{MovingAiMap, Scenario};
 const CAP: usize = 49 * 49;
 
 fn data(name: &str) -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data/movingai/")).join(name)
+    PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/data/movingai/"
+    ))
+    .join(name)
 }
 
 fn arena() -> (MovingAiMap, Scenario) {
@@ -46,7 +50,12 @@ fn astar_matches_all_130_arena_optima() {
         assert!((r.cost_m - r.length_m).abs() <= 1e-3);
         field.compute(&trav, start).unwrap();
         let d = field.distance_to(goal).unwrap() as f64;
-        assert!((d - p.optimal).abs() <= 1e-3, "line {}: field {d} vs {}", p.line, p.optimal);
+        assert!(
+            (d - p.optimal).abs() <= 1e-3,
+            "line {}: field {d} vs {}",
+            p.line,
+            p.optimal
+        );
     }
 }
 
@@ -73,7 +82,12 @@ fn plan_command_exit_codes() {
         .arg(data("arena.map.scen"))
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["problems"], 130);
     assert_eq!(v["optimal"], 130);
@@ -98,7 +112,11 @@ fn plan_command_exit_codes() {
     assert!(text.contains("129/130 optimal"), "{text}");
     assert!(text.contains("MISMATCH"));
     // A malformed map: exit 2, one stderr line naming file and line.
-    std::fs::write(dir.join("bad.map"), "type octile\nheight 2\nwidth 2\nmap\n..\n.x\n").unwrap();
+    std::fs::write(
+        dir.join("bad.map"),
+        "type octile\nheight 2\nwidth 2\nmap\n..\n.x\n",
+    )
+    .unwrap();
     let out = sim()
         .args(["plan", "--map"])
         .arg(dir.join("bad.map"))

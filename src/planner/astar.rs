@@ -78,7 +78,7 @@ impl<const N: usize> AStar<N> {
         })
     }
 
-    /// Cost of the shortest path [m] and the number of expansions, without writing the path.
+    /// Cost of the shortest path \[m\] and the number of expansions, without writing the path.
     pub fn path_cost<const M: usize>(
         &mut self,
         trav: &Traversability<M>,
@@ -89,7 +89,7 @@ impl<const N: usize> AStar<N> {
         Ok((cost * trav.geometry().resolution_m, expansions))
     }
 
-    /// Runs the search; returns cost [cells], expansions and the goal's index.
+    /// Runs the search; returns cost \[cells\], expansions and the goal's index.
     fn search<const M: usize>(
         &mut self,
         trav: &Traversability<M>,

@@ -54,15 +54,17 @@ impl<const N: usize> DistanceField<N> {
     /// An empty field built directly on the heap.
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
-        let zeroed = std::boxed::Box::<Self>::new_zeroed();
-        // SAFETY: the memory is integers, floats and arrays of structs of them; `Option<GridGeometry>`
-        // is overwritten below before any read, through a raw pointer so no invalid value is
-        // ever read or dropped (GridGeometry has no drop glue); `Cell` and `u32` are integers.
+        // SAFETY: `DistanceField` is integers, floats, arrays of structs of them, and an
+        // `Option<GridGeometry>`. The all-zero pattern may not be a valid `Option`, so the field
+        // is written through a raw pointer before the box is formed (GridGeometry has no drop
+        // glue, so nothing is dropped); every other field is valid at zero.
         unsafe {
-            let raw = std::boxed::Box::into_raw(zeroed) as *mut Self;
+            let layout = std::alloc::Layout::new::<Self>();
+            let raw = std::alloc::alloc_zeroed(layout) as *mut Self;
+            if raw.is_null() {
+                std::alloc::handle_alloc_error(layout);
+            }
             core::ptr::addr_of_mut!((*raw).geometry).write(None);
-            core::ptr::addr_of_mut!((*raw).source).write(Cell::new(0, 0));
-            core::ptr::addr_of_mut!((*raw).reached).write(0);
             std::boxed::Box::from_raw(raw)
         }
     }
@@ -126,7 +128,7 @@ impl<const N: usize> DistanceField<N> {
             .then_some(i)
     }
 
-    /// Cost of the shortest path from the source to `cell` [m]; `None` if the cell is
+    /// Cost of the shortest path from the source to `cell` \[m\]; `None` if the cell is
     /// unreachable, outside the grid, or no sweep was made. O(1).
     #[inline]
     pub fn distance_to(&self, cell: Cell) -> Option<f32> {

@@ -48,9 +48,9 @@ pub enum PlanError {
     OutOfBounds {
         /// The cell asked for.
         cell: Cell,
-        /// Grid width [cells].
+        /// Grid width \[cells\].
         width: usize,
-        /// Grid height [cells].
+        /// Grid height \[cells\].
         height: usize,
     },
     /// No path joins start and goal.
@@ -109,10 +109,10 @@ impl core::error::Error for PlanError {}
 pub struct PlannedPath {
     /// Cells in the path, start and goal included.
     pub len: usize,
-    /// Geometric length of the path [m].
+    /// Geometric length of the path \[m\].
     pub length_m: f32,
     /// Cost minimised: the length with each step weighted by the cost factor of the cell it
-    /// enters [m]. Equals `length_m` when the path crosses no Unknown cell.
+    /// enters \[m\]. Equals `length_m` when the path crosses no Unknown cell.
     pub cost_m: f32,
     /// Cells expanded (closed) by the search.
     pub expansions: u32,
@@ -171,7 +171,7 @@ impl<const N: usize> Planner<N> for StraightLinePlanner {
     }
 }
 
-/// Geometric length of a cell path [m]: the sum of its steps (1 or sqrt(2) cells each, or the
+/// Geometric length of a cell path \[m\]: the sum of its steps (1 or sqrt(2) cells each, or the
 /// Euclidean distance between cell centres for longer steps) times `resolution_m`.
 pub fn path_length_m(cells: &[Cell], resolution_m: f32) -> f32 {
     let mut sum = 0.0f32;

@@ -6,7 +6,7 @@
 
 use super::traversability::{CODE_BLOCKED, CODE_FREE, Traversability};
 
-/// Diagonal step [cells].
+/// Diagonal step \[cells\].
 pub(crate) const DIAGONAL: f32 = core::f32::consts::SQRT_2;
 
 const NO_PARENT: u32 = u32::MAX;
@@ -272,7 +272,7 @@ fn make_key(f: f32, g: f32) -> u64 {
     ((f.to_bits() as u64) << 32) | (!g.to_bits()) as u64
 }
 
-/// One legal move: the entered cell's index and coordinates, and the step cost [cells]
+/// One legal move: the entered cell's index and coordinates, and the step cost \[cells\]
 /// already multiplied by the entered cell's cost factor.
 #[derive(Clone, Copy, Default)]
 pub(crate) struct Move {
@@ -316,25 +316,45 @@ pub(crate) fn moves<const N: usize>(
     if south {
         add(i - w, col, row - 1, factor(codes[i - w]));
         if west && codes[i - w - 1] != CODE_BLOCKED {
-            add(i - w - 1, col - 1, row - 1, DIAGONAL * factor(codes[i - w - 1]));
+            add(
+                i - w - 1,
+                col - 1,
+                row - 1,
+                DIAGONAL * factor(codes[i - w - 1]),
+            );
         }
         if east && codes[i - w + 1] != CODE_BLOCKED {
-            add(i - w + 1, col + 1, row - 1, DIAGONAL * factor(codes[i - w + 1]));
+            add(
+                i - w + 1,
+                col + 1,
+                row - 1,
+                DIAGONAL * factor(codes[i - w + 1]),
+            );
         }
     }
     if north {
         add(i + w, col, row + 1, factor(codes[i + w]));
         if west && codes[i + w - 1] != CODE_BLOCKED {
-            add(i + w - 1, col - 1, row + 1, DIAGONAL * factor(codes[i + w - 1]));
+            add(
+                i + w - 1,
+                col - 1,
+                row + 1,
+                DIAGONAL * factor(codes[i + w - 1]),
+            );
         }
         if east && codes[i + w + 1] != CODE_BLOCKED {
-            add(i + w + 1, col + 1, row + 1, DIAGONAL * factor(codes[i + w + 1]));
+            add(
+                i + w + 1,
+                col + 1,
+                row + 1,
+                DIAGONAL * factor(codes[i + w + 1]),
+            );
         }
     }
     n
 }
 
-/// Octile distance between cells `(c0, r0)` and `(c1, r1)` [cells]: the exact cost on an
+/// Octile distance between cells `(c0, r0)` and `(c1, r1)` \[cells\]: the exact cost on an
 /// empty grid, a lower bound whenever cost factors are at least 1.
 #[inline(always)]
 pub(crate) fn octile(c0: usize, r0: usize, c1: usize, r1: usize) -> f32 {
@@ -348,9 +368,29 @@ pub(crate) fn octile(c0: usize, r0: usize, c1: usize, r1: usize) -> f32 {
 impl<const N: usize> SearchMemory<N> {
     /// Memory built on the heap.
     pub(crate) fn new_boxed() -> std::boxed::Box<Self> {
-        let zeroed = std::boxed::Box::<Self>::new_zeroed();
         // SAFETY: all fields are integers, floats and arrays of structs of them; all-zero is
         // valid and is what `new` produces.
-        unsafe { zeroed.assume_init() }
+        unsafe { boxed_zeroed() }
     }
+}
+
+/// A `T` allocated on the heap with every byte zero, never built on the stack.
+///
+/// # Safety
+/// The all-zero bit pattern must be a valid `T`.
+#[cfg(feature = "std")]
+pub(crate) unsafe fn boxed_zeroed<T>() -> std::boxed::Box<T> {
+    let layout = std::alloc::Layout::new::<T>();
+    if layout.size() == 0 {
+        // SAFETY: a zero-sized `T` needs no memory; the caller vouches that zero is valid.
+        return unsafe { std::boxed::Box::new(core::mem::zeroed()) };
+    }
+    // SAFETY: the layout has a non-zero size.
+    let ptr = unsafe { std::alloc::alloc_zeroed(layout) } as *mut T;
+    if ptr.is_null() {
+        std::alloc::handle_alloc_error(layout);
+    }
+    // SAFETY: `ptr` was allocated by the global allocator with `T`'s layout and holds a valid
+    // `T` (all zero, valid per the caller).
+    unsafe { std::boxed::Box::from_raw(ptr) }
 }

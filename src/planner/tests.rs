@@ -8,7 +8,7 @@ use crate::random;
 const CAP: usize = 32 * 24;
 
 /// A plain O(V^2) Dijkstra over an explicit cost function, written apart from the planner's
-/// code: the reference for the property tests. Returns the cost [cells] or `None`.
+/// code: the reference for the property tests. Returns the cost \[cells\] or `None`.
 fn brute_force(
     w: i32,
     h: i32,
@@ -48,10 +48,17 @@ fn brute_force(
                 let Some(f) = cost_factor(nc, nr) else {
                     continue;
                 };
-                if dc != 0 && dr != 0 && (cost_factor(c + dc, r).is_none() || cost_factor(c, r + dr).is_none()) {
+                if dc != 0
+                    && dr != 0
+                    && (cost_factor(c + dc, r).is_none() || cost_factor(c, r + dr).is_none())
+                {
                     continue;
                 }
-                let step = if dc != 0 && dr != 0 { core::f32::consts::SQRT_2 } else { 1.0 };
+                let step = if dc != 0 && dr != 0 {
+                    core::f32::consts::SQRT_2
+                } else {
+                    1.0
+                };
                 let d = dist[b] + step * f;
                 if d < dist[at(nc, nr)] {
                     dist[at(nc, nr)] = d;
@@ -61,7 +68,10 @@ fn brute_force(
     }
 }
 
-fn random_grid(rng: &mut random::ProjectRng, density: f32) -> (OccupancyGrid<CAP>, Traversability<CAP>) {
+fn random_grid(
+    rng: &mut random::ProjectRng,
+    density: f32,
+) -> (OccupancyGrid<CAP>, Traversability<CAP>) {
     let g = GridGeometry::new(32, 24, 0.1, Point2::new(0.0, 0.0)).unwrap();
     let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
     let radius = [0.0, 0.1, 0.15][random::below(rng, 3)];
@@ -108,10 +118,19 @@ fn assert_valid_path(trav: &Traversability<CAP>, cells: &[Cell]) {
     }
     for w in cells.windows(2) {
         let (dc, dr) = (w[1].col - w[0].col, w[1].row - w[0].row);
-        assert!(dc.abs() <= 1 && dr.abs() <= 1 && (dc, dr) != (0, 0), "bad step {w:?}");
+        assert!(
+            dc.abs() <= 1 && dr.abs() <= 1 && (dc, dr) != (0, 0),
+            "bad step {w:?}"
+        );
         if dc != 0 && dr != 0 {
-            assert!(trav.is_passable(Cell::new(w[0].col + dc, w[0].row)), "corner cut {w:?}");
-            assert!(trav.is_passable(Cell::new(w[0].col, w[0].row + dr)), "corner cut {w:?}");
+            assert!(
+                trav.is_passable(Cell::new(w[0].col + dc, w[0].row)),
+                "corner cut {w:?}"
+            );
+            assert!(
+                trav.is_passable(Cell::new(w[0].col, w[0].row + dr)),
+                "corner cut {w:?}"
+            );
         }
     }
 }
@@ -148,9 +167,16 @@ fn astar_distance_field_and_brute_force_agree_on_random_grids() {
                     compared += 1;
                     let cost_m = cost * 0.1;
                     let p = got.unwrap();
-                    assert!((p.cost_m - cost_m).abs() < 1e-4, "case {case}: A* {} vs {cost_m}", p.cost_m);
+                    assert!(
+                        (p.cost_m - cost_m).abs() < 1e-4,
+                        "case {case}: A* {} vs {cost_m}",
+                        p.cost_m
+                    );
                     let d = field.distance_to(goal).unwrap();
-                    assert!((d - cost_m).abs() < 1e-4, "case {case}: field {d} vs {cost_m}");
+                    assert!(
+                        (d - cost_m).abs() < 1e-4,
+                        "case {case}: field {d} vs {cost_m}"
+                    );
                     assert_eq!(path[0], start);
                     assert_eq!(path[p.len - 1], goal);
                     assert_valid_path(&trav, &path[..p.len]);
@@ -174,16 +200,24 @@ fn diagonal_moves_never_cut_corners() {
     let mut astar = AStar::<9>::new();
     let mut path = [Cell::default(); 9];
     let t = Traversability::<9>::from_blocked(3, 3, |c| c == Cell::new(1, 0)).unwrap();
-    let p = astar.find_path(&t, Cell::new(0, 0), Cell::new(1, 1), &mut path).unwrap();
-    assert_eq!(&path[..p.len], &[Cell::new(0, 0), Cell::new(0, 1), Cell::new(1, 1)]);
+    let p = astar
+        .find_path(&t, Cell::new(0, 0), Cell::new(1, 1), &mut path)
+        .unwrap();
+    assert_eq!(
+        &path[..p.len],
+        &[Cell::new(0, 0), Cell::new(0, 1), Cell::new(1, 1)]
+    );
     assert_eq!(p.length_m, 2.0);
     let t = Traversability::<9>::from_blocked(3, 3, |c| c == Cell::new(0, 1)).unwrap();
-    let p = astar.find_path(&t, Cell::new(0, 0), Cell::new(1, 1), &mut path).unwrap();
+    let p = astar
+        .find_path(&t, Cell::new(0, 0), Cell::new(1, 1), &mut path)
+        .unwrap();
     assert_eq!(p.len, 3);
     assert_eq!(p.length_m, 2.0);
     // Both blocked: the diagonal gap is closed.
-    let t = Traversability::<9>::from_blocked(3, 3, |c| c == Cell::new(0, 1) || c == Cell::new(1, 0))
-        .unwrap();
+    let t =
+        Traversability::<9>::from_blocked(3, 3, |c| c == Cell::new(0, 1) || c == Cell::new(1, 0))
+            .unwrap();
     assert_eq!(
         astar.find_path(&t, Cell::new(0, 0), Cell::new(1, 1), &mut path),
         Err(PlanError::NoPath {
@@ -193,7 +227,9 @@ fn diagonal_moves_never_cut_corners() {
     );
     // Open: one diagonal step.
     let t = Traversability::<9>::from_blocked(3, 3, |_| false).unwrap();
-    let p = astar.find_path(&t, Cell::new(0, 0), Cell::new(1, 1), &mut path).unwrap();
+    let p = astar
+        .find_path(&t, Cell::new(0, 0), Cell::new(1, 1), &mut path)
+        .unwrap();
     assert_eq!(p.len, 2);
     assert!((p.length_m - core::f32::consts::SQRT_2).abs() < 1e-6);
 }
@@ -205,11 +241,15 @@ fn errors_name_the_problem() {
     let mut path = [Cell::default(); 16];
     assert_eq!(
         astar.find_path(&t, Cell::new(2, 2), Cell::new(0, 0), &mut path),
-        Err(PlanError::StartBlocked { cell: Cell::new(2, 2) })
+        Err(PlanError::StartBlocked {
+            cell: Cell::new(2, 2)
+        })
     );
     assert_eq!(
         astar.find_path(&t, Cell::new(0, 0), Cell::new(2, 2), &mut path),
-        Err(PlanError::GoalBlocked { cell: Cell::new(2, 2) })
+        Err(PlanError::GoalBlocked {
+            cell: Cell::new(2, 2)
+        })
     );
     assert_eq!(
         astar.find_path(&t, Cell::new(0, 0), Cell::new(4, 0), &mut path),
@@ -222,16 +262,29 @@ fn errors_name_the_problem() {
     let mut short = [Cell::default(); 3];
     assert_eq!(
         astar.find_path(&t, Cell::new(0, 0), Cell::new(3, 0), &mut short),
-        Err(PlanError::CapacityExceeded { needed: 4, capacity: 3 })
+        Err(PlanError::CapacityExceeded {
+            needed: 4,
+            capacity: 3
+        })
     );
     let mut small = AStar::<8>::new();
     assert_eq!(
         small.find_path(&t, Cell::new(0, 0), Cell::new(3, 3), &mut path),
-        Err(PlanError::CapacityExceeded { needed: 16, capacity: 8 })
+        Err(PlanError::CapacityExceeded {
+            needed: 16,
+            capacity: 8
+        })
     );
-    let p = astar.find_path(&t, Cell::new(1, 1), Cell::new(1, 1), &mut path).unwrap();
+    let p = astar
+        .find_path(&t, Cell::new(1, 1), Cell::new(1, 1), &mut path)
+        .unwrap();
     assert_eq!((p.len, p.length_m), (1, 0.0));
-    let msg = std::format!("{}", PlanError::GoalBlocked { cell: Cell::new(2, 2) });
+    let msg = std::format!(
+        "{}",
+        PlanError::GoalBlocked {
+            cell: Cell::new(2, 2)
+        }
+    );
     assert_eq!(msg, "goal cell (2, 2) is blocked");
 }
 
@@ -252,7 +305,9 @@ fn unknown_cells_cost_their_factor() {
     }
     let mut astar = AStar::<21>::new();
     let mut path = [Cell::default(); 21];
-    let p = astar.find_path(&t, Cell::new(0, 1), Cell::new(6, 1), &mut path).unwrap();
+    let p = astar
+        .find_path(&t, Cell::new(0, 1), Cell::new(6, 1), &mut path)
+        .unwrap();
     // Straight through five Unknown cells: 5 * 3 + 1 = 16; detour: 2 diagonals + 4 = 6.83.
     assert!((p.cost_m - (4.0 + 2.0 * core::f32::consts::SQRT_2)).abs() < 1e-5);
     assert!((p.length_m - p.cost_m).abs() < 1e-5);
@@ -261,7 +316,9 @@ fn unknown_cells_cost_their_factor() {
         unknown_policy: UnknownPolicy::Traversable { cost_factor: 1.0 },
     })
     .unwrap();
-    let p = astar.find_path(&t, Cell::new(0, 1), Cell::new(6, 1), &mut path).unwrap();
+    let p = astar
+        .find_path(&t, Cell::new(0, 1), Cell::new(6, 1), &mut path)
+        .unwrap();
     assert!((p.cost_m - 6.0).abs() < 1e-5);
 }
 
@@ -271,8 +328,10 @@ fn memory_is_reused_across_many_queries() {
     let (_, trav) = random_grid(&mut rng, 0.2);
     let mut astar = AStar::<CAP>::new();
     let mut path = [Cell::default(); CAP];
-    let (Some(a), Some(b)) = (random_passable(&mut rng, &trav), random_passable(&mut rng, &trav))
-    else {
+    let (Some(a), Some(b)) = (
+        random_passable(&mut rng, &trav),
+        random_passable(&mut rng, &trav),
+    ) else {
         panic!("no passable cells");
     };
     let first = astar.find_path(&trav, a, b, &mut path);
@@ -320,8 +379,10 @@ fn waypoint_segments_never_touch_blocked_cells() {
     let mut checked = 0usize;
     for case in 0..200 {
         let (_, trav) = random_grid(&mut rng, [0.05, 0.15, 0.3][case % 3]);
-        let (Some(a), Some(b)) = (random_passable(&mut rng, &trav), random_passable(&mut rng, &trav))
-        else {
+        let (Some(a), Some(b)) = (
+            random_passable(&mut rng, &trav),
+            random_passable(&mut rng, &trav),
+        ) else {
             continue;
         };
         let Ok(p) = astar.find_path(&trav, a, b, &mut path) else {
@@ -375,7 +436,15 @@ fn supercover_includes_both_cells_at_a_corner() {
     );
     // Straight line along a row: only the row's cells.
     supercover_all(Cell::new(0, 0), Cell::new(3, 0), &mut seen, &mut n);
-    assert_eq!(&seen[..n], &[Cell::new(0, 0), Cell::new(1, 0), Cell::new(2, 0), Cell::new(3, 0)]);
+    assert_eq!(
+        &seen[..n],
+        &[
+            Cell::new(0, 0),
+            Cell::new(1, 0),
+            Cell::new(2, 0),
+            Cell::new(3, 0)
+        ]
+    );
 }
 
 fn supercover_all(a: Cell, b: Cell, seen: &mut [Cell], n: &mut usize) {
@@ -392,12 +461,16 @@ fn straight_line_double_checks_endpoints() {
     let t = Traversability::<16>::from_blocked(4, 4, |c| c == Cell::new(2, 2)).unwrap();
     let mut planner = StraightLinePlanner;
     let mut path = [Cell::default(); 2];
-    let p = planner.plan(&t, Cell::new(0, 0), Cell::new(3, 3), &mut path).unwrap();
+    let p = planner
+        .plan(&t, Cell::new(0, 0), Cell::new(3, 3), &mut path)
+        .unwrap();
     assert_eq!(p.len, 2);
     assert!((p.length_m - crate::math::sqrt(18.0)).abs() < 1e-5);
     assert_eq!(
         planner.plan(&t, Cell::new(0, 0), Cell::new(2, 2), &mut path),
-        Err(PlanError::GoalBlocked { cell: Cell::new(2, 2) })
+        Err(PlanError::GoalBlocked {
+            cell: Cell::new(2, 2)
+        })
     );
 }
 

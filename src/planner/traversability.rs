@@ -14,7 +14,7 @@
 
 use crate::grid::{Cell, CellClass, CellObserver, GridGeometry, OccupancyGrid};
 
-/// Default robot radius [m]: the Pioneer P3-DX body (about 0.45 m wide, 0.38 m from the wheel
+/// Default robot radius \[m\]: the Pioneer P3-DX body (about 0.45 m wide, 0.38 m from the wheel
 /// axle to the front bumper) fits in a 0.25 m disc around its centre of rotation.
 pub const P3DX_RADIUS_M: f32 = 0.25;
 
@@ -51,7 +51,7 @@ pub enum UnknownPolicy {
 /// Configuration of a [`Traversability`] layer.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TraversabilityConfig {
-    /// Robot radius [m]; cells whose centre lies closer than this to an Occupied cell's centre
+    /// Robot radius \[m\]; cells whose centre lies closer than this to an Occupied cell's centre
     /// are blocked. Zero: only Occupied cells are blocked.
     pub robot_radius_m: f32,
     /// Treatment of Unknown cells.
@@ -83,7 +83,7 @@ pub enum TraversabilityError {
     },
     /// The grid is empty (zero width or height).
     EmptyGrid,
-    /// The robot radius is negative or not finite [m].
+    /// The robot radius is negative or not finite \[m\].
     BadRadius(f32),
     /// The inflation disc has more offsets than [`MAX_STENCIL`].
     InflationTooLarge {
@@ -104,17 +104,26 @@ impl core::fmt::Display for TraversabilityError {
                 "traversability needs {needed} cells but its capacity is {capacity} cells"
             ),
             TraversabilityError::EmptyGrid => {
-                write!(f, "traversability grid must be at least one cell wide and high")
+                write!(
+                    f,
+                    "traversability grid must be at least one cell wide and high"
+                )
             }
             TraversabilityError::BadRadius(r) => {
-                write!(f, "robot radius must be a finite non-negative number of metres, got {r}")
+                write!(
+                    f,
+                    "robot radius must be a finite non-negative number of metres, got {r}"
+                )
             }
             TraversabilityError::InflationTooLarge { needed, capacity } => write!(
                 f,
                 "inflation disc needs {needed} cell offsets but at most {capacity} are allowed"
             ),
             TraversabilityError::BadCostFactor(c) => {
-                write!(f, "unknown-cell cost factor must be finite and at least 1, got {c}")
+                write!(
+                    f,
+                    "unknown-cell cost factor must be finite and at least 1, got {c}"
+                )
             }
         }
     }
@@ -156,7 +165,7 @@ impl<const N: usize> core::fmt::Debug for Traversability<N> {
 }
 
 impl<const N: usize> Traversability<N> {
-    /// Capacity [cells].
+    /// Capacity \[cells\].
     pub const CAPACITY: usize = N;
 
     /// An all-Unknown layer of the given geometry, built on the stack. For large `N` on a host
@@ -187,11 +196,10 @@ impl<const N: usize> Traversability<N> {
         geometry: GridGeometry,
         config: TraversabilityConfig,
     ) -> Result<std::boxed::Box<Self>, TraversabilityError> {
-        let zeroed = std::boxed::Box::<Self>::new_zeroed();
         // SAFETY: every field is plain data (integers, floats, a bool, arrays of them, and
         // `GridGeometry` made of a `usize`, floats and a `Point2` of floats), for which the
         // all-zero bit pattern is valid. `configure` and `reset_cells` then set every field.
-        let mut t = unsafe { zeroed.assume_init() };
+        let mut t: std::boxed::Box<Self> = unsafe { super::search::boxed_zeroed() };
         t.configure(geometry, config)?;
         t.reset_cells();
         Ok(t)
@@ -428,7 +436,7 @@ impl<const N: usize> Traversability<N> {
         }
     }
 
-    /// Offsets (col, row) [cells] of the inflation disc, (0, 0) included.
+    /// Offsets (col, row) \[cells\] of the inflation disc, (0, 0) included.
     pub fn inflation_stencil(&self) -> &[[i16; 2]] {
         &self.stencil[..self.stencil_len]
     }

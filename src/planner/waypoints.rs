@@ -59,7 +59,7 @@ pub fn supercover(a: Cell, b: Cell, mut visit: impl FnMut(Cell) -> bool) -> bool
     true
 }
 
-/// Prunes `path` to waypoints: the map-frame centres [m] of the first cell, the cells where
+/// Prunes `path` to waypoints: the map-frame centres \[m\] of the first cell, the cells where
 /// the line of sight from the previous waypoint ends, and the last cell. Writes them into
 /// `out` and returns how many.
 ///

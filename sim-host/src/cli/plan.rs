@@ -10,10 +10,10 @@ use papillon::planner::{AStar, Traversability};
 
 use crate::movingai::{MovingAiMap, Scenario};
 
-/// Largest map the command accepts [cells] (1024 x 1024).
+/// Largest map the command accepts \[cells\] (1024 x 1024).
 pub const PLAN_CAPACITY: usize = 1 << 20;
 
-/// Tolerance on lengths [cells].
+/// Tolerance on lengths \[cells\].
 pub const TOLERANCE: f64 = 1e-3;
 
 /// Arguments of `papillon-sim plan`.
@@ -39,13 +39,13 @@ pub struct Solved {
     pub start: (usize, usize),
     /// Goal (x, y), Moving AI coordinates.
     pub goal: (usize, usize),
-    /// Published optimal length [cells].
+    /// Published optimal length \[cells\].
     pub expected: f64,
-    /// Length found [cells]; `None` if no path was found.
+    /// Length found \[cells\]; `None` if no path was found.
     pub computed: Option<f64>,
     /// Cells expanded.
     pub expansions: u32,
-    /// Time of the query [µs].
+    /// Time of the query \[µs\].
     pub time_us: f64,
 }
 
@@ -68,7 +68,7 @@ pub struct Report {
     pub mismatches: Vec<Solved>,
     /// Mean expansions per query.
     pub mean_expansions: f64,
-    /// Mean time per query [µs].
+    /// Mean time per query \[µs\].
     pub mean_us: f64,
 }
 
