@@ -118,10 +118,9 @@ impl<const N: usize> AStar<N> {
             }
             let gi = mem.g(i);
             let (ic, ir) = (i % w, i / w);
-            let fi = gi + octile(ic, ir, gc, gr);
             let count = moves(trav, i, ic, ir, &mut buf);
             for m in &buf[..count] {
-                mem.relax(i, m.to, gi + m.step, || octile(m.col, m.row, gc, gr), fi);
+                mem.relax(i, m.to, gi + m.step, || octile(m.col, m.row, gc, gr));
             }
         }
         Err(PlanError::NoPath { start, goal })

@@ -101,7 +101,7 @@ impl<const N: usize> DistanceField<N> {
             let gi = mem.g(i);
             let count = moves(trav, i, i % w, i / w, &mut buf);
             for m in &buf[..count] {
-                mem.relax(i, m.to, gi + m.step, || 0.0, gi);
+                mem.relax(i, m.to, gi + m.step, || 0.0);
             }
         }
         self.geometry = Some(*trav.geometry());

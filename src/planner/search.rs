@@ -30,17 +30,23 @@ const ZERO_NODE: Node = Node { stamp: 0, g: 0.0 };
 
 const ZERO_ENTRY: Entry = Entry { key: 0, idx: 0 };
 
+/// Relative slack of the bypass test, one unit in the last place of an f32. Along a straight
+/// diagonal run f stays constant in exact arithmetic but wobbles by rounding; the slack lets
+/// such cells bypass the heap too. Every cell taken from the stack then has f at most
+/// `BYPASS_SLACK` times the open list's minimum, so a path found costs at most that factor
+/// times the optimum (1.2e-7 relative, the size of the rounding of the f32 sums themselves).
+const BYPASS_SLACK: f32 = 1.0 + f32::EPSILON;
+
 /// `pos` of a cell waiting on the bypass stack rather than in the heap.
 const ON_STACK: u32 = u32::MAX;
 
 /// Open list: a 4-ary heap growing from the front of `heap`, plus a bypass stack of cell
-/// indices growing from its back. A cell opened with f no greater than the f of the cell being
-/// expanded (the minimum of the open list) would go straight to the top of the heap; it is
-/// pushed on the stack instead and expanded next, skipping two heap operations (one of the
-/// optimisations of Sun, Yeoh, Chen & Koenig, "Simple optimization techniques for A*-based
-/// search", AAMAS 2009). It is exact, and pays on open ground, where straight runs keep f
-/// constant. Heap and stack never hold more than the
-/// open cells, fewer than `N`, so they share one array.
+/// indices growing from its back. A cell opened with f no greater than the open list's minimum
+/// (up to [`BYPASS_SLACK`]) would go straight to the top of the heap; it is pushed on the stack
+/// instead and expanded next, skipping two heap operations (one of the optimisations of Sun,
+/// Yeoh, Chen & Koenig, "Simple optimization techniques for A*-based search", AAMAS 2009). It
+/// pays on open ground, where straight runs keep f constant. Heap and stack never hold more
+/// than the open cells, fewer than `N`, so they share one array.
 pub(crate) struct SearchMemory<const N: usize> {
     /// Read on every relaxation: kept small.
     nodes: [Node; N],
@@ -51,6 +57,9 @@ pub(crate) struct SearchMemory<const N: usize> {
     heap: [Entry; N],
     heap_len: usize,
     stack_len: usize,
+    /// New cells with f up to this bypass the heap: the f of the last cell taken from the
+    /// heap (the open list's minimum then) times [`BYPASS_SLACK`].
+    bypass_limit: f32,
     generation: u32,
 }
 
@@ -63,6 +72,7 @@ impl<const N: usize> SearchMemory<N> {
             heap: [ZERO_ENTRY; N],
             heap_len: 0,
             stack_len: 0,
+            bypass_limit: 0.0,
             generation: 0,
         }
     }
@@ -71,6 +81,7 @@ impl<const N: usize> SearchMemory<N> {
     pub(crate) fn begin(&mut self) {
         self.heap_len = 0;
         self.stack_len = 0;
+        self.bypass_limit = 0.0;
         if self.generation >= u32::MAX / 2 - 1 {
             self.nodes.fill(ZERO_NODE);
             self.generation = 0;
@@ -110,17 +121,9 @@ impl<const N: usize> SearchMemory<N> {
     }
 
     /// Relaxes the edge `from -> to` with tentative cost `g`; `h` gives the heuristic of `to`
-    /// (called only when `to` is opened or improved); `f_current` is the f of the cell being
-    /// expanded, the minimum over the open list.
+    /// (called only when `to` is opened or improved).
     #[inline(always)]
-    pub(crate) fn relax(
-        &mut self,
-        from: usize,
-        to: usize,
-        g: f32,
-        h: impl FnOnce() -> f32,
-        f_current: f32,
-    ) {
+    pub(crate) fn relax(&mut self, from: usize, to: usize, g: f32, h: impl FnOnce() -> f32) {
         let seen = 2 * self.generation;
         let node = &mut self.nodes[to];
         if node.stamp == seen + 1 {
@@ -143,7 +146,7 @@ impl<const N: usize> SearchMemory<N> {
             node.g = g;
             self.parents[to] = from as u32;
             let f = g + h();
-            if f <= f_current {
+            if f <= self.bypass_limit {
                 self.pos[to] = ON_STACK;
                 self.stack_len += 1;
                 self.heap[N - self.stack_len].idx = to as u32;
@@ -164,7 +167,9 @@ impl<const N: usize> SearchMemory<N> {
             if self.heap_len == 0 {
                 return None;
             }
-            let top = self.heap[0].idx as usize;
+            let Entry { key, idx } = self.heap[0];
+            let top = idx as usize;
+            self.bypass_limit = f32::from_bits((key >> 32) as u32) * BYPASS_SLACK;
             self.heap_len -= 1;
             if self.heap_len > 0 {
                 self.heap[0] = self.heap[self.heap_len];
