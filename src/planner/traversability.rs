@@ -1,0 +1,688 @@
+//! Traversability: which cells the robot may enter, and at what cost.
+//!
+//! Occupied cells are blocked. Obstacles are inflated by the robot radius (configuration
+//! space for a disc robot, Lozano-Pérez, "Spatial planning: a configuration space approach",
+//! IEEE Trans. Computers C-32(2), 1983): a cell whose centre is closer than `robot_radius_m`
+//! to the centre of an Occupied cell is blocked too. Unknown cells are either traversable at a
+//! cost factor (exploration plans through unknown space optimistically) or blocked (strict).
+//!
+//! Inflation is kept up to date incrementally: for every cell the layer counts the Occupied
+//! cells within the radius (a precomputed disc stencil of offsets). When a cell becomes or
+//! stops being Occupied, the counts under its stencil are incremented or decremented; a cell is
+//! inflated while its count is non-zero. The layer is a [`CellObserver`], so passing it to the
+//! grid's updates keeps it current; no query rescans the grid.
+
+use crate::grid::{Cell, CellClass, CellObserver, GridGeometry, OccupancyGrid};
+
+/// Default robot radius \[m\]: the Pioneer P3-DX body (about 0.45 m wide, 0.38 m from the wheel
+/// axle to the front bumper) fits in a 0.25 m disc around its centre of rotation.
+pub const P3DX_RADIUS_M: f32 = 0.25;
+
+/// Default cost factor of Unknown cells: 1, i.e. fully optimistic.
+pub const DEFAULT_UNKNOWN_COST_FACTOR: f32 = 1.0;
+
+/// Most offsets an inflation disc may hold (a radius of up to 17 cells).
+pub const MAX_STENCIL: usize = 1024;
+
+/// Per-cell step code: blocked.
+pub(crate) const CODE_BLOCKED: u8 = 0;
+/// Per-cell step code: Free (or Occupied-free benchmark cell), cost factor 1.
+pub(crate) const CODE_FREE: u8 = 1;
+/// Per-cell step code: Unknown, traversable at the configured factor.
+pub(crate) const CODE_UNKNOWN: u8 = 2;
+
+const CLASS_UNKNOWN: u8 = 0;
+const CLASS_FREE: u8 = 1;
+const CLASS_OCCUPIED: u8 = 2;
+
+/// What to do with Unknown cells.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum UnknownPolicy {
+    /// Unknown cells may be crossed; entering one costs `cost_factor` times a Free step
+    /// (`cost_factor >= 1`, which keeps the octile heuristic admissible).
+    Traversable {
+        /// Multiplier of the step cost into an Unknown cell; at least 1.
+        cost_factor: f32,
+    },
+    /// Unknown cells are blocked (strict mode).
+    Blocked,
+}
+
+/// Configuration of a [`Traversability`] layer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TraversabilityConfig {
+    /// Robot radius \[m\]; cells whose centre lies closer than this to an Occupied cell's centre
+    /// are blocked. Zero: only Occupied cells are blocked.
+    pub robot_radius_m: f32,
+    /// Treatment of Unknown cells.
+    pub unknown_policy: UnknownPolicy,
+}
+
+impl Default for TraversabilityConfig {
+    /// P3-DX radius, Unknown traversable at factor 1.
+    fn default() -> Self {
+        Self {
+            robot_radius_m: P3DX_RADIUS_M,
+            unknown_policy: UnknownPolicy::Traversable {
+                cost_factor: DEFAULT_UNKNOWN_COST_FACTOR,
+            },
+        }
+    }
+}
+
+/// Errors from building a traversability layer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum TraversabilityError {
+    /// The grid has more cells than the layer's capacity.
+    CapacityExceeded {
+        /// Cells needed.
+        needed: usize,
+        /// Cells the layer holds.
+        capacity: usize,
+    },
+    /// The grid is empty (zero width or height).
+    EmptyGrid,
+    /// The robot radius is negative or not finite \[m\].
+    BadRadius(f32),
+    /// The inflation disc has more offsets than [`MAX_STENCIL`].
+    InflationTooLarge {
+        /// Offsets the disc needs.
+        needed: usize,
+        /// [`MAX_STENCIL`].
+        capacity: usize,
+    },
+    /// The Unknown cost factor is below 1 or not finite.
+    BadCostFactor(f32),
+}
+
+impl core::fmt::Display for TraversabilityError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            TraversabilityError::CapacityExceeded { needed, capacity } => write!(
+                f,
+                "traversability needs {needed} cells but its capacity is {capacity} cells"
+            ),
+            TraversabilityError::EmptyGrid => {
+                write!(
+                    f,
+                    "traversability grid must be at least one cell wide and high"
+                )
+            }
+            TraversabilityError::BadRadius(r) => {
+                write!(
+                    f,
+                    "robot radius must be a finite non-negative number of metres, got {r}"
+                )
+            }
+            TraversabilityError::InflationTooLarge { needed, capacity } => write!(
+                f,
+                "inflation disc needs {needed} cell offsets but at most {capacity} are allowed"
+            ),
+            TraversabilityError::BadCostFactor(c) => {
+                write!(
+                    f,
+                    "unknown-cell cost factor must be finite and at least 1, got {c}"
+                )
+            }
+        }
+    }
+}
+
+impl core::error::Error for TraversabilityError {}
+
+/// Traversability of up to `N` cells: blocked flags (obstacles and their inflation) and step
+/// cost factors, maintained incrementally from the occupancy grid.
+///
+/// Build it with [`Self::new`] / [`Self::new_boxed`] and load a grid with
+/// [`Self::rebuild_from`]; then pass it as the observer of every grid update
+/// (`grid.add_evidence(i, delta, &mut trav)`) so it stays current. For benchmarks on plain
+/// blocked/passable maps, [`Self::from_blocked`] builds it without a grid or inflation.
+#[derive(Clone)]
+pub struct Traversability<const N: usize> {
+    geometry: GridGeometry,
+    robot_radius_m: f32,
+    unknown_blocked: bool,
+    unknown_cost_factor: f32,
+    stencil: [[i16; 2]; MAX_STENCIL],
+    stencil_len: usize,
+    /// Cell classes (CLASS_*).
+    class: [u8; N],
+    /// Occupied cells within the inflation radius (the cell itself included).
+    near: [u16; N],
+    /// Step code (CODE_*), derived from `class` and `near`.
+    code: [u8; N],
+}
+
+impl<const N: usize> core::fmt::Debug for Traversability<N> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Traversability")
+            .field("geometry", &self.geometry)
+            .field("config", &self.config())
+            .field("stencil_len", &self.stencil_len)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<const N: usize> Traversability<N> {
+    /// Capacity \[cells\].
+    pub const CAPACITY: usize = N;
+
+    /// An all-Unknown layer of the given geometry, built on the stack. For large `N` on a host
+    /// prefer [`Self::new_boxed`].
+    pub fn new(
+        geometry: GridGeometry,
+        config: TraversabilityConfig,
+    ) -> Result<Self, TraversabilityError> {
+        let mut t = Self {
+            geometry,
+            robot_radius_m: 0.0,
+            unknown_blocked: false,
+            unknown_cost_factor: 1.0,
+            stencil: [[0; 2]; MAX_STENCIL],
+            stencil_len: 0,
+            class: [CLASS_UNKNOWN; N],
+            near: [0; N],
+            code: [CODE_BLOCKED; N],
+        };
+        t.configure(geometry, config)?;
+        t.reset_cells();
+        Ok(t)
+    }
+
+    /// An all-Unknown layer built directly on the heap (never on the stack, whatever `N`).
+    #[cfg(feature = "std")]
+    pub fn new_boxed(
+        geometry: GridGeometry,
+        config: TraversabilityConfig,
+    ) -> Result<std::boxed::Box<Self>, TraversabilityError> {
+        // SAFETY: every field is plain data (integers, floats, a bool, arrays of them, and
+        // `GridGeometry` made of a `usize`, floats and a `Point2` of floats), for which the
+        // all-zero bit pattern is valid. `configure` and `reset_cells` then set every field.
+        let mut t: std::boxed::Box<Self> = unsafe { super::search::boxed_zeroed() };
+        t.configure(geometry, config)?;
+        t.reset_cells();
+        Ok(t)
+    }
+
+    /// A layer over a plain blocked/passable map of `width` x `height` cells (resolution 1 m,
+    /// origin 0, no inflation, no Unknown cells): `blocked(cell)` says which cells are walls.
+    /// Lengths are then in cells. Used for benchmark maps.
+    pub fn from_blocked(
+        width: usize,
+        height: usize,
+        blocked: impl FnMut(Cell) -> bool,
+    ) -> Result<Self, TraversabilityError> {
+        let geometry = Self::unit_geometry(width, height)?;
+        let mut t = Self::new(geometry, Self::no_inflation())?;
+        t.load_blocked(width, height, blocked)?;
+        Ok(t)
+    }
+
+    /// [`Self::from_blocked`], built on the heap.
+    #[cfg(feature = "std")]
+    pub fn from_blocked_boxed(
+        width: usize,
+        height: usize,
+        blocked: impl FnMut(Cell) -> bool,
+    ) -> Result<std::boxed::Box<Self>, TraversabilityError> {
+        let geometry = Self::unit_geometry(width, height)?;
+        let mut t = Self::new_boxed(geometry, Self::no_inflation())?;
+        t.load_blocked(width, height, blocked)?;
+        Ok(t)
+    }
+
+    /// Replaces the content with a plain blocked/passable map (see [`Self::from_blocked`]),
+    /// reusing this layer's memory.
+    pub fn load_blocked(
+        &mut self,
+        width: usize,
+        height: usize,
+        mut blocked: impl FnMut(Cell) -> bool,
+    ) -> Result<(), TraversabilityError> {
+        let geometry = Self::unit_geometry(width, height)?;
+        self.configure(geometry, Self::no_inflation())?;
+        let n = geometry.cell_count();
+        for i in 0..n {
+            let b = blocked(geometry.cell(i));
+            self.class[i] = if b { CLASS_OCCUPIED } else { CLASS_FREE };
+            self.near[i] = b as u16;
+            self.code[i] = if b { CODE_BLOCKED } else { CODE_FREE };
+        }
+        Ok(())
+    }
+
+    fn unit_geometry(width: usize, height: usize) -> Result<GridGeometry, TraversabilityError> {
+        GridGeometry::new(width, height, 1.0, crate::geometry::Point2::new(0.0, 0.0))
+            .map_err(|_| TraversabilityError::EmptyGrid)
+    }
+
+    fn no_inflation() -> TraversabilityConfig {
+        TraversabilityConfig {
+            robot_radius_m: 0.0,
+            unknown_policy: UnknownPolicy::Blocked,
+        }
+    }
+
+    /// Recomputes everything from a grid (initial load, or after the grid was reset or its
+    /// geometry changed). Takes the grid's geometry.
+    pub fn rebuild_from<const M: usize>(
+        &mut self,
+        grid: &OccupancyGrid<M>,
+    ) -> Result<(), TraversabilityError> {
+        self.configure(*grid.geometry(), self.config())?;
+        let n = self.geometry.cell_count();
+        for i in 0..n {
+            self.class[i] = class_code(grid.class(i));
+        }
+        self.recompute_from_classes();
+        Ok(())
+    }
+
+    /// Changes the configuration (radius, Unknown policy) and recomputes every cell.
+    pub fn set_config(&mut self, config: TraversabilityConfig) -> Result<(), TraversabilityError> {
+        self.configure(self.geometry, config)?;
+        self.recompute_from_classes();
+        Ok(())
+    }
+
+    fn recompute_from_classes(&mut self) {
+        let n = self.geometry.cell_count();
+        self.near[..n].fill(0);
+        for i in 0..n {
+            if self.class[i] == CLASS_OCCUPIED {
+                self.stamp_disc(i, 1);
+            }
+        }
+        for i in 0..n {
+            self.code[i] = self.code_of(i);
+        }
+    }
+
+    /// Checks and stores geometry and configuration, recomputes the stencil. Cell arrays are
+    /// left as they are.
+    fn configure(
+        &mut self,
+        geometry: GridGeometry,
+        config: TraversabilityConfig,
+    ) -> Result<(), TraversabilityError> {
+        let n = geometry.cell_count();
+        if n == 0 {
+            return Err(TraversabilityError::EmptyGrid);
+        }
+        if n > N {
+            return Err(TraversabilityError::CapacityExceeded {
+                needed: n,
+                capacity: N,
+            });
+        }
+        let r = config.robot_radius_m;
+        if !(r.is_finite() && r >= 0.0) {
+            return Err(TraversabilityError::BadRadius(r));
+        }
+        let (unknown_blocked, factor) = match config.unknown_policy {
+            UnknownPolicy::Blocked => (true, 1.0),
+            UnknownPolicy::Traversable { cost_factor } => {
+                if !(cost_factor.is_finite() && cost_factor >= 1.0) {
+                    return Err(TraversabilityError::BadCostFactor(cost_factor));
+                }
+                (false, cost_factor)
+            }
+        };
+        // Disc of offsets whose centre distance is below the radius; (0, 0) always.
+        let r_cells = r / geometry.resolution_m;
+        let reach = crate::math::ceil(r_cells) as i32;
+        let r2 = r_cells * r_cells;
+        let mut stencil = [[0i16; 2]; MAX_STENCIL];
+        let mut len = 0usize;
+        for dr in -reach..=reach {
+            for dc in -reach..=reach {
+                let d2 = (dc * dc + dr * dr) as f32;
+                if (dc == 0 && dr == 0) || d2 < r2 {
+                    if len == MAX_STENCIL {
+                        let side = (2 * reach + 1) as usize;
+                        return Err(TraversabilityError::InflationTooLarge {
+                            needed: side * side,
+                            capacity: MAX_STENCIL,
+                        });
+                    }
+                    stencil[len] = [dc as i16, dr as i16];
+                    len += 1;
+                }
+            }
+        }
+        self.geometry = geometry;
+        self.robot_radius_m = r;
+        self.unknown_blocked = unknown_blocked;
+        self.unknown_cost_factor = factor;
+        self.stencil = stencil;
+        self.stencil_len = len;
+        Ok(())
+    }
+
+    fn reset_cells(&mut self) {
+        let n = self.geometry.cell_count();
+        self.class[..n].fill(CLASS_UNKNOWN);
+        self.near[..n].fill(0);
+        let c = self.unknown_code();
+        self.code[..n].fill(c);
+    }
+
+    #[inline]
+    fn unknown_code(&self) -> u8 {
+        if self.unknown_blocked {
+            CODE_BLOCKED
+        } else {
+            CODE_UNKNOWN
+        }
+    }
+
+    #[inline]
+    fn code_of(&self, i: usize) -> u8 {
+        if self.near[i] > 0 {
+            return CODE_BLOCKED;
+        }
+        match self.class[i] {
+            CLASS_FREE => CODE_FREE,
+            CLASS_UNKNOWN => self.unknown_code(),
+            _ => CODE_BLOCKED,
+        }
+    }
+
+    /// Adds `delta` (+1 or -1) to the counts under the disc centred on cell `i`, refreshing the
+    /// step code of every cell whose count changes between zero and non-zero.
+    fn stamp_disc(&mut self, i: usize, delta: i32) {
+        let w = self.geometry.width as i32;
+        let h = self.geometry.height as i32;
+        let col = (i % self.geometry.width) as i32;
+        let row = (i / self.geometry.width) as i32;
+        for k in 0..self.stencil_len {
+            let [dc, dr] = self.stencil[k];
+            let c = col + dc as i32;
+            let r = row + dr as i32;
+            if c < 0 || r < 0 || c >= w || r >= h {
+                continue;
+            }
+            let j = (r * w + c) as usize;
+            let before = self.near[j];
+            self.near[j] = if delta > 0 {
+                before.saturating_add(1)
+            } else {
+                before.saturating_sub(1)
+            };
+            if (before == 0) != (self.near[j] == 0) {
+                self.code[j] = self.code_of(j);
+            }
+        }
+    }
+
+    /// Size and placement.
+    #[inline]
+    pub fn geometry(&self) -> &GridGeometry {
+        &self.geometry
+    }
+
+    /// The configuration in force.
+    pub fn config(&self) -> TraversabilityConfig {
+        TraversabilityConfig {
+            robot_radius_m: self.robot_radius_m,
+            unknown_policy: if self.unknown_blocked {
+                UnknownPolicy::Blocked
+            } else {
+                UnknownPolicy::Traversable {
+                    cost_factor: self.unknown_cost_factor,
+                }
+            },
+        }
+    }
+
+    /// Offsets (col, row) \[cells\] of the inflation disc, (0, 0) included.
+    pub fn inflation_stencil(&self) -> &[[i16; 2]] {
+        &self.stencil[..self.stencil_len]
+    }
+
+    /// Whether the robot may stand on the cell; `false` outside the grid.
+    #[inline]
+    pub fn is_passable(&self, cell: Cell) -> bool {
+        self.geometry
+            .index(cell)
+            .is_some_and(|i| self.code[i] != CODE_BLOCKED)
+    }
+
+    /// Whether the cell is within the robot radius of an Occupied cell (or Occupied itself).
+    /// `false` outside the grid.
+    pub fn is_inflated(&self, cell: Cell) -> bool {
+        self.geometry.index(cell).is_some_and(|i| self.near[i] > 0)
+    }
+
+    /// Cost factor of entering the cell; `None` if blocked or outside the grid.
+    pub fn cost_factor(&self, cell: Cell) -> Option<f32> {
+        let i = self.geometry.index(cell)?;
+        self.factor_of_code(self.code[i])
+    }
+
+    /// Occupied cells within the robot radius of the cell (itself included); `None` outside.
+    pub fn obstacles_near(&self, cell: Cell) -> Option<u16> {
+        self.geometry.index(cell).map(|i| self.near[i])
+    }
+
+    #[inline]
+    pub(crate) fn factor_of_code(&self, code: u8) -> Option<f32> {
+        match code {
+            CODE_FREE => Some(1.0),
+            CODE_UNKNOWN => Some(self.unknown_cost_factor),
+            _ => None,
+        }
+    }
+
+    /// Step codes of the cells in use, flat-index order.
+    #[inline]
+    pub(crate) fn codes(&self) -> &[u8] {
+        &self.code[..self.geometry.cell_count()]
+    }
+
+    /// The unknown-cell cost factor (1 when Unknown is blocked).
+    #[inline]
+    pub(crate) fn unknown_factor(&self) -> f32 {
+        self.unknown_cost_factor
+    }
+
+    /// Checks that start and goal lie inside and are passable; returns their flat indices.
+    pub(crate) fn check_endpoints(
+        &self,
+        start: Cell,
+        goal: Cell,
+    ) -> Result<(usize, usize), super::PlanError> {
+        let g = &self.geometry;
+        let out = |cell| super::PlanError::OutOfBounds {
+            cell,
+            width: g.width,
+            height: g.height,
+        };
+        let s = g.index(start).ok_or_else(|| out(start))?;
+        let t = g.index(goal).ok_or_else(|| out(goal))?;
+        if self.code[s] == CODE_BLOCKED {
+            return Err(super::PlanError::StartBlocked { cell: start });
+        }
+        if self.code[t] == CODE_BLOCKED {
+            return Err(super::PlanError::GoalBlocked { cell: goal });
+        }
+        Ok((s, t))
+    }
+
+    /// Whether this layer's per-cell state equals `other`'s (same geometry, configuration and
+    /// cells). Lets tests compare an incrementally updated layer with a rebuilt one.
+    pub fn same_state(&self, other: &Self) -> bool {
+        let n = self.geometry.cell_count();
+        self.geometry == other.geometry
+            && self.config() == other.config()
+            && self.class[..n] == other.class[..n]
+            && self.near[..n] == other.near[..n]
+            && self.code[..n] == other.code[..n]
+    }
+}
+
+fn class_code(c: CellClass) -> u8 {
+    match c {
+        CellClass::Free => CLASS_FREE,
+        CellClass::Unknown => CLASS_UNKNOWN,
+        CellClass::Occupied => CLASS_OCCUPIED,
+    }
+}
+
+impl<const N: usize> CellObserver for Traversability<N> {
+    /// Updates the cell's class and, if it became or stopped being Occupied, the inflation
+    /// counts around it. Indices outside the layer's geometry are ignored (the layer must be
+    /// loaded from the same grid with [`Traversability::rebuild_from`]).
+    fn class_changed(&mut self, index: usize, old: CellClass, new: CellClass) {
+        if index >= self.geometry.cell_count() {
+            return;
+        }
+        let _ = old;
+        let was_occupied = self.class[index] == CLASS_OCCUPIED;
+        self.class[index] = class_code(new);
+        let is_occupied = new == CellClass::Occupied;
+        if was_occupied && !is_occupied {
+            self.stamp_disc(index, -1);
+        } else if is_occupied && !was_occupied {
+            self.stamp_disc(index, 1);
+        }
+        self.code[index] = self.code_of(index);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Point2;
+    use crate::grid::LogOddsBounds;
+    use crate::random;
+
+    const CAP: usize = 40 * 30;
+
+    fn geometry() -> GridGeometry {
+        GridGeometry::new(40, 30, 0.1, Point2::new(-1.0, 2.0)).unwrap()
+    }
+
+    #[test]
+    fn p3dx_disc_blocks_cells_closer_than_the_radius() {
+        let g = geometry();
+        let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
+        let mut t = Traversability::<CAP>::new(g, TraversabilityConfig::default()).unwrap();
+        let centre = g.index(Cell::new(20, 15)).unwrap();
+        grid.set_class(centre, CellClass::Occupied, &mut t);
+        // 0.25 m at 0.1 m cells: offsets with dc^2 + dr^2 < 6.25.
+        assert_eq!(t.inflation_stencil().len(), 21);
+        for dr in -4i32..=4 {
+            for dc in -4i32..=4 {
+                let cell = Cell::new(20 + dc, 15 + dr);
+                let expect = dc * dc + dr * dr <= 6;
+                assert_eq!(t.is_inflated(cell), expect, "offset ({dc}, {dr})");
+                assert_eq!(!t.is_passable(cell), expect, "offset ({dc}, {dr})");
+            }
+        }
+        grid.set_class(centre, CellClass::Free, &mut t);
+        assert!(t.is_passable(Cell::new(20, 15)));
+        assert!(t.is_passable(Cell::new(21, 15)));
+        assert_eq!(t.cost_factor(Cell::new(20, 15)), Some(1.0));
+        assert_eq!(t.cost_factor(Cell::new(0, 0)), Some(1.0));
+    }
+
+    #[test]
+    fn unknown_policy_decides_unknown_cells() {
+        let g = geometry();
+        let strict = TraversabilityConfig {
+            robot_radius_m: 0.0,
+            unknown_policy: UnknownPolicy::Blocked,
+        };
+        let t = Traversability::<CAP>::new(g, strict).unwrap();
+        assert!(!t.is_passable(Cell::new(3, 3)));
+        let lax = TraversabilityConfig {
+            robot_radius_m: 0.0,
+            unknown_policy: UnknownPolicy::Traversable { cost_factor: 2.5 },
+        };
+        let t = Traversability::<CAP>::new(g, lax).unwrap();
+        assert_eq!(t.cost_factor(Cell::new(3, 3)), Some(2.5));
+        assert_eq!(t.cost_factor(Cell::new(-1, 3)), None);
+    }
+
+    #[test]
+    fn bad_configuration_is_refused() {
+        let g = geometry();
+        let cfg = |r, f| TraversabilityConfig {
+            robot_radius_m: r,
+            unknown_policy: UnknownPolicy::Traversable { cost_factor: f },
+        };
+        assert_eq!(
+            Traversability::<CAP>::new(g, cfg(-0.1, 1.0)).unwrap_err(),
+            TraversabilityError::BadRadius(-0.1)
+        );
+        assert_eq!(
+            Traversability::<CAP>::new(g, cfg(0.2, 0.5)).unwrap_err(),
+            TraversabilityError::BadCostFactor(0.5)
+        );
+        assert!(matches!(
+            Traversability::<CAP>::new(g, cfg(5.0, 1.0)).unwrap_err(),
+            TraversabilityError::InflationTooLarge { .. }
+        ));
+        assert_eq!(
+            Traversability::<100>::new(g, cfg(0.2, 1.0)).unwrap_err(),
+            TraversabilityError::CapacityExceeded {
+                needed: CAP,
+                capacity: 100
+            }
+        );
+    }
+
+    #[test]
+    fn incremental_updates_equal_a_rebuild() {
+        let g = geometry();
+        let mut rng = random::seeded(11);
+        for (radius, policy) in [
+            (0.25, UnknownPolicy::Traversable { cost_factor: 1.5 }),
+            (0.0, UnknownPolicy::Blocked),
+            (0.42, UnknownPolicy::Blocked),
+        ] {
+            let config = TraversabilityConfig {
+                robot_radius_m: radius,
+                unknown_policy: policy,
+            };
+            let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
+            let mut t = Traversability::<CAP>::new(g, config).unwrap();
+            for step in 0..20_000 {
+                let i = random::below(&mut rng, g.cell_count());
+                match random::below(&mut rng, 4) {
+                    0 => {
+                        grid.add_evidence(i, random::range_f32(&mut rng, -1.0, 1.0), &mut t);
+                    }
+                    1 => {
+                        grid.set_log_odds(i, 0.0, &mut t);
+                    }
+                    2 => {
+                        grid.set_class(i, CellClass::Occupied, &mut t);
+                    }
+                    _ => {
+                        grid.set_class(i, CellClass::Free, &mut t);
+                    }
+                }
+                if step % 2000 == 1999 {
+                    let mut fresh = Traversability::<CAP>::new(g, config).unwrap();
+                    fresh.rebuild_from(&grid).unwrap();
+                    assert!(t.same_state(&fresh), "radius {radius}, step {step}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn from_blocked_marks_exactly_the_walls() {
+        let t = Traversability::<64>::from_blocked(8, 8, |c| c.col == 3 && c.row != 5).unwrap();
+        for row in 0..8 {
+            for col in 0..8 {
+                let c = Cell::new(col, row);
+                assert_eq!(t.is_passable(c), !(col == 3 && row != 5));
+            }
+        }
+        assert_eq!(t.geometry().resolution_m, 1.0);
+    }
+}

@@ -1,0 +1,111 @@
+//! Pruning a cell path to line-of-sight waypoints.
+//!
+//! A greedy string-pulling pass: from the current anchor, the path is followed as far as the
+//! straight segment from the anchor stays clear; the last clear cell becomes the next waypoint.
+//! Clearance is tested on the segment between cell centres with a conservative supercover
+//! traversal: every cell the segment touches, including both side cells where it passes
+//! exactly through a cell corner (the grid traversal of Amanatides & Woo, "A Fast Voxel
+//! Traversal Algorithm for Ray Tracing", Eurographics 1987, in the exact integer form of
+//! Bresenham, "Algorithm for computer control of a digital plotter", IBM Systems Journal 4(1),
+//! 1965). No segment may cross a blocked or inflated cell. A path from A* or the distance field
+//! never cuts corners, so consecutive cells always see each other and the pass always advances.
+
+use super::{PlanError, Traversability};
+use crate::geometry::Point2;
+use crate::grid::Cell;
+
+/// Whether the segment between the centres of `a` and `b` touches only passable cells (and
+/// stays inside the grid). Cells touched only at a corner count as touched.
+pub fn has_line_of_sight<const N: usize>(trav: &Traversability<N>, a: Cell, b: Cell) -> bool {
+    supercover(a, b, |c| trav.is_passable(c))
+}
+
+/// Visits every cell the segment between the centres of `a` and `b` touches, in order, until
+/// `visit` returns `false`. Returns whether every visit returned `true`.
+pub fn supercover(a: Cell, b: Cell, mut visit: impl FnMut(Cell) -> bool) -> bool {
+    let nx = (b.col - a.col).unsigned_abs() as i64;
+    let ny = (b.row - a.row).unsigned_abs() as i64;
+    let sx = (b.col - a.col).signum();
+    let sy = (b.row - a.row).signum();
+    let (mut x, mut y) = (a.col, a.row);
+    if !visit(Cell::new(x, y)) {
+        return false;
+    }
+    let (mut ix, mut iy) = (0i64, 0i64);
+    while ix < nx || iy < ny {
+        // Compare where the segment crosses the next vertical and horizontal cell borders:
+        // (1 + 2 ix) / nx against (1 + 2 iy) / ny, cross-multiplied.
+        let decision = (1 + 2 * ix) * ny - (1 + 2 * iy) * nx;
+        if decision == 0 {
+            // Exactly through a corner: both side cells are touched.
+            if !visit(Cell::new(x + sx, y)) || !visit(Cell::new(x, y + sy)) {
+                return false;
+            }
+            x += sx;
+            y += sy;
+            ix += 1;
+            iy += 1;
+        } else if decision < 0 {
+            x += sx;
+            ix += 1;
+        } else {
+            y += sy;
+            iy += 1;
+        }
+        if !visit(Cell::new(x, y)) {
+            return false;
+        }
+    }
+    true
+}
+
+/// Prunes `path` to waypoints: the map-frame centres \[m\] of the first cell, the cells where
+/// the line of sight from the previous waypoint ends, and the last cell. Writes them into
+/// `out` and returns how many.
+///
+/// Errors: [`PlanError::CapacityExceeded`] if `out` is too short; [`PlanError::NoPath`] if
+/// two consecutive cells of `path` do not see each other (not a valid path on this layer). An
+/// empty path gives no waypoints.
+pub fn prune_to_waypoints<const N: usize>(
+    trav: &Traversability<N>,
+    path: &[Cell],
+    out: &mut [Point2],
+) -> Result<usize, PlanError> {
+    let geometry = trav.geometry();
+    let mut count = 0usize;
+    let mut push = |cell: Cell, count: &mut usize| -> Result<(), PlanError> {
+        if *count == out.len() {
+            return Err(PlanError::CapacityExceeded {
+                needed: *count + 1,
+                capacity: out.len(),
+            });
+        }
+        out[*count] = geometry.cell_center(cell);
+        *count += 1;
+        Ok(())
+    };
+    let Some(&first) = path.first() else {
+        return Ok(0);
+    };
+    push(first, &mut count)?;
+    let mut anchor = 0usize;
+    let mut k = 1usize;
+    while k < path.len() {
+        if has_line_of_sight(trav, path[anchor], path[k]) {
+            k += 1;
+            continue;
+        }
+        if k - 1 == anchor {
+            return Err(PlanError::NoPath {
+                start: path[anchor],
+                goal: path[k],
+            });
+        }
+        anchor = k - 1;
+        push(path[anchor], &mut count)?;
+    }
+    if path.len() > 1 {
+        push(path[path.len() - 1], &mut count)?;
+    }
+    Ok(count)
+}
