@@ -820,3 +820,6 @@ impl Optimizer for AnyOptimizer {
         dispatch!(self, o => o.population())
     }
 }
+
+#[cfg(test)]
+mod tests;
