@@ -20,7 +20,11 @@ fn overhead(c: &mut Criterion) {
     for (pop, dim) in [(20usize, 10usize), (10, 16)] {
         let problem = TestFunction::new(Function::Sphere, dim).unwrap();
         let initial = Population::uniform(&problem, pop, &mut seeded(1)).unwrap();
-        let rules = StopRules { max_generations: GENERATIONS, patience: None, max_evaluations: None };
+        let rules = StopRules {
+            max_generations: GENERATIONS,
+            patience: None,
+            max_evaluations: None,
+        };
         for method in Method::ALL.into_iter().chain([Method::Random]) {
             let id = BenchmarkId::new(method.name(), format!("p{pop}d{dim}"));
             group.bench_function(id, |b| {

@@ -57,7 +57,11 @@ fn a_whole_run_of_every_method_allocates_nothing() {
             let mut problem = TestFunction::new(function, 10).unwrap();
             let mut rng = seeded(11);
             let initial = Population::uniform(&problem, 20, &mut rng).unwrap();
-            let rules = StopRules { max_generations: 100, patience: Some(10), max_evaluations: None };
+            let rules = StopRules {
+                max_generations: 100,
+                patience: Some(10),
+                max_evaluations: None,
+            };
             let mut opt = method.build(initial.len(), rules.max_generations);
             let summary = optim::run(&mut opt, &mut problem, &initial, &rules, &mut rng).unwrap();
             let history_len = opt.history().len();

@@ -45,7 +45,11 @@ pub struct Abc {
 impl Abc {
     /// An ABC with `params` (`max_generations` is kept for symmetry with the other methods).
     pub fn new(params: AbcParams, max_generations: u32) -> Self {
-        Self { params, engine: Engine::new(max_generations), trials: [0; MAX_POP] }
+        Self {
+            params,
+            engine: Engine::new(max_generations),
+            trials: [0; MAX_POP],
+        }
     }
 
     fn explore<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, i: usize, rng: &mut R) {
@@ -76,19 +80,30 @@ fn quality(f: f32) -> f32 {
 }
 
 impl Optimizer for Abc {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.trials = [0; MAX_POP];
         self.engine.start(problem, initial)
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let n = self.engine.pop.len;
         for i in 0..n {
             self.explore(problem, i, rng);
         }
         for _ in 0..n {
-            let total: f32 = self.engine.pop.fitness[..n].iter().map(|&f| quality(f)).sum();
+            let total: f32 = self.engine.pop.fitness[..n]
+                .iter()
+                .map(|&f| quality(f))
+                .sum();
             let mut pick = random::unit_f32(rng) * total;
             let mut chosen = n - 1;
             for (s, &f) in self.engine.pop.fitness[..n].iter().enumerate() {

@@ -28,7 +28,11 @@ pub struct AboaParams {
 
 impl Default for AboaParams {
     fn default() -> Self {
-        Self { a: 0.992, p: 0.983, mu: 1.356 }
+        Self {
+            a: 0.992,
+            p: 0.983,
+            mu: 1.356,
+        }
     }
 }
 
@@ -42,7 +46,10 @@ pub struct Aboa {
 impl Aboa {
     /// An ABOA with `params`, whose schedule spans `max_generations` generations.
     pub fn new(params: AboaParams, max_generations: u32) -> Self {
-        Self { params, engine: Engine::new(max_generations) }
+        Self {
+            params,
+            engine: Engine::new(max_generations),
+        }
     }
 
     /// Sensory modality at fraction `progress = t / T` of the run.
@@ -52,14 +59,29 @@ impl Aboa {
 }
 
 impl Optimizer for Aboa {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.engine.start(problem, initial)
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let c = self.sensory_modality(self.engine.progress());
-        sweep(&mut self.engine, problem, rng, self.params.a, c, self.params.p);
+        sweep(
+            &mut self.engine,
+            problem,
+            rng,
+            self.params.a,
+            c,
+            self.params.p,
+        );
         self.engine.end_step();
         Ok(())
     }

@@ -19,7 +19,9 @@
 
 use rand_core::Rng;
 
-use super::{Engine, Genome, OptimError, Optimizer, Population, Problem, engine_accessors, fragrance};
+use super::{
+    Engine, Genome, OptimError, Optimizer, Population, Problem, engine_accessors, fragrance,
+};
 use crate::random;
 
 /// BOA hyper-parameters.
@@ -58,7 +60,13 @@ impl Default for BoaParams {
 }
 
 /// BOA's global step toward `best`.
-pub(crate) fn global_move<R: Rng>(engine: &Engine, x: &Genome, best: &Genome, f: f32, rng: &mut R) -> Genome {
+pub(crate) fn global_move<R: Rng>(
+    engine: &Engine,
+    x: &Genome,
+    best: &Genome,
+    f: f32,
+    rng: &mut R,
+) -> Genome {
     let r = random::unit_f32(rng) * random::unit_f32(rng);
     let mut y = *x;
     for d in 0..engine.dim {
@@ -84,7 +92,12 @@ pub(crate) fn local_move<R: Rng>(engine: &Engine, x: &Genome, f: f32, rng: &mut 
 }
 
 /// Evaluates `y` as a candidate for butterfly `i` and keeps it if strictly better.
-pub(crate) fn try_replace<P: Problem + ?Sized>(engine: &mut Engine, problem: &mut P, i: usize, y: &Genome) {
+pub(crate) fn try_replace<P: Problem + ?Sized>(
+    engine: &mut Engine,
+    problem: &mut P,
+    i: usize,
+    y: &Genome,
+) {
     let fy = engine.evaluate(problem, y);
     if fy < engine.pop.fitness[i] {
         engine.pop.genes[i] = *y;
@@ -130,19 +143,38 @@ pub struct Boa {
 impl Boa {
     /// A BOA with `params`, whose `c` schedule spans `max_generations` generations.
     pub fn new(params: BoaParams, max_generations: u32) -> Self {
-        Self { params, c: params.c, engine: Engine::new(max_generations) }
+        Self {
+            params,
+            c: params.c,
+            engine: Engine::new(max_generations),
+        }
     }
 }
 
 impl Optimizer for Boa {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.c = self.params.c;
         self.engine.start(problem, initial)
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
-        sweep(&mut self.engine, problem, rng, self.params.a, self.c, self.params.p);
+        sweep(
+            &mut self.engine,
+            problem,
+            rng,
+            self.params.a,
+            self.c,
+            self.params.p,
+        );
         self.c = next_c(self.c, self.engine.horizon);
         self.engine.end_step();
         Ok(())

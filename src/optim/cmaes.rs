@@ -28,7 +28,9 @@
 use nalgebra::{SMatrix, SVector, SymmetricEigen};
 use rand_core::Rng;
 
-use super::{Engine, MAX_DIM, MAX_POP, OptimError, Optimizer, Population, Problem, engine_accessors};
+use super::{
+    Engine, MAX_DIM, MAX_POP, OptimError, Optimizer, Population, Problem, engine_accessors,
+};
 use crate::random;
 
 type Mat = SMatrix<f64, MAX_DIM, MAX_DIM>;
@@ -114,12 +116,19 @@ impl CmaEs {
 }
 
 impl Optimizer for CmaEs {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.engine.start(problem, initial)?;
         let e = &self.engine;
         let (n, lambda) = (e.dim, e.pop.len);
         let nf = n as f64;
-        let mean_width = (0..n).map(|i| (e.upper[i] - e.lower[i]) as f64).sum::<f64>() / nf;
+        let mean_width = (0..n)
+            .map(|i| (e.upper[i] - e.lower[i]) as f64)
+            .sum::<f64>()
+            / nf;
         self.sigma = 0.5 * mean_width;
         self.sigma_cap = 10.0 * mean_width;
         self.cov = Mat::zeros();
@@ -162,7 +171,11 @@ impl Optimizer for CmaEs {
         Ok(())
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let n = self.engine.dim;
         let nf = n as f64;
@@ -209,7 +222,11 @@ impl Optimizer for CmaEs {
         let c_inv_sqrt_y = self.basis * bt_y;
         let cs = self.c_sigma;
         self.p_sigma *= 1.0 - cs;
-        self.p_sigma.axpy(libm::sqrt(cs * (2.0 - cs) * self.mu_eff), &c_inv_sqrt_y, 1.0);
+        self.p_sigma.axpy(
+            libm::sqrt(cs * (2.0 - cs) * self.mu_eff),
+            &c_inv_sqrt_y,
+            1.0,
+        );
         let ps_norm = self.p_sigma.norm();
         let g = self.engine.generation as f64 + 1.0;
         let h_sigma = ps_norm / libm::sqrt(1.0 - libm::pow(1.0 - cs, 2.0 * g))
@@ -217,7 +234,8 @@ impl Optimizer for CmaEs {
         let h = if h_sigma { 1.0 } else { 0.0 };
         let cc = self.c_c;
         self.p_c *= 1.0 - cc;
-        self.p_c.axpy(h * libm::sqrt(cc * (2.0 - cc) * self.mu_eff), &y_w, 1.0);
+        self.p_c
+            .axpy(h * libm::sqrt(cc * (2.0 - cc) * self.mu_eff), &y_w, 1.0);
         // Covariance: rank-one and rank-mu updates.
         let delta_h = (1.0 - h) * cc * (2.0 - cc);
         let keep = 1.0 - self.c_1 - self.c_mu + self.c_1 * delta_h;

@@ -37,8 +37,13 @@ pub enum Function {
 
 impl Function {
     /// All functions.
-    pub const ALL: [Function; 5] =
-        [Function::Sphere, Function::Rastrigin, Function::Rosenbrock, Function::Ackley, Function::Griewank];
+    pub const ALL: [Function; 5] = [
+        Function::Sphere,
+        Function::Rastrigin,
+        Function::Rosenbrock,
+        Function::Ackley,
+        Function::Griewank,
+    ];
 
     /// Command-line name.
     pub fn name(self) -> &'static str {
@@ -68,7 +73,9 @@ impl Function {
         let it = x.iter().map(|&v| v as f64);
         let v = match self {
             Function::Sphere => it.map(|v| v * v).sum::<f64>(),
-            Function::Rastrigin => 10.0 * n + it.map(|v| v * v - 10.0 * libm::cos(TAU * v)).sum::<f64>(),
+            Function::Rastrigin => {
+                10.0 * n + it.map(|v| v * v - 10.0 * libm::cos(TAU * v)).sum::<f64>()
+            }
             Function::Rosenbrock => x
                 .windows(2)
                 .map(|w| {
@@ -79,7 +86,9 @@ impl Function {
             Function::Ackley => {
                 let sq = x.iter().map(|&v| (v as f64) * (v as f64)).sum::<f64>() / n;
                 let cs = it.map(|v| libm::cos(TAU * v)).sum::<f64>() / n;
-                -20.0 * libm::exp(-0.2 * libm::sqrt(sq)) - libm::exp(cs) + 20.0 + core::f64::consts::E
+                -20.0 * libm::exp(-0.2 * libm::sqrt(sq)) - libm::exp(cs)
+                    + 20.0
+                    + core::f64::consts::E
             }
             Function::Griewank => {
                 let sq = x.iter().map(|&v| (v as f64) * (v as f64)).sum::<f64>() / 4000.0;
@@ -107,7 +116,9 @@ pub struct UnknownFunction;
 
 impl fmt::Display for UnknownFunction {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("unknown function, expected one of: sphere rastrigin rosenbrock ackley griewank")
+        f.write_str(
+            "unknown function, expected one of: sphere rastrigin rosenbrock ackley griewank",
+        )
     }
 }
 
@@ -116,7 +127,11 @@ impl core::error::Error for UnknownFunction {}
 impl FromStr for Function {
     type Err = UnknownFunction;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Function::ALL.iter().copied().find(|f| f.name() == s).ok_or(UnknownFunction)
+        Function::ALL
+            .iter()
+            .copied()
+            .find(|f| f.name() == s)
+            .ok_or(UnknownFunction)
     }
 }
 
@@ -130,7 +145,11 @@ pub struct TestFunction {
 impl TestFunction {
     /// `function` in `dim` dimensions (1 to [`MAX_DIM`]; Rosenbrock needs 2).
     pub fn new(function: Function, dim: usize) -> Result<Self, OptimError> {
-        let min = if function == Function::Rosenbrock { 2 } else { 1 };
+        let min = if function == Function::Rosenbrock {
+            2
+        } else {
+            1
+        };
         if dim < min || dim > MAX_DIM {
             return Err(OptimError::BadDimension { dim });
         }

@@ -21,7 +21,9 @@
 
 use rand_core::Rng;
 
-use super::{Engine, Genome, MAX_DIM, MAX_POP, OptimError, Optimizer, Population, Problem, engine_accessors};
+use super::{
+    Engine, Genome, MAX_DIM, MAX_POP, OptimError, Optimizer, Population, Problem, engine_accessors,
+};
 use crate::{math, random};
 
 /// GA hyper-parameters.
@@ -39,7 +41,12 @@ pub struct GaParams {
 
 impl Default for GaParams {
     fn default() -> Self {
-        Self { crossover: 0.11, mutation: 0.215, eta_m: 76.026, eta_c: 20.0 }
+        Self {
+            crossover: 0.11,
+            mutation: 0.215,
+            eta_m: 76.026,
+            eta_c: 20.0,
+        }
     }
 }
 
@@ -67,7 +74,11 @@ impl Ga {
 fn tournament<R: Rng>(e: &Engine, rng: &mut R) -> usize {
     let a = random::below(rng, e.pop.len);
     let b = random::below(rng, e.pop.len);
-    if e.pop.fitness[b] < e.pop.fitness[a] { b } else { a }
+    if e.pop.fitness[b] < e.pop.fitness[a] {
+        b
+    } else {
+        a
+    }
 }
 
 /// Bounded polynomial mutation of one gene.
@@ -88,11 +99,19 @@ fn polynomial<R: Rng>(y: f32, lo: f32, hi: f32, eta: f32, rng: &mut R) -> f32 {
 }
 
 impl Optimizer for Ga {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.engine.start(problem, initial)
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let e = &mut self.engine;
         let (n, dim) = (e.pop.len, e.dim);
@@ -127,13 +146,19 @@ impl Optimizer for Ga {
                 }
                 e.clamp(c);
             }
-            for (slot, (c, ch, parent)) in [(c1, changed[0], i), (c2, changed[1], j)].into_iter().enumerate() {
+            for (slot, (c, ch, parent)) in [(c1, changed[0], i), (c2, changed[1], j)]
+                .into_iter()
+                .enumerate()
+            {
                 if k + slot >= n {
                     break;
                 }
                 let unchanged = !ch || c[..dim] == e.pop.genes[parent][..dim];
-                self.child_fitness[k + slot] =
-                    if unchanged { e.pop.fitness[parent] } else { e.evaluate(problem, &c) };
+                self.child_fitness[k + slot] = if unchanged {
+                    e.pop.fitness[parent]
+                } else {
+                    e.evaluate(problem, &c)
+                };
                 self.children[k + slot] = c;
             }
             k += 2;

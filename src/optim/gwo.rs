@@ -14,7 +14,9 @@
 
 use rand_core::Rng;
 
-use super::{Engine, Genome, MAX_DIM, OptimError, Optimizer, Population, Problem, engine_accessors};
+use super::{
+    Engine, Genome, MAX_DIM, OptimError, Optimizer, Population, Problem, engine_accessors,
+};
 use crate::{math, random};
 
 /// GWO state.
@@ -28,7 +30,11 @@ pub struct Gwo {
 impl Gwo {
     /// A GWO whose `a` schedule spans `max_generations` generations.
     pub fn new(max_generations: u32) -> Self {
-        Self { engine: Engine::new(max_generations), leaders: [[0.0; MAX_DIM]; 3], leader_fitness: [f32::INFINITY; 3] }
+        Self {
+            engine: Engine::new(max_generations),
+            leaders: [[0.0; MAX_DIM]; 3],
+            leader_fitness: [f32::INFINITY; 3],
+        }
     }
 
     fn offer(&mut self, x: &Genome, f: f32) {
@@ -60,7 +66,11 @@ impl Gwo {
 }
 
 impl Optimizer for Gwo {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.engine.start(problem, initial)?;
         self.leader_fitness = [f32::INFINITY; 3];
         self.leaders = [self.engine.pop.genes[0]; 3];
@@ -68,7 +78,11 @@ impl Optimizer for Gwo {
         Ok(())
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let a = 2.0 - 2.0 * self.engine.progress().min(1.0);
         let e = &mut self.engine;

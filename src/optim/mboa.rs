@@ -34,7 +34,11 @@ pub struct MboaParams {
 
 impl Default for MboaParams {
     fn default() -> Self {
-        Self { a: 0.61, c: 0.356, p: 0.762 }
+        Self {
+            a: 0.61,
+            c: 0.356,
+            p: 0.762,
+        }
     }
 }
 
@@ -49,17 +53,29 @@ pub struct Mboa {
 impl Mboa {
     /// An mBOA with `params`, whose `c` schedule spans `max_generations` generations.
     pub fn new(params: MboaParams, max_generations: u32) -> Self {
-        Self { params, c: params.c, engine: Engine::new(max_generations) }
+        Self {
+            params,
+            c: params.c,
+            engine: Engine::new(max_generations),
+        }
     }
 }
 
 impl Optimizer for Mboa {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.c = self.params.c;
         self.engine.start(problem, initial)
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let e = &mut self.engine;
         sweep(e, problem, rng, self.params.a, self.c, self.params.p);

@@ -29,6 +29,9 @@
 //! assert_eq!(opt.best_genome().len(), 4);
 //! ```
 
+// Numerical kernels index several parallel arrays (genes, bounds, velocities) by gene number.
+#![allow(clippy::needless_range_loop)]
+
 use core::fmt;
 use core::str::FromStr;
 
@@ -36,8 +39,8 @@ use rand_core::Rng;
 
 use crate::random;
 
-pub mod aboa;
 pub mod abc;
+pub mod aboa;
 pub mod boa;
 pub mod cmaes;
 pub mod functions;
@@ -97,7 +100,11 @@ pub struct Counting<P> {
 impl<P: Problem> Counting<P> {
     /// Wraps `inner` with a zero count.
     pub fn new(inner: P) -> Self {
-        Self { inner, count: 0, out_of_bounds: false }
+        Self {
+            inner,
+            count: 0,
+            out_of_bounds: false,
+        }
     }
 }
 
@@ -143,6 +150,13 @@ pub enum OptimError {
         /// Dimension expected.
         expected: usize,
     },
+    /// The number of fitnesses differs from the number of genomes.
+    FitnessCount {
+        /// Fitnesses given.
+        got: usize,
+        /// Genomes given.
+        expected: usize,
+    },
     /// The problem's dimension differs from the population's or the running optimizer's.
     DimensionMismatch {
         /// Problem dimension.
@@ -178,15 +192,25 @@ impl fmt::Display for OptimError {
             Self::GenomeLength { got, expected } => {
                 write!(f, "genome has {got} genes, expected {expected}")
             }
+            Self::FitnessCount { got, expected } => {
+                write!(f, "{got} fitnesses given for {expected} genomes")
+            }
             Self::DimensionMismatch { problem, expected } => {
                 write!(f, "problem has {problem} genes, expected {expected}")
             }
             Self::BadBounds { gene, lower, upper } => {
-                write!(f, "gene {gene} has bounds [{lower}, {upper}], expected finite lower < upper")
+                write!(
+                    f,
+                    "gene {gene} has bounds [{lower}, {upper}], expected finite lower < upper"
+                )
             }
             Self::NotStarted => write!(f, "optimizer stepped before start"),
             Self::HistoryFull => {
-                write!(f, "history full: at most {} generations per run", MAX_HISTORY - 1)
+                write!(
+                    f,
+                    "history full: at most {} generations per run",
+                    MAX_HISTORY - 1
+                )
             }
         }
     }
@@ -224,7 +248,12 @@ impl Population {
         if dim == 0 || dim > MAX_DIM {
             return Err(OptimError::BadDimension { dim });
         }
-        Ok(Self { dim, len: 0, genes: [[0.0; MAX_DIM]; MAX_POP], fitness: [f32::NAN; MAX_POP] })
+        Ok(Self {
+            dim,
+            len: 0,
+            genes: [[0.0; MAX_DIM]; MAX_POP],
+            fitness: [f32::NAN; MAX_POP],
+        })
     }
 
     /// `size` genomes drawn uniformly in the problem's bounds (fitness unknown).
@@ -246,6 +275,35 @@ impl Population {
         Ok(pop)
     }
 
+    /// A population from `genes`, `dim` genes per individual back to back, with their known
+    /// fitnesses if `fitness` is given (one per individual).
+    pub fn from_flat(
+        dim: usize,
+        genes: &[f32],
+        fitness: Option<&[f32]>,
+    ) -> Result<Self, OptimError> {
+        let mut pop = Self::new(dim)?;
+        if !genes.len().is_multiple_of(dim) {
+            return Err(OptimError::GenomeLength {
+                got: genes.len() % dim,
+                expected: dim,
+            });
+        }
+        let n = genes.len() / dim;
+        if let Some(f) = fitness
+            && f.len() != n
+        {
+            return Err(OptimError::FitnessCount {
+                got: f.len(),
+                expected: n,
+            });
+        }
+        for (i, g) in genes.chunks_exact(dim).enumerate() {
+            pop.push_with_fitness(g, fitness.map_or(f32::NAN, |f| f[i]))?;
+        }
+        Ok(pop)
+    }
+
     /// Appends a genome whose fitness is not known yet ([`Optimizer::start`] evaluates it).
     pub fn push(&mut self, genome: &[f32]) -> Result<(), OptimError> {
         self.push_with_fitness(genome, f32::NAN)
@@ -254,7 +312,10 @@ impl Population {
     /// Appends a genome with its known fitness (not re-evaluated by [`Optimizer::start`]).
     pub fn push_with_fitness(&mut self, genome: &[f32], fitness: f32) -> Result<(), OptimError> {
         if genome.len() != self.dim {
-            return Err(OptimError::GenomeLength { got: genome.len(), expected: self.dim });
+            return Err(OptimError::GenomeLength {
+                got: genome.len(),
+                expected: self.dim,
+            });
         }
         if self.len == MAX_POP {
             return Err(OptimError::PopulationFull);
@@ -394,7 +455,10 @@ impl Engine {
     ) -> Result<(), OptimError> {
         let dim = check_problem(problem)?;
         if dim != initial.dim {
-            return Err(OptimError::DimensionMismatch { problem: dim, expected: initial.dim });
+            return Err(OptimError::DimensionMismatch {
+                problem: dim,
+                expected: initial.dim,
+            });
         }
         if initial.len < MIN_POP {
             return Err(OptimError::PopulationTooSmall { len: initial.len });
@@ -444,7 +508,11 @@ impl Engine {
     pub fn clamp(&self, x: &mut Genome) {
         for i in 0..self.dim {
             let v = x[i];
-            x[i] = if v.is_nan() { self.lower[i] } else { v.max(self.lower[i]).min(self.upper[i]) };
+            x[i] = if v.is_nan() {
+                self.lower[i]
+            } else {
+                v.max(self.lower[i]).min(self.upper[i])
+            };
         }
     }
 
@@ -463,7 +531,10 @@ impl Engine {
             return Err(OptimError::NotStarted);
         }
         if problem.dim() != self.dim {
-            return Err(OptimError::DimensionMismatch { problem: problem.dim(), expected: self.dim });
+            return Err(OptimError::DimensionMismatch {
+                problem: problem.dim(),
+                expected: self.dim,
+            });
         }
         if self.history_len >= MAX_HISTORY {
             return Err(OptimError::HistoryFull);
@@ -520,7 +591,11 @@ pub(crate) use engine_accessors;
 /// Fragrance of the butterfly optimizers: `c * |F|^a`.
 pub(crate) fn fragrance(c: f32, fitness: f32, a: f32) -> f32 {
     let s = crate::math::abs(fitness);
-    if s.is_finite() { c * crate::math::powf(s, a) } else { c * crate::math::powf(f32::MAX, a) }
+    if s.is_finite() {
+        c * crate::math::powf(s, a)
+    } else {
+        c * crate::math::powf(f32::MAX, a)
+    }
 }
 
 /// When a run stops.
@@ -538,7 +613,11 @@ pub struct StopRules {
 
 impl Default for StopRules {
     fn default() -> Self {
-        Self { max_generations: 30, patience: Some(10), max_evaluations: None }
+        Self {
+            max_generations: 30,
+            patience: Some(10),
+            max_evaluations: None,
+        }
     }
 }
 
@@ -582,7 +661,10 @@ pub fn run<O: Optimizer + ?Sized, P: Problem + ?Sized, R: Rng>(
         if optimizer.generation() >= rules.max_generations {
             break StopReason::MaxGenerations;
         }
-        if rules.max_evaluations.is_some_and(|m| optimizer.evaluations() >= m) {
+        if rules
+            .max_evaluations
+            .is_some_and(|m| optimizer.evaluations() >= m)
+        {
             break StopReason::MaxEvaluations;
         }
         if rules.patience.is_some_and(|p| stale >= p) {
@@ -670,9 +752,10 @@ impl Method {
     pub fn build(self, population: usize, max_generations: u32) -> AnyOptimizer {
         let t = max_generations;
         match self {
-            Method::Xboa => {
-                AnyOptimizer::Xboa(xboa::Xboa::new(xboa::XboaParams::for_population(population), t))
-            }
+            Method::Xboa => AnyOptimizer::Xboa(xboa::Xboa::new(
+                xboa::XboaParams::for_population(population),
+                t,
+            )),
             Method::Boa => {
                 AnyOptimizer::Boa(boa::Boa::new(boa::BoaParams::for_population(population), t))
             }
@@ -703,7 +786,9 @@ pub struct UnknownMethod;
 
 impl fmt::Display for UnknownMethod {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("unknown method, expected one of: xboa boa mboa aboa saboa ga pso gwo abc cmaes random")
+        f.write_str(
+            "unknown method, expected one of: xboa boa mboa aboa saboa ga pso gwo abc cmaes random",
+        )
     }
 }
 

@@ -17,7 +17,9 @@
 
 use rand_core::Rng;
 
-use super::{Engine, Genome, MAX_DIM, MAX_POP, OptimError, Optimizer, Population, Problem, engine_accessors};
+use super::{
+    Engine, Genome, MAX_DIM, MAX_POP, OptimError, Optimizer, Population, Problem, engine_accessors,
+};
 use crate::random;
 
 /// PSO hyper-parameters.
@@ -37,7 +39,13 @@ pub struct PsoParams {
 
 impl Default for PsoParams {
     fn default() -> Self {
-        Self { neighbours: 4, inertia: 0.449, cognitive: 3.379, social: 1.506, vmax_fraction: 0.329 }
+        Self {
+            neighbours: 4,
+            inertia: 0.449,
+            cognitive: 3.379,
+            social: 1.506,
+            vmax_fraction: 0.329,
+        }
     }
 }
 
@@ -65,7 +73,11 @@ impl Pso {
 }
 
 impl Optimizer for Pso {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.engine.start(problem, initial)?;
         let n = self.engine.pop.len;
         self.velocity = [[0.0; MAX_DIM]; MAX_POP];
@@ -74,12 +86,20 @@ impl Optimizer for Pso {
         Ok(())
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let e = &mut self.engine;
         let n = e.pop.len;
         let half = (self.params.neighbours / 2).min((n - 1) / 2);
-        let extra = if self.params.neighbours % 2 == 1 && 2 * half + 1 < n { 1 } else { 0 };
+        let extra = if self.params.neighbours % 2 == 1 && 2 * half + 1 < n {
+            1
+        } else {
+            0
+        };
         let mut lbest = [0usize; MAX_POP];
         for (i, lb) in lbest[..n].iter_mut().enumerate() {
             let mut b = i;

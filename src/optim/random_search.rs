@@ -18,16 +18,26 @@ pub struct RandomSearch {
 impl RandomSearch {
     /// A random search (`max_generations` is kept for symmetry with the other methods).
     pub fn new(max_generations: u32) -> Self {
-        Self { engine: Engine::new(max_generations) }
+        Self {
+            engine: Engine::new(max_generations),
+        }
     }
 }
 
 impl Optimizer for RandomSearch {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.engine.start(problem, initial)
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let e = &mut self.engine;
         for i in 0..e.pop.len {

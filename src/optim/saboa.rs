@@ -52,16 +52,27 @@ pub struct Saboa {
 impl Saboa {
     /// A SABOA with `params`, whose schedule spans `max_generations` generations.
     pub fn new(params: SaboaParams, max_generations: u32) -> Self {
-        Self { params, engine: Engine::new(max_generations) }
+        Self {
+            params,
+            engine: Engine::new(max_generations),
+        }
     }
 }
 
 impl Optimizer for Saboa {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.engine.start(problem, initial)
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let e = &mut self.engine;
         let decay = (1.0 - e.progress()).max(0.0);

@@ -7,7 +7,11 @@ use crate::random::seeded;
 const FUNCTIONS: [Function; 3] = [Function::Sphere, Function::Rastrigin, Function::Rosenbrock];
 
 fn long_run() -> StopRules {
-    StopRules { max_generations: 100, patience: None, max_evaluations: None }
+    StopRules {
+        max_generations: 100,
+        patience: None,
+        max_evaluations: None,
+    }
 }
 
 /// Initial population of run `run`, the same for every method.
@@ -34,7 +38,10 @@ fn fragrance_scale_stalls_boa_and_aboa() {
             let s = run_optimizer(&mut opt, &mut problem, &start, &mut seeded(run));
             stalled += usize::from(s.best_fitness >= opt.history()[0]);
         }
-        assert!(stalled > 0, "{method}: the fragrance no longer stalls on Rosenbrock");
+        assert!(
+            stalled > 0,
+            "{method}: the fragrance no longer stalls on Rosenbrock"
+        );
     }
 }
 
@@ -54,18 +61,41 @@ fn every_method_improves_on_every_run_within_bounds_with_exact_counts() {
                 let s = run_optimizer(&mut opt, &mut problem, &start, &mut rng);
                 let ctx = format!("{method} on {function}, run {run}");
                 if !stalls_on_fitness_scale(method, function) {
-                    assert!(s.best_fitness < start_best, "{ctx}: {} not below {start_best}", s.best_fitness);
+                    assert!(
+                        s.best_fitness < start_best,
+                        "{ctx}: {} not below {start_best}",
+                        s.best_fitness
+                    );
                 }
                 assert_eq!(opt.history()[0], start_best, "{ctx}");
                 assert_eq!(opt.history().len(), 101, "{ctx}");
-                assert!(opt.history().windows(2).all(|w| w[1] <= w[0]), "{ctx}: history rises");
+                assert!(
+                    opt.history().windows(2).all(|w| w[1] <= w[0]),
+                    "{ctx}: history rises"
+                );
                 assert_eq!(problem.count, opt.evaluations(), "{ctx}: evaluation count");
-                assert!(!problem.out_of_bounds, "{ctx}: evaluated outside the bounds");
+                assert!(
+                    !problem.out_of_bounds,
+                    "{ctx}: evaluated outside the bounds"
+                );
                 let (lo, hi) = function.bounds();
-                assert!(opt.best_genome().iter().all(|g| (lo..=hi).contains(g)), "{ctx}");
-                assert_eq!(function.value(opt.best_genome()), opt.best_fitness(), "{ctx}");
+                assert!(
+                    opt.best_genome().iter().all(|g| (lo..=hi).contains(g)),
+                    "{ctx}"
+                );
+                assert_eq!(
+                    function.value(opt.best_genome()),
+                    opt.best_fitness(),
+                    "{ctx}"
+                );
                 for i in 0..opt.population().len() {
-                    assert!(opt.population().genome(i).iter().all(|g| (lo..=hi).contains(g)), "{ctx}");
+                    assert!(
+                        opt.population()
+                            .genome(i)
+                            .iter()
+                            .all(|g| (lo..=hi).contains(g)),
+                        "{ctx}"
+                    );
                 }
             }
         }
@@ -96,7 +126,9 @@ fn survey() {
                 let start = initial(&problem.inner, run);
                 let mut opt = method.build(20, 100);
                 let s = run_optimizer(&mut opt, &mut problem, &start, &mut seeded(run));
-                if s.best_fitness >= opt.history()[0] { fails += 1; }
+                if s.best_fitness >= opt.history()[0] {
+                    fails += 1;
+                }
                 finals[run as usize] = s.best_fitness;
             }
             finals.sort_by(f32::total_cmp);
@@ -113,7 +145,11 @@ fn same_seed_same_run() {
             let mut problem = TestFunction::new(Function::Rastrigin, 6).unwrap();
             let start = Population::uniform(&problem, 12, &mut seeded(3)).unwrap();
             let mut opt = method.build(12, 40);
-            let rules = StopRules { max_generations: 40, patience: None, max_evaluations: None };
+            let rules = StopRules {
+                max_generations: 40,
+                patience: None,
+                max_evaluations: None,
+            };
             let s = run(&mut opt, &mut problem, &start, &rules, &mut seeded(9)).unwrap();
             *r = (s.best_fitness.to_bits(), s.evaluations);
         }
@@ -128,7 +164,11 @@ fn cmaes_converges_on_sphere() {
         let mut problem = TestFunction::new(Function::Sphere, 10).unwrap();
         let start = initial(&problem, r);
         let mut opt = Method::CmaEs.build(20, 150);
-        let rules = StopRules { max_generations: 150, patience: None, max_evaluations: None };
+        let rules = StopRules {
+            max_generations: 150,
+            patience: None,
+            max_evaluations: None,
+        };
         let s = run(&mut opt, &mut problem, &start, &rules, &mut seeded(r)).unwrap();
         assert!(s.best_fitness < 1e-6, "run {r}: {}", s.best_fitness);
     }
@@ -140,7 +180,11 @@ fn cmaes_converges_on_sphere_in_two_dimensions() {
     let mut problem = TestFunction::new(Function::Sphere, 2).unwrap();
     let start = Population::uniform(&problem, 6, &mut seeded(4)).unwrap();
     let mut opt = Method::CmaEs.build(6, 150);
-    let rules = StopRules { max_generations: 150, patience: None, max_evaluations: None };
+    let rules = StopRules {
+        max_generations: 150,
+        patience: None,
+        max_evaluations: None,
+    };
     let s = run(&mut opt, &mut problem, &start, &rules, &mut seeded(4)).unwrap();
     assert!(s.best_fitness < 1e-6, "{}", s.best_fitness);
 }
@@ -164,17 +208,39 @@ fn stop_rules_apply() {
     let start = Population::uniform(&Flat, 5, &mut seeded(1)).unwrap();
     for method in Method::ALL {
         let mut opt = method.build(5, 30);
-        let s = run(&mut opt, &mut Flat, &start, &StopRules::default(), &mut seeded(2)).unwrap();
-        assert_eq!((s.reason, s.generations), (StopReason::NoImprovement, 10), "{method}");
-        let rules = StopRules { max_generations: 30, patience: None, max_evaluations: Some(40) };
+        let s = run(
+            &mut opt,
+            &mut Flat,
+            &start,
+            &StopRules::default(),
+            &mut seeded(2),
+        )
+        .unwrap();
+        assert_eq!(
+            (s.reason, s.generations),
+            (StopReason::NoImprovement, 10),
+            "{method}"
+        );
+        let rules = StopRules {
+            max_generations: 30,
+            patience: None,
+            max_evaluations: Some(40),
+        };
         let s = run(&mut opt, &mut Flat, &start, &rules, &mut seeded(2)).unwrap();
         assert_eq!(s.reason, StopReason::MaxEvaluations, "{method}");
         assert!(s.evaluations >= 40 && s.generations < 30, "{method}");
         let mut sphere = TestFunction::new(Function::Sphere, 3).unwrap();
         let start3 = Population::uniform(&sphere, 5, &mut seeded(1)).unwrap();
-        let rules = StopRules { max_generations: 7, patience: None, max_evaluations: None };
+        let rules = StopRules {
+            max_generations: 7,
+            patience: None,
+            max_evaluations: None,
+        };
         let s = run(&mut opt, &mut sphere, &start3, &rules, &mut seeded(2)).unwrap();
-        assert_eq!((s.reason, s.generations, opt.history().len()), (StopReason::MaxGenerations, 7, 8));
+        assert_eq!(
+            (s.reason, s.generations, opt.history().len()),
+            (StopReason::MaxGenerations, 7, 8)
+        );
     }
 }
 
@@ -186,7 +252,9 @@ fn known_fitnesses_are_not_evaluated_again() {
     for i in 0..8 {
         let g: [f32; 4] = core::array::from_fn(|_| crate::random::range_f32(&mut rng, -5.0, 5.0));
         if i % 2 == 0 {
-            start.push_with_fitness(&g, Function::Sphere.value(&g)).unwrap();
+            start
+                .push_with_fitness(&g, Function::Sphere.value(&g))
+                .unwrap();
         } else {
             start.push(&g).unwrap();
         }
@@ -211,16 +279,40 @@ fn evaluations_per_generation_match_each_method() {
         opt.evaluations() - before
     };
     // xBOA: two children per crossover, one point per local step.
-    let mut x = AnyOptimizer::Xboa(xboa::Xboa::new(xboa::XboaParams { p_c: 1.0, ..Default::default() }, 30));
+    let mut x = AnyOptimizer::Xboa(xboa::Xboa::new(
+        xboa::XboaParams {
+            p_c: 1.0,
+            ..Default::default()
+        },
+        30,
+    ));
     assert_eq!(per_gen(&mut x), 20);
-    let mut x = AnyOptimizer::Xboa(xboa::Xboa::new(xboa::XboaParams { p_c: 0.0, ..Default::default() }, 30));
+    let mut x = AnyOptimizer::Xboa(xboa::Xboa::new(
+        xboa::XboaParams {
+            p_c: 0.0,
+            ..Default::default()
+        },
+        30,
+    ));
     assert_eq!(per_gen(&mut x), 10);
     // GA: a child that is neither crossed nor mutated is not re-evaluated.
-    let p = ga::GaParams { crossover: 0.0, mutation: 0.0, ..Default::default() };
+    let p = ga::GaParams {
+        crossover: 0.0,
+        mutation: 0.0,
+        ..Default::default()
+    };
     assert_eq!(per_gen(&mut AnyOptimizer::Ga(ga::Ga::new(p, 30))), 0);
     // ABC: employed + onlookers (+ a scout, none in the first cycle).
     assert_eq!(per_gen(&mut Method::Abc.build(10, 30)), 20);
-    for m in [Method::Boa, Method::Aboa, Method::Saboa, Method::Pso, Method::Gwo, Method::CmaEs, Method::Random] {
+    for m in [
+        Method::Boa,
+        Method::Aboa,
+        Method::Saboa,
+        Method::Pso,
+        Method::Gwo,
+        Method::CmaEs,
+        Method::Random,
+    ] {
         assert_eq!(per_gen(&mut m.build(10, 30)), 10, "{m}");
     }
     let e = per_gen(&mut Method::Mboa.build(10, 30));
@@ -249,28 +341,78 @@ fn errors_are_reported_not_panicked() {
     let mut problem = TestFunction::new(Function::Sphere, 4).unwrap();
     let mut opt = Method::Xboa.build(5, 30);
     let mut rng = seeded(1);
-    assert_eq!(opt.step(&mut problem, &mut rng), Err(OptimError::NotStarted));
+    assert_eq!(
+        opt.step(&mut problem, &mut rng),
+        Err(OptimError::NotStarted)
+    );
     let mut small = Population::new(4).unwrap();
     small.push(&[0.0; 4]).unwrap();
-    assert_eq!(opt.start(&mut problem, &small), Err(OptimError::PopulationTooSmall { len: 1 }));
-    let other = Population::uniform(&TestFunction::new(Function::Sphere, 3).unwrap(), 5, &mut rng).unwrap();
+    assert_eq!(
+        opt.start(&mut problem, &small),
+        Err(OptimError::PopulationTooSmall { len: 1 })
+    );
+    let other = Population::uniform(
+        &TestFunction::new(Function::Sphere, 3).unwrap(),
+        5,
+        &mut rng,
+    )
+    .unwrap();
     assert_eq!(
         opt.start(&mut problem, &other),
-        Err(OptimError::DimensionMismatch { problem: 4, expected: 3 })
+        Err(OptimError::DimensionMismatch {
+            problem: 4,
+            expected: 3
+        })
     );
-    assert_eq!(small.push(&[0.0; 3]), Err(OptimError::GenomeLength { got: 3, expected: 4 }));
+    assert_eq!(
+        small.push(&[0.0; 3]),
+        Err(OptimError::GenomeLength {
+            got: 3,
+            expected: 4
+        })
+    );
     let mut full = Population::new(2).unwrap();
     for _ in 0..MAX_POP {
         full.push(&[0.0; 2]).unwrap();
     }
     assert_eq!(full.push(&[0.0; 2]), Err(OptimError::PopulationFull));
-    assert_eq!(Population::new(17).err(), Some(OptimError::BadDimension { dim: 17 }));
+    assert_eq!(
+        Population::new(17).err(),
+        Some(OptimError::BadDimension { dim: 17 })
+    );
     // History capacity: MAX_HISTORY - 1 generations, then an error.
     let start = Population::uniform(&problem, 3, &mut rng).unwrap();
     let mut opt = Method::Random.build(3, 30);
-    let rules = StopRules { max_generations: 5000, patience: None, max_evaluations: None };
-    assert_eq!(run(&mut opt, &mut problem, &start, &rules, &mut rng), Err(OptimError::HistoryFull));
+    let rules = StopRules {
+        max_generations: 5000,
+        patience: None,
+        max_evaluations: None,
+    };
+    assert_eq!(
+        run(&mut opt, &mut problem, &start, &rules, &mut rng),
+        Err(OptimError::HistoryFull)
+    );
     assert_eq!(opt.generation() as usize, MAX_HISTORY - 1);
+}
+
+#[test]
+fn population_from_flat_genes() {
+    let genes = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0];
+    let p = Population::from_flat(2, &genes, Some(&[1.0, 0.5, 2.0])).unwrap();
+    assert_eq!(
+        (p.len(), p.genome(1), p.fitness(1), p.best()),
+        (3, &[2.0, 3.0][..], Some(0.5), Some((1, 0.5)))
+    );
+    let p = Population::from_flat(3, &genes, None).unwrap();
+    assert_eq!((p.len(), p.fitness(0)), (2, None));
+    assert_eq!(
+        Population::from_flat(2, &genes, Some(&[1.0])).err(),
+        Some(OptimError::FitnessCount {
+            got: 1,
+            expected: 3
+        })
+    );
+    assert!(Population::from_flat(4, &genes, None).is_err());
 }
 
 #[test]

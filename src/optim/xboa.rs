@@ -66,17 +66,29 @@ pub struct Xboa {
 impl Xboa {
     /// An xBOA with `params`, whose `c` schedule spans `max_generations` generations.
     pub fn new(params: XboaParams, max_generations: u32) -> Self {
-        Self { params, c: params.c, engine: Engine::new(max_generations) }
+        Self {
+            params,
+            c: params.c,
+            engine: Engine::new(max_generations),
+        }
     }
 }
 
 impl Optimizer for Xboa {
-    fn start<P: Problem + ?Sized>(&mut self, problem: &mut P, initial: &Population) -> Result<(), OptimError> {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
         self.c = self.params.c;
         self.engine.start(problem, initial)
     }
 
-    fn step<P: Problem + ?Sized, R: Rng>(&mut self, problem: &mut P, rng: &mut R) -> Result<(), OptimError> {
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
         let e = &mut self.engine;
         let (n, dim) = (e.pop.len, e.dim);

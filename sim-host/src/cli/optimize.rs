@@ -81,13 +81,15 @@ pub struct Outcome {
     pub mean_ms: f64,
 }
 
-fn number<T: std::str::FromStr>(name: &str, text: &str, lo: T, hi: T) -> Result<T, String>
+fn number<T>(name: &str, text: &str, lo: T, hi: T) -> Result<T, String>
 where
-    T: PartialOrd + std::fmt::Display + Copy,
+    T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy,
 {
     match text.parse::<T>() {
         Ok(v) if v >= lo && v <= hi => Ok(v),
-        _ => Err(format!("--{name}: expected an integer from {lo} to {hi}, got '{text}'")),
+        _ => Err(format!(
+            "--{name}: expected an integer from {lo} to {hi}, got '{text}'"
+        )),
     }
 }
 
@@ -98,9 +100,15 @@ impl Experiment {
             .function
             .parse::<Function>()
             .map_err(|e| format!("--function: {e}, got '{}'", args.function))?;
-        let method =
-            args.method.parse::<Method>().map_err(|e| format!("--method: {e}, got '{}'", args.method))?;
-        let min_dim = if function == Function::Rosenbrock { 2 } else { 1 };
+        let method = args
+            .method
+            .parse::<Method>()
+            .map_err(|e| format!("--method: {e}, got '{}'", args.method))?;
+        let min_dim = if function == Function::Rosenbrock {
+            2
+        } else {
+            1
+        };
         let dim = number("dim", &args.dim, min_dim, MAX_DIM)?;
         let pop = number("pop", &args.pop, MIN_POP, MAX_POP)?;
         let gens = number("gens", &args.gens, 1, (optim::MAX_HISTORY - 1) as u32)?;
@@ -110,7 +118,16 @@ impl Experiment {
             Some(p) => Some(number("patience", p, 1, u32::MAX)?),
             None => None,
         };
-        Ok(Self { function, dim, method, pop, gens, runs, seed, patience })
+        Ok(Self {
+            function,
+            dim,
+            method,
+            pop,
+            gens,
+            runs,
+            seed,
+            patience,
+        })
     }
 }
 
@@ -145,18 +162,27 @@ pub fn execute(exp: &Experiment) -> Result<Outcome, String> {
     for run in 0..exp.runs {
         let mut problem = TestFunction::new(exp.function, exp.dim).map_err(|e| e.to_string())?;
         let initial = initial_population(&problem, exp.pop, exp.seed, run);
-        let rules = StopRules { max_generations: exp.gens, patience: exp.patience, max_evaluations: None };
+        let rules = StopRules {
+            max_generations: exp.gens,
+            patience: exp.patience,
+            max_evaluations: None,
+        };
         let mut rng = seeded(optimizer_seed(exp.seed, run));
         let t0 = Instant::now();
         let mut opt = exp.method.build(exp.pop, exp.gens);
-        let s = optim::run(&mut opt, &mut problem, &initial, &rules, &mut rng).map_err(|e| e.to_string())?;
+        let s = optim::run(&mut opt, &mut problem, &initial, &rules, &mut rng)
+            .map_err(|e| e.to_string())?;
         ms += t0.elapsed().as_secs_f64() * 1e3;
         evals += s.evaluations as f64;
         bests.push(s.best_fitness as f64);
     }
     bests.sort_by(f64::total_cmp);
     let n = bests.len();
-    let median = if n % 2 == 1 { bests[n / 2] } else { 0.5 * (bests[n / 2 - 1] + bests[n / 2]) };
+    let median = if n % 2 == 1 {
+        bests[n / 2]
+    } else {
+        0.5 * (bests[n / 2 - 1] + bests[n / 2])
+    };
     Ok(Outcome {
         median,
         min: bests[0],
@@ -199,7 +225,10 @@ pub fn run(args: Args) -> ExitCode {
             "{} on {} ({} genes), population {}, {} generations, {} runs, seed {}",
             exp.method, exp.function, exp.dim, exp.pop, exp.gens, exp.runs, exp.seed
         );
-        println!("best fitness: median {:.6e}  min {:.6e}  max {:.6e}", out.median, out.min, out.max);
+        println!(
+            "best fitness: median {:.6e}  min {:.6e}  max {:.6e}",
+            out.median, out.min, out.max
+        );
         println!("mean evaluations per run: {:.1}", out.evals);
         println!("mean time per run: {:.3} ms", out.mean_ms);
     }
@@ -227,7 +256,10 @@ mod tests {
     #[test]
     fn bad_arguments_name_the_option() {
         let e = Experiment::from_args(&args("xbox", "4")).unwrap_err();
-        assert!(e.starts_with("--method:") && e.contains("xbox") && !e.contains('\n'), "{e}");
+        assert!(
+            e.starts_with("--method:") && e.contains("xbox") && !e.contains('\n'),
+            "{e}"
+        );
         let e = Experiment::from_args(&args("xboa", "17")).unwrap_err();
         assert!(e.starts_with("--dim:") && e.contains("17"), "{e}");
         let mut a = args("xboa", "4");
@@ -253,7 +285,10 @@ mod tests {
         let a = execute(&exp).unwrap();
         let b = execute(&exp).unwrap();
         assert!(a.min <= a.median && a.median <= a.max);
-        assert_eq!((a.median, a.min, a.max, a.evals), (b.median, b.min, b.max, b.evals));
+        assert_eq!(
+            (a.median, a.min, a.max, a.evals),
+            (b.median, b.min, b.max, b.evals)
+        );
         assert_eq!(a.evals, 8.0 + 8.0 * 10.0);
     }
 }
