@@ -9,7 +9,8 @@
 //! gene, clamped to `±vmax` with `vmax = vmax_fraction * (upper - lower)`; then `x <- x + v`,
 //! clamped to the bounds, evaluated; the personal best follows strict improvements. `lbest` is
 //! the best personal best among the particle and its `neighbours` nearest indices on the ring
-//! (`neighbours / 2` on each side), taken at the start of the generation (synchronous update).
+//! (`neighbours / 2` on each side; with fewer particles, all the others, one more on the
+//! right when their number is odd), taken at the start of the generation (synchronous update).
 //! Velocities start at zero, so the first move is pulled by the neighbourhood only.
 //!
 //! Defaults are the thesis's tuned values: 4 neighbours, inertia 0.449, cognitive 3.379,
@@ -94,21 +95,18 @@ impl Optimizer for Pso {
         self.engine.begin_step(problem)?;
         let e = &mut self.engine;
         let n = e.pop.len;
-        let half = (self.params.neighbours / 2).min((n - 1) / 2);
-        let extra = if self.params.neighbours % 2 == 1 && 2 * half + 1 < n {
-            1
-        } else {
-            0
-        };
+        // k distinct neighbours: ceil(k/2) on the right, floor(k/2) on the left.
+        let k = self.params.neighbours.min(n - 1);
+        let (right_count, left_count) = (k - k / 2, k / 2);
         let mut lbest = [0usize; MAX_POP];
         for (i, lb) in lbest[..n].iter_mut().enumerate() {
             let mut b = i;
-            for off in 1..=half + extra {
+            for off in 1..=right_count {
                 let right = (i + off) % n;
                 if self.pbest_fitness[right] < self.pbest_fitness[b] {
                     b = right;
                 }
-                if off <= half {
+                if off <= left_count {
                     let left = (i + n - off) % n;
                     if self.pbest_fitness[left] < self.pbest_fitness[b] {
                         b = left;

@@ -115,29 +115,6 @@ fn run_optimizer(
 }
 
 #[test]
-#[ignore]
-fn survey() {
-    for method in Method::ALL {
-        for function in FUNCTIONS {
-            let mut fails = 0;
-            let mut finals = [0f32; 25];
-            for run in 0..25u64 {
-                let mut problem = Counting::new(TestFunction::new(function, 10).unwrap());
-                let start = initial(&problem.inner, run);
-                let mut opt = method.build(20, 100);
-                let s = run_optimizer(&mut opt, &mut problem, &start, &mut seeded(run));
-                if s.best_fitness >= opt.history()[0] {
-                    fails += 1;
-                }
-                finals[run as usize] = s.best_fitness;
-            }
-            finals.sort_by(f32::total_cmp);
-            std::println!("{method} {function} fails {fails} median {}", finals[12]);
-        }
-    }
-}
-
-#[test]
 fn same_seed_same_run() {
     for method in Method::ALL.into_iter().chain([Method::Random]) {
         let mut results = [(0u32, 0u32); 2];
@@ -413,6 +390,40 @@ fn population_from_flat_genes() {
         })
     );
     assert!(Population::from_flat(4, &genes, None).is_err());
+}
+
+#[test]
+fn every_method_runs_at_the_capacity_edges() {
+    for method in Method::ALL.into_iter().chain([Method::Random]) {
+        for (pop, dim) in [
+            (MIN_POP, 1),
+            (MIN_POP, 2),
+            (3, 2),
+            (5, 16),
+            (MAX_POP, MAX_DIM),
+        ] {
+            let mut problem = Counting::new(TestFunction::new(Function::Ackley, dim).unwrap());
+            let start = Population::uniform(&problem.inner, pop, &mut seeded(pop as u64)).unwrap();
+            let mut opt = method.build(pop, 30);
+            let rules = StopRules {
+                max_generations: 30,
+                patience: None,
+                max_evaluations: None,
+            };
+            let s = run(&mut opt, &mut problem, &start, &rules, &mut seeded(1)).unwrap();
+            let ctx = format!("{method}, pop {pop}, dim {dim}");
+            assert!(
+                s.best_fitness <= opt.history()[0] && s.best_fitness.is_finite(),
+                "{ctx}"
+            );
+            assert_eq!(
+                (problem.count, opt.population().len()),
+                (opt.evaluations(), pop),
+                "{ctx}"
+            );
+            assert!(!problem.out_of_bounds, "{ctx}");
+        }
+    }
 }
 
 #[test]
