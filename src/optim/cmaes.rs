@@ -24,6 +24,10 @@
 //! eigenvector is recognised as padding when most of its weight lies in padded coordinates; its
 //! scale and inverse scale are set to zero, so samples and `C^-1/2` never leave the `n`-dim
 //! subspace. `n` (not 16) enters every strategy parameter.
+//!
+//! Tested convergence: on the 10-gene sphere (`[-5.12, 5.12]`), `lambda = 20`, 150 generations
+//! (3020 evaluations) end below `1e-6` in every one of 10 seeded runs; at 100 generations the
+//! median over 25 runs is `7e-8` (`docs/optimizers.md`).
 
 use nalgebra::{SMatrix, SVector, SymmetricEigen};
 use rand_core::Rng;
