@@ -1,0 +1,208 @@
+//! Standard test functions for the optimizers, all minimised, each with its global minimum 0.
+//!
+//! Definitions and bounds follow M. Jamil and X.-S. Yang, "A literature survey of benchmark
+//! functions for global optimization problems", Int. J. Mathematical Modelling and Numerical
+//! Optimisation 4(2) (2013), and the Virtual Library of Simulation Experiments (Surjanovic &
+//! Bingham):
+//!
+//! | function | bounds per gene | minimum at |
+//! |---|---|---|
+//! | sphere `sum x^2` | `[-5.12, 5.12]` | 0 |
+//! | rastrigin `10 n + sum (x^2 - 10 cos 2 pi x)` | `[-5.12, 5.12]` | 0 |
+//! | rosenbrock `sum 100 (x_{i+1} - x_i^2)^2 + (1 - x_i)^2` | `[-5, 10]` | 1 |
+//! | ackley (`a = 20, b = 0.2, c = 2 pi`) | `[-32.768, 32.768]` | 0 |
+//! | griewank `1 + sum x^2 / 4000 - prod cos(x_i / sqrt i)` | `[-600, 600]` | 0 |
+//!
+//! The sums run in `f64` so that values near the optimum keep their precision.
+
+use core::fmt;
+use core::str::FromStr;
+
+use super::{MAX_DIM, OptimError, Problem};
+
+/// A standard test function.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Function {
+    /// Sum of squares.
+    Sphere,
+    /// Rastrigin's highly multimodal function.
+    Rastrigin,
+    /// Rosenbrock's valley.
+    Rosenbrock,
+    /// Ackley's function.
+    Ackley,
+    /// Griewank's function.
+    Griewank,
+}
+
+impl Function {
+    /// All functions.
+    pub const ALL: [Function; 5] = [
+        Function::Sphere,
+        Function::Rastrigin,
+        Function::Rosenbrock,
+        Function::Ackley,
+        Function::Griewank,
+    ];
+
+    /// Command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Function::Sphere => "sphere",
+            Function::Rastrigin => "rastrigin",
+            Function::Rosenbrock => "rosenbrock",
+            Function::Ackley => "ackley",
+            Function::Griewank => "griewank",
+        }
+    }
+
+    /// `(lower, upper)` bound of every gene.
+    pub fn bounds(self) -> (f32, f32) {
+        match self {
+            Function::Sphere | Function::Rastrigin => (-5.12, 5.12),
+            Function::Rosenbrock => (-5.0, 10.0),
+            Function::Ackley => (-32.768, 32.768),
+            Function::Griewank => (-600.0, 600.0),
+        }
+    }
+
+    /// Value at `x`.
+    pub fn value(self, x: &[f32]) -> f32 {
+        use core::f64::consts::TAU;
+        let n = x.len() as f64;
+        let it = x.iter().map(|&v| v as f64);
+        let v = match self {
+            Function::Sphere => it.map(|v| v * v).sum::<f64>(),
+            Function::Rastrigin => {
+                10.0 * n + it.map(|v| v * v - 10.0 * libm::cos(TAU * v)).sum::<f64>()
+            }
+            Function::Rosenbrock => x
+                .windows(2)
+                .map(|w| {
+                    let (a, b) = (w[0] as f64, w[1] as f64);
+                    100.0 * (b - a * a) * (b - a * a) + (1.0 - a) * (1.0 - a)
+                })
+                .sum::<f64>(),
+            Function::Ackley => {
+                let sq = x.iter().map(|&v| (v as f64) * (v as f64)).sum::<f64>() / n;
+                let cs = it.map(|v| libm::cos(TAU * v)).sum::<f64>() / n;
+                -20.0 * libm::exp(-0.2 * libm::sqrt(sq)) - libm::exp(cs)
+                    + 20.0
+                    + core::f64::consts::E
+            }
+            Function::Griewank => {
+                let sq = x.iter().map(|&v| (v as f64) * (v as f64)).sum::<f64>() / 4000.0;
+                let prod = it
+                    .enumerate()
+                    .map(|(i, v)| libm::cos(v / libm::sqrt(i as f64 + 1.0)))
+                    .product::<f64>();
+                1.0 + sq - prod
+            }
+        };
+        // Rounding can leave a tiny negative value near the optimum.
+        v.max(0.0) as f32
+    }
+}
+
+impl fmt::Display for Function {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A function name that is not one of `sphere rastrigin rosenbrock ackley griewank`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UnknownFunction;
+
+impl fmt::Display for UnknownFunction {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(
+            "unknown function, expected one of: sphere rastrigin rosenbrock ackley griewank",
+        )
+    }
+}
+
+impl core::error::Error for UnknownFunction {}
+
+impl FromStr for Function {
+    type Err = UnknownFunction;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Function::ALL
+            .iter()
+            .copied()
+            .find(|f| f.name() == s)
+            .ok_or(UnknownFunction)
+    }
+}
+
+/// A test function in `dim` dimensions, as a [`Problem`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TestFunction {
+    function: Function,
+    dim: usize,
+}
+
+impl TestFunction {
+    /// `function` in `dim` dimensions (1 to [`MAX_DIM`]; Rosenbrock needs 2).
+    pub fn new(function: Function, dim: usize) -> Result<Self, OptimError> {
+        let min = if function == Function::Rosenbrock {
+            2
+        } else {
+            1
+        };
+        if dim < min || dim > MAX_DIM {
+            return Err(OptimError::BadDimension { dim });
+        }
+        Ok(Self { function, dim })
+    }
+
+    /// Which function.
+    pub fn function(&self) -> Function {
+        self.function
+    }
+}
+
+impl Problem for TestFunction {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+    fn bounds(&self, _gene: usize) -> (f32, f32) {
+        self.function.bounds()
+    }
+    fn evaluate(&mut self, genes: &[f32]) -> f32 {
+        self.function.value(genes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn minima_are_zero() {
+        for f in Function::ALL {
+            let at = if f == Function::Rosenbrock { 1.0 } else { 0.0 };
+            let x = [at; 10];
+            assert!(f.value(&x) < 1e-6, "{f}: {}", f.value(&x));
+        }
+    }
+
+    #[test]
+    fn values_away_from_minimum_are_positive() {
+        let x = [0.5f32; 10];
+        for f in Function::ALL {
+            assert!(f.value(&x) > 1e-3, "{f}");
+        }
+        assert!((Function::Sphere.value(&x) - 2.5).abs() < 1e-6);
+        assert!((Function::Rastrigin.value(&[1.0, 0.0]) - 1.0).abs() < 1e-5);
+        assert!((Function::Rosenbrock.value(&[0.0, 0.0]) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for f in Function::ALL {
+            assert_eq!(f.name().parse::<Function>(), Ok(f));
+        }
+        assert!("bogus".parse::<Function>().is_err());
+    }
+}
