@@ -696,8 +696,16 @@ mod tests {
             Point2::new(0.5, 3.0),
             Point2::new(3.0, 3.2),
         ];
-        for seed in 0..20 {
-            let (robot, f, sign_changes, arrived) = run(&path, Slip::thesis(), seed, FollowerConfig::default());
+        let harsh = Slip {
+            speed_noise_fraction: 0.15,
+            turn_noise_fraction: 0.15,
+            stop_slide_s: (0.3, 0.8),
+            stop_slide_m: (0.01, 0.03),
+        };
+        for seed in 0..40 {
+            let slip = if seed % 2 == 0 { Slip::thesis() } else { harsh };
+            let (robot, f, sign_changes, arrived) =
+                run(&path, slip, seed, FollowerConfig::default());
             assert!(arrived, "seed {seed}: did not arrive, at {:?}", robot.pose());
             let end = *path.last().unwrap();
             let err = robot.pose().position().distance(end);
@@ -712,6 +720,22 @@ mod tests {
                 "seed {seed}: heading error changed sign {sign_changes} times"
             );
         }
+    }
+
+    /// The oscillation measure is sensitive: a heading gain far too high for the 10 Hz loop
+    /// and the robot's rotational acceleration makes the heading error swing from side to
+    /// side, and the count shows it.
+    #[test]
+    fn an_overtuned_heading_loop_is_seen_oscillating() {
+        let path = [Point2::new(3.0, 0.0), Point2::new(3.0, 3.0)];
+        let config = FollowerConfig {
+            heading_kp: 30.0,
+            heading_kd: 0.0,
+            realign_threshold_rad: 1.5,
+            ..FollowerConfig::default()
+        };
+        let (_, _, sign_changes, _) = run(&path, Slip::thesis(), 5, config);
+        assert!(sign_changes > 2 * path.len() as u32, "{sign_changes}");
     }
 
     /// Without slip, no back-up is ever needed on a simple path.
