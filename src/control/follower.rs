@@ -557,7 +557,10 @@ mod tests {
             if remaining_m > 0.21 {
                 assert_eq!(speed, 300, "full speed {remaining_m} m out");
             } else if remaining_m > 0.05 {
-                assert!(speed < 300 && speed >= 40, "{speed} mm/s at {remaining_m} m");
+                assert!(
+                    (40..300).contains(&speed),
+                    "{speed} mm/s at {remaining_m} m"
+                );
             }
         }
         assert!(speeds.iter().any(|&(r, s)| r < 0.15 && s < 250));
@@ -576,7 +579,10 @@ mod tests {
         let (_, s) = f.update(Time::from_millis(100), at_first);
         assert_eq!(s, FollowStatus::WaypointReached(0));
         let at_second = Pose2::new(0.98, 0.97, 1.5);
-        assert_eq!(f.update(Time::from_millis(200), at_second).1, FollowStatus::Settling);
+        assert_eq!(
+            f.update(Time::from_millis(200), at_second).1,
+            FollowStatus::Settling
+        );
         let (cmd, s) = f.update(Time::from_millis(300), at_second);
         assert_eq!((cmd, s), (MotionCommand::ZERO, FollowStatus::Arrived));
         let (cmd, s) = f.update(Time::from_millis(400), Pose2::new(0.0, 0.0, 0.0));
@@ -612,7 +618,10 @@ mod tests {
         let mut f = follower();
         assert_eq!(f.set_path(&[]), Err(FollowerError::EmptyPath));
         let many = [Point2::new(0.0, 0.0); MAX_WAYPOINTS + 1];
-        assert!(matches!(f.set_path(&many), Err(FollowerError::TooManyWaypoints { .. })));
+        assert!(matches!(
+            f.set_path(&many),
+            Err(FollowerError::TooManyWaypoints { .. })
+        ));
         let bad = [Point2::new(0.0, 0.0), Point2::new(f32::NAN, 1.0)];
         assert_eq!(f.set_path(&bad), Err(FollowerError::NotFinite { index: 1 }));
         assert_eq!(f.update(Time::ZERO, Pose2::default()).1, FollowStatus::Idle);
@@ -706,7 +715,11 @@ mod tests {
             let slip = if seed % 2 == 0 { Slip::thesis() } else { harsh };
             let (robot, f, sign_changes, arrived) =
                 run(&path, slip, seed, FollowerConfig::default());
-            assert!(arrived, "seed {seed}: did not arrive, at {:?}", robot.pose());
+            assert!(
+                arrived,
+                "seed {seed}: did not arrive, at {:?}",
+                robot.pose()
+            );
             let end = *path.last().unwrap();
             let err = robot.pose().position().distance(end);
             assert!(err <= 0.05, "seed {seed}: final error {err} m");
@@ -766,6 +779,9 @@ mod tests {
         let (robot, f, _, arrived) = run(&path, slip, 3, config);
         assert!(arrived);
         assert!(robot.pose().position().distance(path[1]) <= 0.05);
-        assert!(f.backup_count() >= 1, "the slide should have forced a back-up");
+        assert!(
+            f.backup_count() >= 1,
+            "the slide should have forced a back-up"
+        );
     }
 }

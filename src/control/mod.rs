@@ -108,7 +108,12 @@ impl core::ops::Add<Duration> for Time {
 
 impl core::fmt::Display for Time {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "{}.{:06} s", self.micros / 1_000_000, self.micros % 1_000_000)
+        write!(
+            f,
+            "{}.{:06} s",
+            self.micros / 1_000_000,
+            self.micros % 1_000_000
+        )
     }
 }
 
@@ -127,7 +132,10 @@ mod tests {
         assert_eq!(Time::from_secs_f64(-3.0), Time::ZERO);
         assert_eq!(Time::from_secs_f64(f64::NAN), Time::ZERO);
         assert_eq!(Time::from_secs_f64(0.25).as_micros(), 250_000);
-        assert_eq!(Time::from_micros(u64::MAX) + Duration::from_secs(5), Time::from_micros(u64::MAX));
+        assert_eq!(
+            Time::from_micros(u64::MAX) + Duration::from_secs(5),
+            Time::from_micros(u64::MAX)
+        );
     }
 }
 
@@ -223,7 +231,11 @@ mod chain_tests {
         let map_start = Pose2::new(2.0, 3.0, 0.0);
         // 32.5 m east in odom: XPOS wraps 0.27 m into the drive.
         let odom_start = Pose2::new(32.5, -0.4, 0.0);
-        let path = [Point2::new(4.0, 3.0), Point2::new(4.0, 4.5), Point2::new(2.5, 4.5)];
+        let path = [
+            Point2::new(4.0, 3.0),
+            Point2::new(4.0, 4.5),
+            Point2::new(2.5, 4.5),
+        ];
         for seed in 0..5 {
             let mut chain = Chain::new(map_start, odom_start, &path, seed);
             let mut arrived = false;
@@ -242,7 +254,10 @@ mod chain_tests {
             let err = truth.position().distance(path[2]);
             assert!(err <= 0.05, "seed {seed}: {err} m from the goal");
             let seen = chain.map_pose();
-            assert!(seen.position().distance(truth.position()) < 0.003, "{seen:?} vs {truth:?}");
+            assert!(
+                seen.position().distance(truth.position()) < 0.003,
+                "{seen:?} vs {truth:?}"
+            );
         }
     }
 

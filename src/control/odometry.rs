@@ -170,10 +170,16 @@ impl core::fmt::Display for OdometryError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             OdometryError::BadTicksPerMm { ticks_per_mm } => {
-                write!(f, "encoder ticks per mm must be finite and > 0, got {ticks_per_mm}")
+                write!(
+                    f,
+                    "encoder ticks per mm must be finite and > 0, got {ticks_per_mm}"
+                )
             }
             OdometryError::BadTrackWidth { track_width_mm } => {
-                write!(f, "track width must be finite and > 0 mm, got {track_width_mm}")
+                write!(
+                    f,
+                    "track width must be finite and > 0 mm, got {track_width_mm}"
+                )
             }
         }
     }
@@ -431,7 +437,10 @@ mod tests {
         // 1 m forward in odom is 1 m forward in map too.
         let ahead = odom_start.compose(Pose2::new(1.0, 0.0, 0.0));
         let m = t.map_pose(ahead);
-        assert!((m.x - 5.0).abs() < 1e-4 && (m.y - 3.0).abs() < 1e-4, "{m:?}");
+        assert!(
+            (m.x - 5.0).abs() < 1e-4 && (m.y - 3.0).abs() < 1e-4,
+            "{m:?}"
+        );
         let back = t.odom_pose(m);
         assert!((back.x - ahead.x).abs() < 1e-4 && (back.y - ahead.y).abs() < 1e-4);
     }

@@ -58,7 +58,10 @@ impl core::fmt::Display for PidError {
             PidError::EmptyOutputRange {
                 output_min,
                 output_max,
-            } => write!(f, "PID output range is empty: min {output_min} > max {output_max}"),
+            } => write!(
+                f,
+                "PID output range is empty: min {output_min} > max {output_max}"
+            ),
             PidError::Negative => write!(f, "PID gains and integral limit must be >= 0"),
         }
     }
@@ -78,7 +81,14 @@ impl Pid {
     /// A controller with a checked configuration.
     pub fn new(config: PidConfig) -> Result<Self, PidError> {
         let c = &config;
-        let all = [c.kp, c.ki, c.kd, c.output_min, c.output_max, c.integral_limit];
+        let all = [
+            c.kp,
+            c.ki,
+            c.kd,
+            c.output_min,
+            c.output_max,
+            c.integral_limit,
+        ];
         if all.iter().any(|v| !v.is_finite()) {
             return Err(PidError::NotFinite);
         }
@@ -267,7 +277,10 @@ mod tests {
             output_max: -1.0,
             ..config()
         };
-        assert!(matches!(Pid::new(bad), Err(PidError::EmptyOutputRange { .. })));
+        assert!(matches!(
+            Pid::new(bad),
+            Err(PidError::EmptyOutputRange { .. })
+        ));
         let bad = PidConfig {
             kp: f32::NAN,
             ..config()
@@ -284,8 +297,16 @@ mod tests {
     /// included), every output is within the limits.
     #[test]
     fn output_always_within_limits_for_random_inputs() {
-        let mut rng = seeded(0x5049_44);
-        let specials = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -0.0, 1e30, -1e30];
+        let mut rng = seeded(0x50_49_44);
+        let specials = [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            0.0,
+            -0.0,
+            1e30,
+            -1e30,
+        ];
         for _ in 0..2_000 {
             let lo = range_f32(&mut rng, -500.0, 10.0);
             let hi = lo + range_f32(&mut rng, 0.0, 500.0);

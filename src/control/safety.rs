@@ -353,8 +353,8 @@ impl SafetyMonitor {
         let contact = flags.front_bumper || flags.rear_bumper || flags.stalled();
         match self.state {
             SafetyState::BackingOff { direction, .. } => {
-                let blocked = (direction > 0 && flags.front_bumper)
-                    || (direction < 0 && flags.rear_bumper);
+                let blocked =
+                    (direction > 0 && flags.front_bumper) || (direction < 0 && flags.rear_bumper);
                 if blocked {
                     return self.hold(HoldCause::Contact);
                 }
@@ -437,8 +437,9 @@ impl SafetyMonitor {
             }
             SafetyState::Monitoring => self.limits.clamp(proposed),
         };
-        if let Some((distance_m, point_base_m)) =
-            inputs.scan.and_then(|s| self.obstacle_in_path(command, s, inputs.laser))
+        if let Some((distance_m, point_base_m)) = inputs
+            .scan
+            .and_then(|s| self.obstacle_in_path(command, s, inputs.laser))
         {
             let cause = match self.state {
                 SafetyState::BackingOff { .. } => HoldCause::Contact,
@@ -496,7 +497,8 @@ impl SafetyMonitor {
             if !(r.is_finite() && r >= self.config.min_valid_range_m) {
                 continue;
             }
-            let in_laser = Point2::new(r * math::cos(beam.angle_rad), r * math::sin(beam.angle_rad));
+            let in_laser =
+                Point2::new(r * math::cos(beam.angle_rad), r * math::sin(beam.angle_rad));
             let p = laser.mount.transform_point(in_laser);
             let clearance = if speed_mm_s > 0 {
                 (p.x > 0.0 && math::abs(p.y) <= half_width && p.x - fp.front_m < stop_m)
@@ -774,7 +776,11 @@ mod tests {
                 cause: HoldCause::Contact
             })
         );
-        assert!((b.pose_odom.x + 0.15).abs() < 0.011, "backed to {}", b.pose_odom.x);
+        assert!(
+            (b.pose_odom.x + 0.15).abs() < 0.011,
+            "backed to {}",
+            b.pose_odom.x
+        );
         // 0.15 m at 10 mm per period.
         assert!((15..=16).contains(&backed), "{backed} periods");
         // Holding: no motion until the replan is acknowledged.
@@ -813,7 +819,12 @@ mod tests {
         }
         let (k, cmd, ev) = outcome.expect("the back-off never ended");
         assert_eq!(cmd, RobotCommand::Stop);
-        assert_eq!(ev, Some(SafetyEvent::RequiresReplan { cause: HoldCause::Contact }));
+        assert_eq!(
+            ev,
+            Some(SafetyEvent::RequiresReplan {
+                cause: HoldCause::Contact
+            })
+        );
         assert!((29..=31).contains(&k), "gave up after {k} periods");
     }
 
@@ -836,7 +847,10 @@ mod tests {
                     assert!(moving(cmd), "{which}: stopped too early at {k}");
                 } else {
                     assert_eq!(cmd, RobotCommand::Velocity(Velocity::ZERO), "{which}");
-                    assert!(matches!(ev, Some(SafetyEvent::InputsStale { .. })), "{which}");
+                    assert!(
+                        matches!(ev, Some(SafetyEvent::InputsStale { .. })),
+                        "{which}"
+                    );
                 }
             }
             // Stays stopped, reported once.
@@ -884,14 +898,22 @@ mod tests {
                     motors_disabled: !estop
                 })
             );
-            assert_eq!(b.monitor.acknowledge_replan(), Err(AcknowledgeError::FaultActive));
+            assert_eq!(
+                b.monitor.acknowledge_replan(),
+                Err(AcknowledgeError::FaultActive)
+            );
             let (cmd, ev) = b.tick(forward(300));
             assert_eq!((cmd, ev), (RobotCommand::Stop, None));
             // The fault clears: the old decision must not resume.
             b.flags = RobotFlags::nominal();
             let (cmd, ev) = b.tick(forward(300));
             assert_eq!(cmd, RobotCommand::Stop);
-            assert_eq!(ev, Some(SafetyEvent::RequiresReplan { cause: HoldCause::Fault }));
+            assert_eq!(
+                ev,
+                Some(SafetyEvent::RequiresReplan {
+                    cause: HoldCause::Fault
+                })
+            );
             for _ in 0..10 {
                 assert_eq!(b.tick(forward(300)).0, RobotCommand::Stop);
             }
@@ -935,7 +957,10 @@ mod tests {
                 estop: chance(&mut rng, 0.02),
             };
             if chance(&mut rng, 0.05) {
-                b.scan = scan_with(None, &[(below(&mut rng, 181), range_f32(&mut rng, 0.0, 2.0))]);
+                b.scan = scan_with(
+                    None,
+                    &[(below(&mut rng, 181), range_f32(&mut rng, 0.0, 2.0))],
+                );
             }
             b.pose_odom.x += range_f32(&mut rng, -0.02, 0.02);
             if chance(&mut rng, 0.05) {

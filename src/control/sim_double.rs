@@ -104,8 +104,7 @@ impl Unicycle {
     pub fn arcos_raw(&self) -> (u16, u16, i16) {
         let x = (math::round(m_to_mm(self.pose.x)) as i64).rem_euclid(0x8000) as u16;
         let y = (math::round(m_to_mm(self.pose.y)) as i64).rem_euclid(0x8000) as u16;
-        let th = (math::round(rad_to_arcos_angle(self.pose.theta)) as i32 + 2048)
-            .rem_euclid(4096)
+        let th = (math::round(rad_to_arcos_angle(self.pose.theta)) as i32 + 2048).rem_euclid(4096)
             - 2048;
         (x, y, th as i16)
     }
@@ -127,8 +126,16 @@ impl Unicycle {
             // The end-of-move slide, along the direction of motion.
             let (lo, hi) = self.slip.stop_slide_s;
             let (dlo, dhi) = self.slip.stop_slide_m;
-            let t = if hi > lo { range_f32(&mut self.rng, lo, hi) } else { lo };
-            let extra = if dhi > dlo { range_f32(&mut self.rng, dlo, dhi) } else { dlo };
+            let t = if hi > lo {
+                range_f32(&mut self.rng, lo, hi)
+            } else {
+                lo
+            };
+            let extra = if dhi > dlo {
+                range_f32(&mut self.rng, dlo, dhi)
+            } else {
+                dlo
+            };
             let slide = self.speed_m_s * t + extra * self.speed_m_s.signum();
             self.translate(slide);
         }
@@ -138,8 +145,8 @@ impl Unicycle {
         let dw = self.turn_accel_rad_s2 * dt_s;
         self.turn_rate_rad_s += (w_cmd - self.turn_rate_rad_s).clamp(-dw, dw);
         let v = self.speed_m_s * (1.0 + self.slip.speed_noise_fraction * gaussian(&mut self.rng));
-        let w = self.turn_rate_rad_s
-            * (1.0 + self.slip.turn_noise_fraction * gaussian(&mut self.rng));
+        let w =
+            self.turn_rate_rad_s * (1.0 + self.slip.turn_noise_fraction * gaussian(&mut self.rng));
         let mid = self.pose.theta + 0.5 * w * dt_s;
         let d = v * dt_s;
         self.pose = Pose2::new(
