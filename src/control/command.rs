@@ -36,7 +36,7 @@ impl MotionCommand {
         self.speed_mm_s == 0 && self.turn_rate_deg_s == 0
     }
 
-    /// From SI values [m/s, rad/s], rounded and saturated to `i16`.
+    /// From SI values \[m/s, rad/s\], rounded and saturated to `i16`.
     pub fn from_si(speed_m_s: f32, turn_rate_rad_s: f32) -> Self {
         Self {
             speed_mm_s: saturating_i16(crate::units::m_to_mm(speed_m_s)),

@@ -31,7 +31,7 @@ use crate::units::{deg_to_rad, mm_to_m};
 /// Waypoints a path can hold.
 pub const MAX_WAYPOINTS: usize = 128;
 
-/// A path: waypoints in the `map` frame [m], in driving order.
+/// A path: waypoints in the `map` frame \[m\], in driving order.
 pub type Path = heapless::Vec<Point2, MAX_WAYPOINTS>;
 
 /// What the follower is doing.
@@ -56,7 +56,7 @@ pub enum FollowStatus {
 
 /// A path follower: the small interface the mission layer drives.
 pub trait Controller {
-    /// Starts following `waypoints` (map frame [m]) from the first one, forgetting any
+    /// Starts following `waypoints` (map frame \[m\]) from the first one, forgetting any
     /// previous path and controller state.
     fn set_path(&mut self, waypoints: &[Point2]) -> Result<(), FollowerError>;
 
@@ -116,14 +116,14 @@ impl core::error::Error for FollowerError {}
 /// Tuning of the waypoint follower.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FollowerConfig {
-    /// Rotate in place until the heading error is within this [rad]. Default 0.1 (≈ 6°).
+    /// Rotate in place until the heading error is within this \[rad\]. Default 0.1 (≈ 6°).
     pub heading_tolerance_rad: f32,
-    /// While driving, a heading error beyond this stops the robot to rotate again [rad].
+    /// While driving, a heading error beyond this stops the robot to rotate again \[rad\].
     /// Default 0.5 (≈ 29°).
     pub realign_threshold_rad: f32,
-    /// Distance before a waypoint where the robot starts slowing down [m]. Default 0.2.
+    /// Distance before a waypoint where the robot starts slowing down \[m\]. Default 0.2.
     pub slow_down_distance_m: f32,
-    /// A waypoint closer than this is reached [m]. Default 0.05.
+    /// A waypoint closer than this is reached \[m\]. Default 0.05.
     pub position_tolerance_m: f32,
     /// Cruising speed [mm/s]. Default 300.
     pub cruise_speed_mm_s: f32,
@@ -149,10 +149,10 @@ pub struct FollowerConfig {
     /// At most this many back-up corrections per waypoint; after that an overshot waypoint
     /// is approached by turning around. Default 3.
     pub max_backups_per_waypoint: u8,
-    /// The robot counts as stopped when it moved less than this in one period [m].
+    /// The robot counts as stopped when it moved less than this in one period \[m\].
     /// Default 0.002.
     pub settle_motion_m: f32,
-    /// Longest wait for the robot to stop before checking the tolerance anyway [s].
+    /// Longest wait for the robot to stop before checking the tolerance anyway \[s\].
     /// Default 1.0.
     pub settle_timeout_s: f32,
 }

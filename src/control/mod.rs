@@ -83,7 +83,7 @@ impl Time {
         Duration::from_micros(self.micros.saturating_sub(earlier.micros))
     }
 
-    /// Seconds elapsed since `earlier` [s]; zero if `earlier` is later than `self`.
+    /// Seconds elapsed since `earlier` \[s\]; zero if `earlier` is later than `self`.
     pub fn secs_since(self, earlier: Time) -> f32 {
         self.micros.saturating_sub(earlier.micros) as f32 * 1e-6
     }

@@ -92,7 +92,7 @@ impl ArcosOdometry {
     }
 
     /// Feeds one SIP's XPOS, YPOS (15-bit mm counters) and THPOS (4096 units per turn) and
-    /// returns the new `odom` pose [m, rad].
+    /// returns the new `odom` pose \[m, rad\].
     pub fn update(&mut self, x_raw: u16, y_raw: u16, th_raw: i16) -> Pose2 {
         match self.last_raw {
             None => {
@@ -119,7 +119,7 @@ impl ArcosOdometry {
         self.last_raw.is_some()
     }
 
-    /// The current pose in `odom` [m, rad]; the origin until the first reading.
+    /// The current pose in `odom` \[m, rad\]; the origin until the first reading.
     pub fn pose_odom(&self) -> Pose2 {
         Pose2::new(
             self.x_mm as f32 * 0.001,
@@ -128,18 +128,18 @@ impl ArcosOdometry {
         )
     }
 
-    /// The unwrapped position in `odom` [mm].
+    /// The unwrapped position in `odom` \[mm\].
     pub fn position_odom_mm(&self) -> (i64, i64) {
         (self.x_mm, self.y_mm)
     }
 
-    /// Total signed rotation since the first reading [rad] (counter-clockwise positive; not
+    /// Total signed rotation since the first reading \[rad\] (counter-clockwise positive; not
     /// wrapped, so two full turns give 4π).
     pub fn rotation_total_rad(&self) -> f32 {
         self.rotation_units as f32 * (TAU / ARCOS_ANGLE_UNITS_PER_TURN)
     }
 
-    /// Path length driven since the first reading [m] (sum of per-SIP straight steps).
+    /// Path length driven since the first reading \[m\] (sum of per-SIP straight steps).
     pub fn distance_travelled_m(&self) -> f32 {
         self.distance_mm as f32 * 0.001
     }
@@ -161,7 +161,7 @@ pub enum OdometryError {
     },
     /// Track width (distance between the wheel contact points) must be finite and positive.
     BadTrackWidth {
-        /// The value given [mm].
+        /// The value given \[mm\].
         track_width_mm: f32,
     },
 }
@@ -192,7 +192,7 @@ impl core::error::Error for OdometryError {}
 pub struct EncoderGeometry {
     /// Encoder ticks per millimetre of tyre travel.
     pub ticks_per_mm: f32,
-    /// Distance between the left and right wheel contact points [mm].
+    /// Distance between the left and right wheel contact points \[mm\].
     pub track_width_mm: f32,
 }
 
@@ -257,7 +257,7 @@ impl EncoderOdometry {
         self.pose_odom()
     }
 
-    /// The current pose in `odom` [m, rad].
+    /// The current pose in `odom` \[m, rad\].
     pub fn pose_odom(&self) -> Pose2 {
         Pose2::new(self.x_m as f32, self.y_m as f32, self.theta_rad as f32)
     }
@@ -266,7 +266,7 @@ impl EncoderOdometry {
 /// The rigid transform that maps `odom` poses into the `map` frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MapFromOdom {
-    /// The `odom` frame's origin and orientation, expressed in `map` [m, rad].
+    /// The `odom` frame's origin and orientation, expressed in `map` \[m, rad\].
     pub odom_origin_in_map: Pose2,
 }
 
@@ -300,7 +300,7 @@ mod tests {
     use super::*;
     use core::f32::consts::PI;
 
-    /// What the robot reports for an unwrapped position [mm] and heading [units].
+    /// What the robot reports for an unwrapped position \[mm\] and heading [units].
     fn raw(x_mm: i64, y_mm: i64, th_units: i64) -> (u16, u16, i16) {
         let th = (th_units + 2048).rem_euclid(4096) - 2048;
         (

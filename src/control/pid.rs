@@ -132,7 +132,7 @@ impl Pid {
         self.step(setpoint - measurement, measurement, change, dt_s)
     }
 
-    /// As [`Pid::update`] for angles [rad]: the error and the measurement change are wrapped
+    /// As [`Pid::update`] for angles \[rad\]: the error and the measurement change are wrapped
     /// into (−π, π].
     pub fn update_angle(&mut self, setpoint_rad: f32, measurement_rad: f32, dt_s: f32) -> f32 {
         let change = self

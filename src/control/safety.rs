@@ -40,13 +40,13 @@ use crate::units::mm_to_m;
 /// The robot's outline, seen from above, relative to its centre of rotation.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RobotFootprint {
-    /// Overall width [m].
+    /// Overall width \[m\].
     pub width_m: f32,
-    /// From the centre of rotation to the front edge [m].
+    /// From the centre of rotation to the front edge \[m\].
     pub front_m: f32,
-    /// From the centre of rotation to the rear edge [m].
+    /// From the centre of rotation to the rear edge \[m\].
     pub rear_m: f32,
-    /// Radius of the circle swept when turning in place [m].
+    /// Radius of the circle swept when turning in place \[m\].
     pub radius_m: f32,
 }
 
@@ -74,24 +74,24 @@ impl Default for RobotFootprint {
 pub struct SafetyConfig {
     /// The robot's outline.
     pub footprint: RobotFootprint,
-    /// Added on each side of the robot's width for the driving corridor [m]. Default 0.05.
+    /// Added on each side of the robot's width for the driving corridor \[m\]. Default 0.05.
     pub side_margin_m: f32,
     /// Clearance always kept ahead of (or behind) the robot's edge, on top of the braking
-    /// distance [m]. Default 0.10.
+    /// distance \[m\]. Default 0.10.
     pub min_clearance_m: f32,
-    /// Added to the turning radius when turning in place [m]. Default 0.05.
+    /// Added to the turning radius when turning in place \[m\]. Default 0.05.
     pub turn_margin_m: f32,
-    /// The control period, for the distance covered before the next check [s]. Default 0.1.
+    /// The control period, for the distance covered before the next check \[s\]. Default 0.1.
     pub control_period_s: f32,
     /// Odometry or a scan older than this is stale. Default 500 ms.
     pub max_input_age: Duration,
-    /// Distance to back off after a contact [m]. Default 0.15.
+    /// Distance to back off after a contact \[m\]. Default 0.15.
     pub backoff_distance_m: f32,
     /// Speed when backing off [mm/s]. Default 100.
     pub backoff_speed_mm_s: i16,
     /// Longest back-off before giving up and holding. Default 3 s.
     pub backoff_timeout: Duration,
-    /// Laser ranges below this are sensor errors, not obstacles [m]. Default 0.02 (the
+    /// Laser ranges below this are sensor errors, not obstacles \[m\]. Default 0.02 (the
     /// LMS1xx reports 0 for an invalid beam; the mapping blind zone is not applied here).
     pub min_valid_range_m: f32,
 }
@@ -151,7 +151,7 @@ impl RobotFlags {
 /// What the monitor looks at in one period.
 #[derive(Clone, Copy, Debug)]
 pub struct SafetyInputs<'a> {
-    /// The latest odometry pose, `odom` frame [m, rad] (used to measure the back-off).
+    /// The latest odometry pose, `odom` frame \[m, rad\] (used to measure the back-off).
     pub pose_odom: Pose2,
     /// When that odometry was received; `None` if none yet.
     pub odometry_time: Option<Time>,
@@ -185,9 +185,9 @@ pub enum SafetyEvent {
     /// A laser return in the swept corridor: the robot stopped and holds for a replan.
     ObstacleAhead {
         /// Clearance between the robot's edge (front, rear, or turning circle) and the
-        /// return [m]; 0 if the return is inside the outline.
+        /// return \[m\]; 0 if the return is inside the outline.
         distance_m: f32,
-        /// The return's position in the robot's base frame (x forward, y left) [m], for
+        /// The return's position in the robot's base frame (x forward, y left) \[m\], for
         /// adding it to the map.
         point_base_m: Point2,
     },
@@ -468,14 +468,14 @@ impl SafetyMonitor {
         )
     }
 
-    /// Distance needed ahead of the robot's edge at `speed_m_s` [m].
+    /// Distance needed ahead of the robot's edge at `speed_m_s` \[m\].
     pub fn stopping_distance_m(&self, speed_m_s: f32) -> f32 {
         let v = math::abs(speed_m_s);
         let decel = mm_to_m(f32::from(self.limits.decel_mm_s2().max(1)));
         self.config.min_clearance_m + v * v / (2.0 * decel) + v * self.config.control_period_s
     }
 
-    /// The nearest laser return that `v` would run into: its clearance [m] and its position
+    /// The nearest laser return that `v` would run into: its clearance \[m\] and its position
     /// in the base frame.
     pub fn obstacle_in_path(
         &self,

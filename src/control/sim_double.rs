@@ -23,9 +23,9 @@ pub struct Slip {
     /// Standard deviation of the multiplicative error on the achieved turn rate.
     pub turn_noise_fraction: f32,
     /// When the robot is told to stop after driving, it slides on for this many seconds at
-    /// its last speed, drawn uniformly from the range [s].
+    /// its last speed, drawn uniformly from the range \[s\].
     pub stop_slide_s: (f32, f32),
-    /// Extra slide distance drawn uniformly from the range at every stop after driving [m].
+    /// Extra slide distance drawn uniformly from the range at every stop after driving \[m\].
     pub stop_slide_m: (f32, f32),
 }
 
@@ -65,7 +65,7 @@ pub struct Unicycle {
     slip: Slip,
     rng: ProjectRng,
     commanded_speed_m_s: f32,
-    /// Distance driven [m].
+    /// Distance driven \[m\].
     pub distance_m: f32,
 }
 
