@@ -123,8 +123,13 @@ pub struct FollowerConfig {
     pub realign_threshold_rad: f32,
     /// Distance before a waypoint where the robot starts slowing down \[m\]. Default 0.2.
     pub slow_down_distance_m: f32,
-    /// A waypoint closer than this is reached \[m\]. Default 0.05.
+    /// A waypoint closer than this, once the robot has stopped, is reached \[m\].
+    /// Default 0.05.
     pub position_tolerance_m: f32,
+    /// The robot stops when this close to the waypoint, or earlier once inside the
+    /// tolerance if the waypoint is no longer ahead \[m\]. Default 0.02, leaving room for
+    /// the end-of-move slide.
+    pub stop_within_m: f32,
     /// Cruising speed [mm/s]. Default 300.
     pub cruise_speed_mm_s: f32,
     /// Lowest forward speed while approaching a waypoint [mm/s]. Default 40.
@@ -164,6 +169,7 @@ impl Default for FollowerConfig {
             realign_threshold_rad: 0.5,
             slow_down_distance_m: 0.2,
             position_tolerance_m: 0.05,
+            stop_within_m: 0.02,
             cruise_speed_mm_s: 300.0,
             approach_speed_mm_s: 40.0,
             backup_speed_mm_s: 60.0,
@@ -209,6 +215,15 @@ impl FollowerConfig {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(FollowerError::BadConfig { field, value });
             }
+        }
+        if !(self.stop_within_m.is_finite()
+            && self.stop_within_m > 0.0
+            && self.stop_within_m <= self.position_tolerance_m)
+        {
+            return Err(FollowerError::BadConfig {
+                field: "stop_within_m",
+                value: self.stop_within_m,
+            });
         }
         if !(self.realign_threshold_rad.is_finite()
             && self.realign_threshold_rad > self.heading_tolerance_rad)
@@ -407,6 +422,10 @@ impl Controller for WaypointFollower {
         };
         let here = pose_map.position();
         let distance_m = here.distance(target);
+        let theta = pose_map.theta;
+        let bearing = here.bearing_to(target);
+        let error = normalize_angle(bearing - theta);
+        let along_m = distance_m * math::cos(error);
         let within = distance_m <= self.config.position_tolerance_m;
         if self.phase == Phase::Settling {
             let stopped = moved.is_some_and(|(d, a)| d < self.config.settle_motion_m && a < 0.01);
@@ -425,15 +444,12 @@ impl Controller for WaypointFollower {
                 self.enter(Phase::Rotating);
                 return (MotionCommand::ZERO, FollowStatus::WaypointReached(reached));
             }
-        } else if within {
+        } else if distance_m <= self.config.stop_within_m || (within && along_m <= 0.0) {
+            // Close to the centre, or inside the tolerance and no longer getting closer.
             self.enter(Phase::Settling);
             self.settle_start = now;
             return (MotionCommand::ZERO, FollowStatus::Settling);
         }
-        let theta = pose_map.theta;
-        let bearing = here.bearing_to(target);
-        let error = normalize_angle(bearing - theta);
-        let along_m = distance_m * math::cos(error);
         let near = distance_m < self.config.slow_down_distance_m;
         let behind = math::abs(error) > FRAC_PI_2;
         let backward_error = normalize_angle(bearing + PI - theta);
@@ -572,13 +588,13 @@ mod tests {
         let mut f = follower();
         let path = [Point2::new(1.0, 0.0), Point2::new(1.0, 1.0)];
         f.set_path(&path).unwrap();
-        let at_first = Pose2::new(0.97, 0.02, 0.0);
+        let at_first = Pose2::new(0.99, 0.01, 0.0);
         let (cmd, s) = f.update(Time::ZERO, at_first);
         assert_eq!((cmd, s), (MotionCommand::ZERO, FollowStatus::Settling));
         // Still there one period later: stopped, so reached.
         let (_, s) = f.update(Time::from_millis(100), at_first);
         assert_eq!(s, FollowStatus::WaypointReached(0));
-        let at_second = Pose2::new(0.98, 0.97, 1.5);
+        let at_second = Pose2::new(0.99, 0.985, 1.5);
         assert_eq!(
             f.update(Time::from_millis(200), at_second).1,
             FollowStatus::Settling
@@ -587,6 +603,20 @@ mod tests {
         assert_eq!((cmd, s), (MotionCommand::ZERO, FollowStatus::Arrived));
         let (cmd, s) = f.update(Time::from_millis(400), Pose2::new(0.0, 0.0, 0.0));
         assert_eq!((cmd, s), (MotionCommand::ZERO, FollowStatus::Arrived));
+    }
+
+    #[test]
+    fn stops_early_inside_the_tolerance_once_the_waypoint_is_no_longer_ahead() {
+        let mut f = follower();
+        f.set_path(&[Point2::new(1.0, 0.0)]).unwrap();
+        f.update(Time::ZERO, Pose2::new(0.0, 0.0, 0.0));
+        // 4 cm out, still ahead: keep driving toward the centre.
+        let (cmd, s) = f.update(Time::from_millis(100), Pose2::new(0.96, 0.0, 0.0));
+        assert_eq!(s, FollowStatus::Driving);
+        assert!(cmd.speed_mm_s > 0);
+        // Passing 3 cm to the side of it: the closest point is behind, stop here.
+        let (cmd, s) = f.update(Time::from_millis(200), Pose2::new(1.001, 0.03, 0.0));
+        assert_eq!((cmd, s), (MotionCommand::ZERO, FollowStatus::Settling));
     }
 
     #[test]
@@ -749,6 +779,51 @@ mod tests {
         };
         let (_, _, sign_changes, _) = run(&path, Slip::thesis(), 5, config);
         assert!(sign_changes > 2 * path.len() as u32, "{sign_changes}");
+    }
+
+    /// Figures for docs/control.md (run with `--ignored --nocapture`).
+    #[test]
+    #[ignore = "prints figures for the docs"]
+    fn report_tracking_figures() {
+        let path = [
+            Point2::new(2.0, 0.0),
+            Point2::new(2.0, 1.5),
+            Point2::new(0.5, 1.5),
+            Point2::new(0.5, 3.0),
+            Point2::new(3.0, 3.2),
+        ];
+        let harsh = Slip {
+            speed_noise_fraction: 0.15,
+            turn_noise_fraction: 0.15,
+            stop_slide_s: (0.3, 0.8),
+            stop_slide_m: (0.01, 0.03),
+        };
+        for (name, slip) in [
+            ("none", Slip::none()),
+            ("thesis", Slip::thesis()),
+            ("harsh", harsh),
+        ] {
+            let (mut worst_m, mut sum_m, mut backups, mut signs, mut time_s) =
+                (0.0f32, 0.0, 0, 0, 0.0);
+            let n = 100;
+            for seed in 0..n {
+                let (robot, f, s, arrived) = run(&path, slip, seed, FollowerConfig::default());
+                assert!(arrived);
+                let e = robot.pose().position().distance(path[4]);
+                worst_m = worst_m.max(e);
+                sum_m += e;
+                backups += f.backup_count();
+                signs += s;
+                time_s += robot.elapsed_s;
+            }
+            std::eprintln!(
+                "slip {name}: {n} runs, final error mean {:.1} mm max {:.1} mm, back-ups {backups}, \
+                 heading sign changes {signs}, mean time {:.1} s",
+                1000.0 * sum_m / n as f32,
+                1000.0 * worst_m,
+                time_s / n as f32
+            );
+        }
     }
 
     /// Without slip, no back-up is ever needed on a simple path.

@@ -67,6 +67,8 @@ pub struct Unicycle {
     commanded_speed_m_s: f32,
     /// Distance driven \[m\].
     pub distance_m: f32,
+    /// Time driven \[s\].
+    pub elapsed_s: f32,
 }
 
 impl Unicycle {
@@ -82,6 +84,7 @@ impl Unicycle {
             rng: seeded(seed),
             commanded_speed_m_s: 0.0,
             distance_m: 0.0,
+            elapsed_s: 0.0,
         }
     }
 
@@ -155,6 +158,7 @@ impl Unicycle {
             self.pose.theta + w * dt_s,
         );
         self.distance_m += math::abs(d);
+        self.elapsed_s += dt_s;
     }
 
     fn translate(&mut self, d: f32) {
