@@ -143,6 +143,21 @@ impl RobotFlags {
         }
     }
 
+    /// The flags from a standard SIP's STALL AND BUMPERS and FLAGS words (protocols.md
+    /// §1.6): bit 0 left-wheel stall, bits 1-7 rear bumper segments, bit 8 right-wheel stall,
+    /// bits 9-15 front bumper segments (ARIA's reading); FLAGS bit 0 motors enabled, bits 5-6
+    /// the STOP/e-stop state (either counts).
+    pub const fn from_sip(stall_and_bumpers: u16, flags: u16) -> Self {
+        Self {
+            left_stall: stall_and_bumpers & 0x0001 != 0,
+            rear_bumper: stall_and_bumpers & 0x00FE != 0,
+            right_stall: stall_and_bumpers & 0x0100 != 0,
+            front_bumper: stall_and_bumpers & 0xFE00 != 0,
+            motors_enabled: flags & 0x0001 != 0,
+            estop: flags & 0x0060 != 0,
+        }
+    }
+
     fn stalled(&self) -> bool {
         self.left_stall || self.right_stall
     }
@@ -609,6 +624,20 @@ mod tests {
 
     fn moving(cmd: RobotCommand) -> bool {
         cmd.commands_motion()
+    }
+
+    #[test]
+    fn sip_words_map_to_flags() {
+        assert_eq!(RobotFlags::from_sip(0, 0x0001), RobotFlags::nominal());
+        let f = RobotFlags::from_sip(0x0200, 0x0001);
+        assert!(f.front_bumper && !f.rear_bumper && !f.left_stall && !f.right_stall);
+        let f = RobotFlags::from_sip(0x0003, 0x0001);
+        assert!(f.rear_bumper && f.left_stall && !f.front_bumper);
+        let f = RobotFlags::from_sip(0x0100, 0x0021);
+        assert!(f.right_stall && f.estop && f.motors_enabled);
+        // AMRISim's FLAGS 0x001E: sonar on, motors off.
+        let f = RobotFlags::from_sip(0, 0x001E);
+        assert!(!f.motors_enabled && !f.estop);
     }
 
     #[test]
