@@ -444,7 +444,17 @@ impl Controller for WaypointFollower {
                 self.enter(Phase::Rotating);
                 return (MotionCommand::ZERO, FollowStatus::WaypointReached(reached));
             }
-        } else if distance_m <= self.config.stop_within_m || (within && along_m <= 0.0) {
+        } else if distance_m <= self.config.stop_within_m
+            || (within && {
+                // Distance still to go in the direction of travel.
+                let to_go_m = if self.phase == Phase::BackingUp {
+                    -along_m
+                } else {
+                    along_m
+                };
+                to_go_m <= 0.0
+            })
+        {
             // Close to the centre, or inside the tolerance and no longer getting closer.
             self.enter(Phase::Settling);
             self.settle_start = now;
@@ -630,6 +640,13 @@ mod tests {
         assert_eq!(s, FollowStatus::BackingUp);
         assert!(cmd.speed_mm_s < 0 && cmd.speed_mm_s >= -60, "{cmd:?}");
         assert_eq!(f.backup_count(), 1);
+        // Inside the tolerance but still short of the waypoint: keep backing.
+        let (cmd, s) = f.update(Time::from_millis(200), Pose2::new(1.04, 0.0, 0.0));
+        assert_eq!(s, FollowStatus::BackingUp);
+        assert!(cmd.speed_mm_s < 0);
+        // Close enough: stop and settle.
+        let (cmd, s) = f.update(Time::from_millis(300), Pose2::new(1.015, 0.0, 0.0));
+        assert_eq!((cmd, s), (MotionCommand::ZERO, FollowStatus::Settling));
     }
 
     #[test]
