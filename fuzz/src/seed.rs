@@ -132,7 +132,9 @@ fn main() {
         }
     }
     write(&root.join("cola_stream"), "connect_sequences", &cola);
-    let ranges: Vec<u16> = (0..541u16).map(|i| if i % 50 == 0 { 0 } else { 400 + i * 7 }).collect();
+    let ranges: Vec<u16> = (0..541u16)
+        .map(|i| if i % 50 == 0 { 0 } else { 400 + i * 7 })
+        .collect();
     let t = ScanTelegram::with_distances(-450_000, 5000, 5000, &ranges).unwrap();
     let n = t.emit(&mut buf).unwrap();
     let mut s = vec![200u8];

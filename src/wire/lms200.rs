@@ -464,6 +464,8 @@ impl Variant {
 pub type Data = heapless::Vec<u8, MAX_DATA_LEN>;
 
 /// A telegram from the host to the laser (address 0x00).
+// Stored inline: the core has no allocator; a telegram is at most 812 bytes.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum Request {
@@ -497,7 +499,9 @@ impl Request {
                 let m = r.u8().ok_or(ParseError::Truncated { field: "mode" })?;
                 Request::SetMode(match m {
                     0x00 => {
-                        let p = r.take(8).ok_or(ParseError::Truncated { field: "password" })?;
+                        let p = r
+                            .take(8)
+                            .ok_or(ParseError::Truncated { field: "password" })?;
                         let mut password = [0u8; 8];
                         password.copy_from_slice(p);
                         Mode::Setup { password }
@@ -512,9 +516,9 @@ impl Request {
             }
             cmd::VARIANT => {
                 let angle_deg = r.u16_le().ok_or(ParseError::Truncated { field: "angle" })?;
-                let resolution_cdeg = r
-                    .u16_le()
-                    .ok_or(ParseError::Truncated { field: "resolution" })?;
+                let resolution_cdeg = r.u16_le().ok_or(ParseError::Truncated {
+                    field: "resolution",
+                })?;
                 Request::SetVariant(Variant {
                     angle_deg,
                     resolution_cdeg,
@@ -522,9 +526,8 @@ impl Request {
             }
             _ => Request::Other {
                 command,
-                data: Data::from_slice(r.rest()).map_err(|_| ParseError::TooManyValues {
-                    count: data.len(),
-                })?,
+                data: Data::from_slice(r.rest())
+                    .map_err(|_| ParseError::TooManyValues { count: data.len() })?,
             },
         };
         if !r.is_empty() {
@@ -579,6 +582,8 @@ impl Request {
 }
 
 /// A telegram from the laser to the host.
+// Stored inline: the core has no allocator; a telegram is at most 812 bytes.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum Response {
@@ -658,9 +663,8 @@ impl Response {
             }
             _ => Response::Other {
                 command,
-                data: Data::from_slice(r.rest()).map_err(|_| ParseError::TooManyValues {
-                    count: data.len(),
-                })?,
+                data: Data::from_slice(r.rest())
+                    .map_err(|_| ParseError::TooManyValues { count: data.len() })?,
             },
         };
         if !r.is_empty() {
@@ -879,7 +883,9 @@ impl Lms200Decoder {
             let room = MAX_TELEGRAM_LEN - self.len;
             let n = self.bytes_needed().min(room).max(1).min(input.len());
             let (head, tail) = input.split_at(n);
-            self.buf.get_mut(self.len..self.len + n)?.copy_from_slice(head);
+            self.buf
+                .get_mut(self.len..self.len + n)?
+                .copy_from_slice(head);
             self.len += n;
             *input = tail;
         }
@@ -897,9 +903,18 @@ mod tests {
     #[test]
     fn golden_crc_examples() {
         // Fact sheet section 3.
-        assert_eq!(crc16(&[0x02, 0x00, 0x02, 0x00, 0x20, 0x25]).to_le_bytes(), [0x35, 0x08]);
-        assert_eq!(crc16(&[0x02, 0x00, 0x02, 0x00, 0x20, 0x24]).to_le_bytes(), [0x34, 0x08]);
-        assert_eq!(crc16(&[0x02, 0x00, 0x02, 0x00, 0x20, 0x40]).to_le_bytes(), [0x50, 0x08]);
+        assert_eq!(
+            crc16(&[0x02, 0x00, 0x02, 0x00, 0x20, 0x25]).to_le_bytes(),
+            [0x35, 0x08]
+        );
+        assert_eq!(
+            crc16(&[0x02, 0x00, 0x02, 0x00, 0x20, 0x24]).to_le_bytes(),
+            [0x34, 0x08]
+        );
+        assert_eq!(
+            crc16(&[0x02, 0x00, 0x02, 0x00, 0x20, 0x40]).to_le_bytes(),
+            [0x50, 0x08]
+        );
     }
 
     #[test]
@@ -910,7 +925,10 @@ mod tests {
                 Mode::ContinuousOutput,
                 [0x02, 0x00, 0x02, 0x00, 0x20, 0x24, 0x34, 0x08],
             ),
-            (Mode::Baud38400, [0x02, 0x00, 0x02, 0x00, 0x20, 0x40, 0x50, 0x08]),
+            (
+                Mode::Baud38400,
+                [0x02, 0x00, 0x02, 0x00, 0x20, 0x40, 0x50, 0x08],
+            ),
         ];
         let mut buf = [0u8; 32];
         for (mode, bytes) in cases {
@@ -938,7 +956,10 @@ mod tests {
         let n = r.emit(&mut buf).unwrap();
         assert_eq!(&buf[..5], &[0x02, 0x00, 0x0A, 0x00, 0x20]);
         assert_eq!(&buf[5..14], b"\0SICK_LMS");
-        assert_eq!(Request::parse(&Telegram::new_checked(&buf[..n]).unwrap()), Ok(r));
+        assert_eq!(
+            Request::parse(&Telegram::new_checked(&buf[..n]).unwrap()),
+            Ok(r)
+        );
     }
 
     #[test]
@@ -966,7 +987,10 @@ mod tests {
         assert!((b[180].angle_rad - core::f32::consts::FRAC_PI_2).abs() < 1e-4);
         assert_eq!(b[0].range_m, Some(1.0));
         assert_eq!(b[90].range_m, None);
-        assert_eq!(b[150].range_m, None, "1.150 m is beyond the 1.1 m usable range");
+        assert_eq!(
+            b[150].range_m, None,
+            "1.150 m is beyond the 1.1 m usable range"
+        );
     }
 
     fn random_response(rng: &mut ProjectRng) -> Response {
@@ -1037,10 +1061,16 @@ mod tests {
         for _ in 0..5_000 {
             let r = random_request(&mut rng);
             let n = r.emit(&mut buf).unwrap();
-            assert_eq!(Request::parse(&Telegram::new_checked(&buf[..n]).unwrap()), Ok(r));
+            assert_eq!(
+                Request::parse(&Telegram::new_checked(&buf[..n]).unwrap()),
+                Ok(r)
+            );
             let r = random_response(&mut rng);
             let n = r.emit(&mut buf).unwrap();
-            assert_eq!(Response::parse(&Telegram::new_checked(&buf[..n]).unwrap()), Ok(r));
+            assert_eq!(
+                Response::parse(&Telegram::new_checked(&buf[..n]).unwrap()),
+                Ok(r)
+            );
         }
     }
 
@@ -1075,7 +1105,11 @@ mod tests {
                 for _ in 0..below(rng, 30) {
                     let b = rng.next_u32() as u8;
                     // Junk without STX/ACK/NACK so it cannot hide or fake an event.
-                    stream.push(if matches!(b, STX | ACK | NACK) { 0x55 } else { b });
+                    stream.push(if matches!(b, STX | ACK | NACK) {
+                        0x55
+                    } else {
+                        b
+                    });
                 }
             }
             match below(rng, 4) {

@@ -28,6 +28,8 @@ pub const MAX_COMMAND_LEN: usize = frame::frame_len(2 + MAX_STR_ARG);
 pub type StrArg = heapless::Vec<u8, MAX_STR_ARG>;
 
 /// A command argument.
+// Stored inline: the core has no allocator, and a string argument is at most 199 bytes.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq, Eq, Default)]
 pub enum Arg {
     /// No argument.
@@ -298,9 +300,7 @@ impl Command {
                 a.map_or(ArgRef::None, |v| ArgRef::Int(v as i32))
             }
             Command::Polling(s) | Command::Say(s) => ArgRef::Str(s),
-            Command::Enable(b) | Command::Sonar(b) | Command::JoyDrive(b) => {
-                ArgRef::Int(*b as i32)
-            }
+            Command::Enable(b) | Command::Sonar(b) | Command::JoyDrive(b) => ArgRef::Int(*b as i32),
             Command::SetA(v)
             | Command::SetV(v)
             | Command::Move(v)
@@ -549,7 +549,10 @@ pub(crate) mod tests {
             assert_eq!(&dec(bytes), cmd);
         }
         assert_eq!(Command::SYNC0.sync_number(), Some(0));
-        assert_eq!(dec(&[0xFA, 0xFB, 0x03, 0x02, 0x00, 0x02]).sync_number(), Some(2));
+        assert_eq!(
+            dec(&[0xFA, 0xFB, 0x03, 0x02, 0x00, 0x02]).sync_number(),
+            Some(2)
+        );
         assert_eq!(Command::Open(Some(1)).sync_number(), None);
     }
 

@@ -28,7 +28,10 @@ pub fn checksum(data: &[u8]) -> u16 {
     let mut sum: u16 = 0;
     let mut pairs = data.chunks_exact(2);
     for p in &mut pairs {
-        let word = u16::from_be_bytes([p.first().copied().unwrap_or(0), p.get(1).copied().unwrap_or(0)]);
+        let word = u16::from_be_bytes([
+            p.first().copied().unwrap_or(0),
+            p.get(1).copied().unwrap_or(0),
+        ]);
         sum = sum.wrapping_add(word);
     }
     if let Some(&odd) = pairs.remainder().first() {
@@ -73,19 +76,16 @@ impl fmt::Display for FrameError {
             FrameError::Truncated { needed, got } => {
                 write!(f, "frame needs {needed} bytes, got {got}")
             }
-            FrameError::BadHeader { got } => write!(
-                f,
-                "header {:02X} {:02X}, expected FA FB",
-                got[0], got[1]
-            ),
+            FrameError::BadHeader { got } => {
+                write!(f, "header {:02X} {:02X}, expected FA FB", got[0], got[1])
+            }
             FrameError::BadLength { count } => write!(
                 f,
                 "byte count {count}, expected {MIN_BYTE_COUNT}..={MAX_BYTE_COUNT}"
             ),
-            FrameError::BadChecksum { got, computed } => write!(
-                f,
-                "checksum 0x{got:04X}, computed 0x{computed:04X}"
-            ),
+            FrameError::BadChecksum { got, computed } => {
+                write!(f, "checksum 0x{got:04X}, computed 0x{computed:04X}")
+            }
         }
     }
 }

@@ -106,7 +106,10 @@ impl fmt::Display for ParseError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             ParseError::Truncated { field, offset } => {
-                write!(f, "packet ends inside field {field} at payload byte {offset}")
+                write!(
+                    f,
+                    "packet ends inside field {field} at payload byte {offset}"
+                )
             }
             ParseError::UnexpectedId { got } => write!(f, "unexpected packet ID 0x{got:02X}"),
             ParseError::BadArgType { got } => write!(

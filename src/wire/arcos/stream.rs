@@ -166,7 +166,9 @@ impl FrameDecoder {
             let need = self.bytes_needed().min(room).max(1);
             let n = need.min(input.len());
             let (head, tail) = input.split_at(n);
-            self.buf.get_mut(self.len..self.len + n)?.copy_from_slice(head);
+            self.buf
+                .get_mut(self.len..self.len + n)?
+                .copy_from_slice(head);
             self.len += n;
             *input = tail;
         }
@@ -234,11 +236,17 @@ mod tests {
         let mut got = decode_all(&mut dec, &[&stream]);
         // The real frame comes out once enough bytes arrive to refute the false one.
         got.extend(decode_all(&mut dec, &[&[0u8; 250]]));
-        assert_eq!(got, std::vec![std::vec![0xFA, 0xFB, 0x03, 0x1D, 0x00, 0x1D]]);
+        assert_eq!(
+            got,
+            std::vec![std::vec![0xFA, 0xFB, 0x03, 0x1D, 0x00, 0x1D]]
+        );
         assert_eq!(dec.stats().bad_checksum, 1);
     }
 
-    fn random_stream(rng: &mut crate::random::ProjectRng, garbage: bool) -> (Vec<u8>, Vec<Vec<u8>>) {
+    fn random_stream(
+        rng: &mut crate::random::ProjectRng,
+        garbage: bool,
+    ) -> (Vec<u8>, Vec<Vec<u8>>) {
         let mut stream = Vec::new();
         let mut frames = Vec::new();
         let mut buf = [0u8; MAX_COMMAND_LEN];
@@ -301,7 +309,11 @@ mod tests {
         for _ in 0..300 {
             let mut stream = Vec::new();
             for _ in 0..below(&mut rng, 600) {
-                stream.push(if below(&mut rng, 8) == 0 { 0xFA } else { rng.next_u32() as u8 });
+                stream.push(if below(&mut rng, 8) == 0 {
+                    0xFA
+                } else {
+                    rng.next_u32() as u8
+                });
             }
             // Enough padding to refute any false header in the garbage.
             stream.extend_from_slice(&[0u8; MAX_FRAME_LEN]);
@@ -324,7 +336,10 @@ mod tests {
         let mut dec = FrameDecoder::new();
         let mut input = &buf[..n];
         let f = dec.decode(&mut input).unwrap();
-        assert_eq!(ServerPacket::parse(&f), Ok(ServerPacket::Status(sip.clone())));
+        assert_eq!(
+            ServerPacket::parse(&f),
+            Ok(ServerPacket::Status(sip.clone()))
+        );
         assert_eq!(StatusPacket::parse_frame(&f), Ok(sip));
         let _ = Command::Stop;
     }

@@ -260,7 +260,9 @@ impl Request {
                 password_hash,
                 dialect,
             } => match dialect {
-                Dialect::Clearpath => write!(w, "sMN SetAccessMode {level:02X} {password_hash:08X}"),
+                Dialect::Clearpath => {
+                    write!(w, "sMN SetAccessMode {level:02X} {password_hash:08X}")
+                }
                 Dialect::Aria => write!(w, "sMN SetAccessMode {level:X} {password_hash:08X}"),
             },
             Request::ReadScanConfig => w.write_str("sRN LMPscancfg"),
@@ -684,7 +686,11 @@ pub fn check_reply(request: &Request, reply: &Reply) -> Result<(), ReplyError> {
     };
     match (request, reply) {
         (Request::SetAccessMode { .. }, Reply::AccessMode { granted }) => {
-            if *granted { Ok(()) } else { Err(refused(0)) }
+            if *granted {
+                Ok(())
+            } else {
+                Err(refused(0))
+            }
         }
         (Request::ReadScanConfig, Reply::ScanConfig(_))
         | (Request::ReadOutputRange, Reply::OutputRange(_))
@@ -705,8 +711,13 @@ pub fn check_reply(request: &Request, reply: &Reply) -> Result<(), ReplyError> {
                 Err(ReplyError::NotReady { state: *state })
             }
         }
-        (Request::Run, Reply::Run { success }) | (Request::SaveConfig, Reply::SaveConfig { success }) => {
-            if *success { Ok(()) } else { Err(refused(0)) }
+        (Request::Run, Reply::Run { success })
+        | (Request::SaveConfig, Reply::SaveConfig { success }) => {
+            if *success {
+                Ok(())
+            } else {
+                Err(refused(0))
+            }
         }
         (Request::SubscribeScanData(on), Reply::Subscribed { enabled }) => {
             if on == enabled {

@@ -162,9 +162,16 @@ mod tests {
         }
         assert_eq!(
             got,
-            std::vec![b"sAN Run 1".to_vec(), b"sEA LMDscandata 1".to_vec(), b"sRA STlms 7".to_vec()]
+            std::vec![
+                b"sAN Run 1".to_vec(),
+                b"sEA LMDscandata 1".to_vec(),
+                b"sRA STlms 7".to_vec()
+            ]
         );
         let s = dec.stats();
-        assert_eq!((s.frames, s.truncated, s.oversize, s.skipped_bytes), (3, 1, 1, 4));
+        assert_eq!(
+            (s.frames, s.truncated, s.oversize, s.skipped_bytes),
+            (3, 1, 1, 4)
+        );
     }
 }

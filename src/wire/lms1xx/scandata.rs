@@ -462,7 +462,11 @@ impl ScanTelegram {
         self.channels16
             .iter()
             .find(|c| c.content.as_str() == "DIST1")
-            .or_else(|| self.channels16.iter().find(|c| c.content.starts_with("DIST")))
+            .or_else(|| {
+                self.channels16
+                    .iter()
+                    .find(|c| c.content.starts_with("DIST"))
+            })
     }
 
     /// Converts the distance channel into `out` (cleared first): beam angles in the laser
@@ -580,7 +584,8 @@ pub(crate) mod tests {
 
     #[test]
     fn signed_decimal_numbers_are_accepted() {
-        let text = b"sSN LMDscandata +1 +1 +9018 +0 +0 +1 +1 +0 +0 +0 +0 +0 +0 +0 +5000 +360 +0 +1 \
+        let text =
+            b"sSN LMDscandata +1 +1 +9018 +0 +0 +1 +1 +0 +0 +0 +0 +0 +0 +0 +5000 +360 +0 +1 \
                      DIST1 3F800000 00000000 -450000 +5000 +3 +100 +0 +65535 +0";
         let t = ScanTelegram::parse(text).unwrap();
         let c = &t.channels16[0];
