@@ -28,9 +28,9 @@ pub const NACK: u8 = 0x15;
 pub const HOST_ADDRESS: u8 = 0x00;
 /// Address of laser → host telegrams (laser address 0).
 pub const LASER_REPLY_ADDRESS: u8 = 0x80;
-/// Largest command + data length [bytes].
+/// Largest command + data length \[bytes\].
 pub const MAX_PAYLOAD_LEN: usize = 812;
-/// Largest telegram [bytes].
+/// Largest telegram \[bytes\].
 pub const MAX_TELEGRAM_LEN: usize = 4 + MAX_PAYLOAD_LEN + 2;
 /// Largest data length (payload minus the command byte).
 pub const MAX_DATA_LEN: usize = MAX_PAYLOAD_LEN - 1;
@@ -275,7 +275,7 @@ impl<T: AsRef<[u8]>> Telegram<T> {
         ]) as usize
     }
 
-    /// Total length on the wire [bytes].
+    /// Total length on the wire \[bytes\].
     pub fn total_len(&self) -> usize {
         self.payload_len() + 6
     }
@@ -423,9 +423,9 @@ impl MeasuredValues {
 /// Angular range and resolution (command 0x3B, reply 0xBB).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Variant {
-    /// Angular range [deg]: 100 or 180.
+    /// Angular range \[deg\]: 100 or 180.
     pub angle_deg: u16,
-    /// Resolution [0.01 deg]: 100, 50 or 25.
+    /// Resolution \[0.01 deg\]: 100, 50 or 25.
     pub resolution_cdeg: u16,
 }
 
@@ -449,12 +449,12 @@ impl Variant {
         self.angle_deg as usize * 100 / self.resolution_cdeg as usize + 1
     }
 
-    /// First beam angle in the laser frame [rad] (scans are centred on forward).
+    /// First beam angle in the laser frame \[rad\] (scans are centred on forward).
     pub fn first_angle_rad(&self) -> f32 {
         -deg_to_rad(self.angle_deg as f32 / 2.0)
     }
 
-    /// Beam step [rad].
+    /// Beam step \[rad\].
     pub fn step_rad(&self) -> f32 {
         deg_to_rad(self.resolution_cdeg as f32 / 100.0)
     }

@@ -19,9 +19,9 @@ pub const ARG_INT: u8 = 0x3B;
 pub const ARG_NEG_INT: u8 = 0x1B;
 /// Argument type byte: counted string.
 pub const ARG_STR: u8 = 0x2B;
-/// Longest string argument [bytes] (ARIA refuses longer ones).
+/// Longest string argument \[bytes\] (ARIA refuses longer ones).
 pub const MAX_STR_ARG: usize = 199;
-/// Largest encoded command [bytes].
+/// Largest encoded command \[bytes\].
 pub const MAX_COMMAND_LEN: usize = frame::frame_len(2 + MAX_STR_ARG);
 
 /// Bytes of a string argument (SAY tunes are binary, so these are bytes, not text).
@@ -135,23 +135,23 @@ pub enum Command {
     Polling(StrArg),
     /// 4: enable (true) or disable the motors.
     Enable(bool),
-    /// 5: translational acceleration (+) or deceleration (−) [mm/s²].
+    /// 5: translational acceleration (+) or deceleration (−) \[mm/s²\].
     SetA(i16),
-    /// 6: maximum translational velocity [mm/s].
+    /// 6: maximum translational velocity \[mm/s\].
     SetV(i16),
     /// 7: reset odometry to (0, 0, 0).
     SetO,
-    /// 8: relative translation [mm].
+    /// 8: relative translation \[mm\].
     Move(i16),
-    /// 9: rotate at [deg/s] (as RVEL).
+    /// 9: rotate at \[deg/s\] (as RVEL).
     Rotate(i16),
-    /// 10: maximum rotational velocity [deg/s].
+    /// 10: maximum rotational velocity \[deg/s\].
     SetRv(i16),
-    /// 11: translational velocity [mm/s].
+    /// 11: translational velocity \[mm/s\].
     Vel(i16),
-    /// 12: absolute heading [deg].
+    /// 12: absolute heading \[deg\].
     Head(i16),
-    /// 13: relative heading change [deg].
+    /// 13: relative heading change \[deg\].
     DHead(i16),
     /// 15: buzzer tune.
     Say(StrArg),
@@ -163,11 +163,11 @@ pub enum Command {
     Encoder(i16),
     /// 20: rotational velocity maximum per direction.
     SetRvDir(i16),
-    /// 21: rotational velocity [deg/s], counter-clockwise positive.
+    /// 21: rotational velocity \[deg/s\], counter-clockwise positive.
     RVel(i16),
-    /// 22: relative heading setpoint [deg].
+    /// 22: relative heading setpoint \[deg\].
     DcHead(i16),
-    /// 23: rotational acceleration (+) or deceleration (−) [deg/s²].
+    /// 23: rotational acceleration (+) or deceleration (−) \[deg/s²\].
     SetRa(i16),
     /// 28: sonar on (true) or off.
     Sonar(bool),
@@ -210,7 +210,7 @@ pub enum Command {
     DriftFactor(i16),
     /// 93: working encoder ticks per mm.
     TicksMm(i16),
-    /// 250: fake battery voltage [0.1 V], 0 = real.
+    /// 250: fake battery voltage \[0.1 V\], 0 = real.
     BatTest(i16),
     /// 253: power-on-like reset.
     Reset,
@@ -340,7 +340,7 @@ impl Command {
         }
     }
 
-    /// Encoded length [bytes].
+    /// Encoded length \[bytes\].
     pub fn buffer_len(&self) -> usize {
         frame::frame_len(self.arg_ref().wire_len())
     }

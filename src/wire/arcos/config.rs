@@ -131,19 +131,19 @@ config_packet! {
         serial: Name = "SerialNumber",
         /// 4MOTS (unused).
         four_mots: u8 = "4MOTS",
-        /// Absolute maximum rotational velocity [deg/s].
+        /// Absolute maximum rotational velocity \[deg/s\].
         rot_vel_top: u16 = "RotVelTop",
-        /// Absolute maximum translational velocity [mm/s].
+        /// Absolute maximum translational velocity \[mm/s\].
         trans_vel_top: u16 = "TransVelTop",
-        /// Absolute maximum rotational acceleration [deg/s²].
+        /// Absolute maximum rotational acceleration \[deg/s²\].
         rot_acc_top: u16 = "RotAccTop",
-        /// Absolute maximum translational acceleration [mm/s²].
+        /// Absolute maximum translational acceleration \[mm/s²\].
         trans_acc_top: u16 = "TransAccTop",
         /// Maximum PWM.
         pwm_max: u16 = "PWMMax",
         /// Robot name.
         name: Name = "Name",
-        /// Status packet period [ms].
+        /// Status packet period \[ms\].
         sip_cycle_ms: u8 = "SIPcycle",
         /// Host port baud code (0 = 9600 … 4 = 115200).
         host_baud: u8 = "HostBaud",
@@ -155,29 +155,29 @@ config_packet! {
         front_sonar: u16 = "FrontSonar",
         /// Rear sonar present (one byte).
         rear_sonar: u8 = "RearSonar",
-        /// Low battery alarm [0.1 V].
+        /// Low battery alarm \[0.1 V\].
         low_battery_dv: u16 = "LowBattery",
         /// Differential encoder count.
         rev_count: u16 = "RevCount",
-        /// Watchdog period [ms].
+        /// Watchdog period \[ms\].
         watchdog_ms: u16 = "Watchdog",
         /// NormalMPacs.
         normal_mpacs: u8 = "P2Mpacs",
         /// Stall PWM limit.
         stall_val: u16 = "StallVal",
-        /// Stall recovery time [ms].
+        /// Stall recovery time \[ms\].
         stall_count_ms: u16 = "StallCount",
-        /// Joystick translational velocity [mm/s].
+        /// Joystick translational velocity \[mm/s\].
         joy_vel: u16 = "JoyVel",
-        /// Joystick rotational velocity [deg/s].
+        /// Joystick rotational velocity \[deg/s\].
         joy_rvel: u16 = "JoyRVel",
-        /// Current maximum rotational velocity [deg/s].
+        /// Current maximum rotational velocity \[deg/s\].
         rot_vel_max: u16 = "RotVelMax",
-        /// Current maximum translational velocity [mm/s].
+        /// Current maximum translational velocity \[mm/s\].
         trans_vel_max: u16 = "TransVelMax",
-        /// Rotational acceleration [deg/s²].
+        /// Rotational acceleration \[deg/s²\].
         rot_acc: u16 = "RotAcc",
-        /// Rotational deceleration [deg/s²].
+        /// Rotational deceleration \[deg/s²\].
         rot_decel: u16 = "RotDecel",
         /// Rotation PID proportional gain.
         rot_kp: u16 = "RotKP",
@@ -185,9 +185,9 @@ config_packet! {
         rot_kv: u16 = "RotKV",
         /// Rotation PID integral gain.
         rot_ki: u16 = "RotKI",
-        /// Translational acceleration [mm/s²].
+        /// Translational acceleration \[mm/s²\].
         trans_acc: u16 = "TransAcc",
-        /// Translational deceleration [mm/s²].
+        /// Translational deceleration \[mm/s²\].
         trans_decel: u16 = "TransDecel",
         /// Translation PID proportional gain.
         trans_kp: u16 = "TransKP",
@@ -201,7 +201,7 @@ config_packet! {
         rear_bumps: u8 = "RearBumps",
         /// Charger type.
         charger: u8 = "Charger",
-        /// Sonar cycle [ms].
+        /// Sonar cycle \[ms\].
         sonar_cycle_ms: u8 = "SonarCycle",
         /// 1 = can change baud, 2 = auto-baud (ARIA may switch).
         auto_baud: u8 = "AutoBaud",
@@ -215,7 +215,7 @@ config_packet! {
         aux3_baud: u8 = "Aux3Baud",
         /// Encoder ticks per mm.
         ticks_mm: u16 = "TicksMM",
-        /// Shutdown voltage [0.1 V].
+        /// Shutdown voltage \[0.1 V\].
         shutdown_voltage_dv: u16 = "ShutdownVoltage",
     }
     optional {
@@ -225,17 +225,17 @@ config_packet! {
         gyro_cw: u16 = "GyroCW",
         /// Gyro counter-clockwise scale.
         gyro_ccw: u16 = "GyroCCW",
-        /// Kinematics delay [ms].
+        /// Kinematics delay \[ms\].
         kinematics_delay_ms: u8 = "KinematicsDelay",
-        /// Lateral velocity top [mm/s].
+        /// Lateral velocity top \[mm/s\].
         lat_vel_top: u16 = "LatVelTop",
-        /// Lateral acceleration top [mm/s²].
+        /// Lateral acceleration top \[mm/s²\].
         lat_acc_top: u16 = "LatAccTop",
-        /// Lateral velocity max [mm/s].
+        /// Lateral velocity max \[mm/s\].
         lat_vel_max: u16 = "LatVelMax",
-        /// Lateral acceleration [mm/s²].
+        /// Lateral acceleration \[mm/s²\].
         lat_acc: u16 = "LatAcc",
-        /// Lateral deceleration [mm/s²].
+        /// Lateral deceleration \[mm/s²\].
         lat_decel: u16 = "LatDecel",
         /// Powerbot charge threshold.
         powerbot_charge_threshold: u16 = "PowerbotChargeThreshold",
@@ -243,15 +243,15 @@ config_packet! {
         pdb_port: u8 = "PDBPort",
         /// Gyro rate limit.
         gyro_rate_limit: u16 = "GyroRateLimit",
-        /// High temperature shutdown [°C].
+        /// High temperature shutdown \[°C\].
         high_temperature_shutdown_c: i8 = "HighTemperatureShutdown",
         /// Power bits.
         power_bits: u16 = "PowerBits",
         /// Battery type.
         battery_type: u8 = "BatteryType",
-        /// State-of-charge warning level [%].
+        /// State-of-charge warning level \[%\].
         soc_low: u16 = "SoCLow",
-        /// State-of-charge shutdown level [%].
+        /// State-of-charge shutdown level \[%\].
         soc_shutdown: u16 = "SoCShutdown",
         /// Bootloader version.
         bootloader_version: Name = "BootloaderVersion",
@@ -271,7 +271,7 @@ impl ConfigPacket {
         Self::parse(frame.payload())
     }
 
-    /// Encoded length [bytes].
+    /// Encoded length \[bytes\].
     pub fn buffer_len(&self) -> Result<usize, EmitError> {
         Ok(frame::frame_len(self.payload_len()?))
     }

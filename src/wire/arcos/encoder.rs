@@ -8,7 +8,7 @@ use crate::wire::bytes::Reader;
 /// ENCODER packet ID.
 pub const ID: u8 = 0x90;
 
-/// Accumulated wheel encoder counts [ticks].
+/// Accumulated wheel encoder counts \[ticks\].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct EncoderPacket {
     /// Left wheel.
@@ -43,7 +43,7 @@ impl EncoderPacket {
         Self::parse(frame.payload())
     }
 
-    /// Encoded length [bytes].
+    /// Encoded length \[bytes\].
     pub const fn buffer_len(&self) -> usize {
         frame::frame_len(8)
     }

@@ -18,7 +18,7 @@ pub const HEADER: [u8; 2] = [0xFA, 0xFB];
 pub const MIN_BYTE_COUNT: usize = 3;
 /// Largest byte count accepted and emitted (the operations manual's command limit).
 pub const MAX_BYTE_COUNT: usize = 249;
-/// Largest frame on the wire [bytes].
+/// Largest frame on the wire \[bytes\].
 pub const MAX_FRAME_LEN: usize = 3 + MAX_BYTE_COUNT;
 /// Largest payload (bytes between the ID and the checksum).
 pub const MAX_PAYLOAD_LEN: usize = MAX_BYTE_COUNT - 3;
@@ -144,7 +144,7 @@ impl<T: AsRef<[u8]>> Frame<T> {
         self.bytes().get(2).copied().unwrap_or(0)
     }
 
-    /// Total frame length on the wire [bytes].
+    /// Total frame length on the wire \[bytes\].
     pub fn total_len(&self) -> usize {
         3 + self.byte_count() as usize
     }

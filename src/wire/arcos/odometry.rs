@@ -21,7 +21,7 @@ pub fn wrapped_delta(old: i32, new: i32, range: i32) -> i32 {
     if d >= range / 2 { d - range } else { d }
 }
 
-/// Turns a 15-bit position counter into a continuous position [mm × DistConvFactor].
+/// Turns a 15-bit position counter into a continuous position \[mm × DistConvFactor\].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PositionUnwrapper {
     last: Option<u16>,
@@ -72,7 +72,7 @@ impl HeadingUnwrapper {
         }
     }
 
-    /// Feeds one raw THPOS; returns the continuous heading [2π/4096 rad].
+    /// Feeds one raw THPOS; returns the continuous heading \[2π/4096 rad\].
     pub fn update(&mut self, raw: i16) -> i64 {
         match self.last {
             None => self.total = raw as i64,
@@ -84,19 +84,19 @@ impl HeadingUnwrapper {
         self.total
     }
 
-    /// The continuous heading [rad], if a value was fed.
+    /// The continuous heading \[rad\], if a value was fed.
     pub fn heading_rad(&self) -> Option<f32> {
         self.last.map(|_| arcos_angle_to_rad(self.total as f32))
     }
 }
 
-/// A position [mm] as the 15-bit XPOS/YPOS counter (for emitting SIPs).
+/// A position \[mm\] as the 15-bit XPOS/YPOS counter (for emitting SIPs).
 #[inline]
 pub fn position_to_counter(pos_mm: i64) -> u16 {
     (pos_mm.rem_euclid(POS_RANGE as i64)) as u16
 }
 
-/// A heading [2π/4096 rad] as THPOS in (-2048, 2048].
+/// A heading \[2π/4096 rad\] as THPOS in (-2048, 2048].
 #[inline]
 pub fn heading_to_counter(units: i64) -> i16 {
     let r = units.rem_euclid(ANGLE_RANGE as i64) as i16;

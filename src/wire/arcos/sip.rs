@@ -17,7 +17,7 @@ pub const MAX_SONAR: usize = 32;
 pub struct SonarReading {
     /// Sonar number, 0-31.
     pub number: u8,
-    /// Range [mm] (× RangeConvFactor 1.0).
+    /// Range \[mm\] (× RangeConvFactor 1.0).
     pub range_mm: u16,
 }
 
@@ -35,21 +35,21 @@ pub struct SipExtras {
     pub digin: Option<u8>,
     /// User digital outputs.
     pub digout: Option<u8>,
-    /// Battery voltage [0.1 V].
+    /// Battery voltage \[0.1 V\].
     pub battery_dv_x10: Option<u16>,
     /// Charge state: -1 unknown, 0 not charging, 1 bulk, 2 overcharge, 3 float, 4 balance.
     pub charge_state: Option<i8>,
-    /// Rotational velocity [0.1 deg/s].
+    /// Rotational velocity \[0.1 deg/s\].
     pub rot_vel_ddeg_s: Option<i16>,
     /// Control fault flags.
     pub fault_flags: Option<u16>,
-    /// Lateral velocity [mm/s] (Seekur).
+    /// Lateral velocity \[mm/s\] (Seekur).
     pub lat_vel_mm_s: Option<i16>,
-    /// Temperature [°C], -127/-128 = none.
+    /// Temperature \[°C\], -127/-128 = none.
     pub temperature_c: Option<i8>,
-    /// State of charge [%].
+    /// State of charge \[%\].
     pub state_of_charge_pct: Option<i8>,
-    /// Microcontroller time [µs].
+    /// Microcontroller time \[µs\].
     pub uc_time_us: Option<u32>,
     /// FLAGS3.
     pub flags3: Option<u32>,
@@ -60,26 +60,26 @@ pub struct SipExtras {
 pub struct StatusPacket {
     /// ID 0x33 (moving) rather than 0x32 (stopped).
     pub moving: bool,
-    /// XPOS: integrated x, 15 bits used [mm × DistConvFactor]; see [`super::odometry`].
+    /// XPOS: integrated x, 15 bits used \[mm × DistConvFactor\]; see [`super::odometry`].
     pub x_pos: u16,
     /// YPOS, as `x_pos`.
     pub y_pos: u16,
-    /// THPOS: heading [2π/4096 rad].
+    /// THPOS: heading \[2π/4096 rad\].
     pub th_pos: i16,
-    /// Left wheel velocity [mm/s].
+    /// Left wheel velocity \[mm/s\].
     pub left_vel_mm_s: i16,
-    /// Right wheel velocity [mm/s].
+    /// Right wheel velocity \[mm/s\].
     pub right_vel_mm_s: i16,
-    /// Battery [0.1 V].
+    /// Battery \[0.1 V\].
     pub battery_dv: u8,
     /// STALL AND BUMPERS: bit 0 left stall, bits 1-7 bumper ring A, bit 8 right stall,
     /// bits 9-15 bumper ring B.
     pub stall_bumpers: u16,
-    /// CONTROL: heading setpoint [2π/4096 rad].
+    /// CONTROL: heading setpoint \[2π/4096 rad\].
     pub control: i16,
     /// FLAGS: bit 0 motors enabled, bits 1-4 sonar arrays, bit 5 e-stop, …
     pub flags: u16,
-    /// COMPASS [2 deg].
+    /// COMPASS \[2 deg\].
     pub compass: u8,
     /// New sonar readings.
     pub sonar: heapless::Vec<SonarReading, MAX_SONAR>,
@@ -210,7 +210,7 @@ impl StatusPacket {
         Ok(FIXED_LEN + 3 * self.sonar.len() + self.extras_len()?)
     }
 
-    /// Encoded length [bytes].
+    /// Encoded length \[bytes\].
     pub fn buffer_len(&self) -> Result<usize, EmitError> {
         Ok(frame::frame_len(self.payload_len()?))
     }

@@ -66,7 +66,7 @@ impl SyncReply {
         }
     }
 
-    /// Encoded length [bytes].
+    /// Encoded length \[bytes\].
     pub fn buffer_len(&self) -> usize {
         frame::frame_len(self.payload_len())
     }

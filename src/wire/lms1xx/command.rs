@@ -36,15 +36,15 @@ pub const STATE_READY: u8 = 7;
 /// Scan frequency, resolution and angular range (`LMPscancfg`, `mLMPsetscancfg`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ScanConfig {
-    /// Scan frequency [0.01 Hz] (5000 = 50 Hz).
+    /// Scan frequency \[0.01 Hz\] (5000 = 50 Hz).
     pub frequency_centi_hz: u32,
     /// Number of sectors.
     pub sectors: u32,
-    /// Angular resolution [1/10000 deg] (5000 = 0.5°).
+    /// Angular resolution \[1/10000 deg\] (5000 = 0.5°).
     pub resolution_deg_e4: u32,
-    /// Start angle in SICK's frame [1/10000 deg] (−450000 = −45°).
+    /// Start angle in SICK's frame \[1/10000 deg\] (−450000 = −45°).
     pub start_deg_e4: i32,
-    /// Stop angle in SICK's frame [1/10000 deg] (2250000 = 225°).
+    /// Stop angle in SICK's frame \[1/10000 deg\] (2250000 = 225°).
     pub stop_deg_e4: i32,
 }
 
@@ -86,11 +86,11 @@ impl ScanConfig {
 pub struct OutputRange {
     /// Number of sectors.
     pub sectors: u32,
-    /// Angular resolution [1/10000 deg].
+    /// Angular resolution \[1/10000 deg\].
     pub resolution_deg_e4: u32,
-    /// Start angle in SICK's frame [1/10000 deg].
+    /// Start angle in SICK's frame \[1/10000 deg\].
     pub start_deg_e4: i32,
-    /// Stop angle in SICK's frame [1/10000 deg].
+    /// Stop angle in SICK's frame \[1/10000 deg\].
     pub stop_deg_e4: i32,
 }
 
@@ -423,7 +423,7 @@ pub enum Reply {
     },
     /// `sRA LMPscancfg …`.
     ScanConfig(ScanConfig),
-    /// `sAN mLMPsetscancfg <status> [config]`: 0 OK, 1 bad frequency, 2 bad resolution,
+    /// `sAN mLMPsetscancfg <status> \[config\]`: 0 OK, 1 bad frequency, 2 bad resolution,
     /// 3 both, 4 bad scan area.
     SetScanConfig {
         /// Status code.

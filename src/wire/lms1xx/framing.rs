@@ -38,7 +38,7 @@ impl<const N: usize> Default for ColaDecoder<N> {
 }
 
 impl<const N: usize> ColaDecoder<N> {
-    /// The default capacity [bytes].
+    /// The default capacity \[bytes\].
     pub const DEFAULT_CAPACITY: usize = 16384;
 
     /// An empty decoder.

@@ -3,11 +3,11 @@
 //!
 //! Token layout after `sSN LMDscandata` (or `sRA LMDscandata` when polled), fact sheet
 //! section 2: version, device number, serial number, device status (2), telegram counter,
-//! scan counter, time since startup [µs], time of transmission [µs], input status (2), output
-//! status (2), reserved, scanning frequency [0.01 Hz], measurement frequency, encoders (count
+//! scan counter, time since startup \[µs\], time of transmission \[µs\], input status (2), output
+//! status (2), reserved, scanning frequency \[0.01 Hz\], measurement frequency, encoders (count
 //! then position and speed each), 16-bit channels (count then per channel: content name,
-//! scale factor and offset as IEEE-754 floats in 8 hex digits, start angle [1/10000°], angular
-//! step [1/10000°], value count, values), 8-bit channels (same layout), then position, device
+//! scale factor and offset as IEEE-754 floats in 8 hex digits, start angle \[1/10000°\], angular
+//! step \[1/10000°\], value count, values), 8-bit channels (same layout), then position, device
 //! name, comment, time stamp and event blocks, each a 0/1 flag followed by its data when 1.
 //!
 //! Angles: SICK counts the start angle from the laser's right-hand side (its 0° is the laser
@@ -42,9 +42,9 @@ pub struct Channel<V> {
     pub scale: f32,
     /// Scale offset.
     pub offset: f32,
-    /// First beam angle in SICK's frame [1/10000 deg].
+    /// First beam angle in SICK's frame \[1/10000 deg\].
     pub start_angle_deg_e4: i32,
-    /// Angular step [1/10000 deg].
+    /// Angular step \[1/10000 deg\].
     pub step_deg_e4: u16,
     /// Raw values.
     pub values: heapless::Vec<V, MAX_BEAMS>,
@@ -58,9 +58,9 @@ pub type Channel8 = Channel<u8>;
 /// One encoder block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EncoderData {
-    /// Position [ticks].
+    /// Position \[ticks\].
     pub position: u32,
-    /// Speed [ticks/mm].
+    /// Speed \[ticks/mm\].
     pub speed: u16,
 }
 
@@ -101,9 +101,9 @@ pub struct EventData {
     pub kind: ChannelName,
     /// Encoder position at the event.
     pub encoder_position: u32,
-    /// Time of the event [µs].
+    /// Time of the event \[µs\].
     pub time_us: u32,
-    /// Angle of the event [1/10000 deg].
+    /// Angle of the event \[1/10000 deg\].
     pub angle_deg_e4: i32,
 }
 
@@ -124,9 +124,9 @@ pub struct ScanTelegram {
     pub telegram_counter: u16,
     /// Scan counter.
     pub scan_counter: u16,
-    /// Time since startup [µs].
+    /// Time since startup \[µs\].
     pub time_since_startup_us: u32,
-    /// Time of transmission [µs].
+    /// Time of transmission \[µs\].
     pub time_of_transmission_us: u32,
     /// Input status (two tokens).
     pub input_status: [u8; 2],
@@ -134,7 +134,7 @@ pub struct ScanTelegram {
     pub output_status: [u8; 2],
     /// Reserved byte A.
     pub reserved_a: u16,
-    /// Scanning frequency [0.01 Hz].
+    /// Scanning frequency \[0.01 Hz\].
     pub scan_frequency_centi_hz: u32,
     /// Measurement frequency.
     pub measurement_frequency: u32,
@@ -253,7 +253,7 @@ fn block_flag(t: &mut Tokens<'_>, field: &'static str) -> Result<bool, ParseErro
 }
 
 impl ScanTelegram {
-    /// A telegram with one DIST1 channel of distances [mm] at scale 1.0, as an emulated
+    /// A telegram with one DIST1 channel of distances \[mm\] at scale 1.0, as an emulated
     /// LMS1xx sends it.
     pub fn with_distances(
         start_angle_deg_e4: i32,
@@ -471,8 +471,8 @@ impl ScanTelegram {
 
     /// Converts the distance channel into `out` (cleared first): beam angles in the laser
     /// frame (x forward, CCW positive, see the module doc), ranges = value × scale + offset
-    /// [mm] converted to metres. A zero value (no return) and any range above
-    /// `max_range_m` [m] become `None`.
+    /// \[mm\] converted to metres. A zero value (no return) and any range above
+    /// `max_range_m` \[m\] become `None`.
     pub fn to_scan(&self, max_range_m: f32, out: &mut Scan) -> Result<(), ToScanError> {
         let c = self
             .distance_channel()
