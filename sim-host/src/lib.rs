@@ -2,3 +2,7 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod dynamic;
+pub mod laser;
+pub mod physics;
+pub mod world;
