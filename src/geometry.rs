@@ -110,11 +110,7 @@ mod tests {
             (TAU + 0.5, 0.5),
             (-TAU - 0.5, -0.5),
         ] {
-            assert!(
-                (normalize_angle(a) - want).abs() < 1e-5,
-                "{a} -> {}",
-                normalize_angle(a)
-            );
+            assert!((normalize_angle(a) - want).abs() < 1e-5, "{a} -> {}", normalize_angle(a));
         }
     }
 

@@ -106,10 +106,7 @@ impl core::fmt::Display for GridError {
             ),
             GridError::EmptyGrid => write!(f, "grid width and height must be at least one cell"),
             GridError::BadResolution(r) => {
-                write!(
-                    f,
-                    "grid resolution must be a positive number of metres, got {r}"
-                )
+                write!(f, "grid resolution must be a positive number of metres, got {r}")
             }
             GridError::BadOrigin => write!(f, "grid origin must be finite"),
             GridError::BadBounds { min, max } => write!(
@@ -569,13 +566,7 @@ mod tests {
         assert_eq!(g.counts().occupied, 1);
         g.add_evidence(5, -10.0, &mut obs);
         assert_eq!(g.class(5), CellClass::Free);
-        assert_eq!(
-            g.counts(),
-            CellCounts {
-                free: 1,
-                occupied: 0
-            }
-        );
+        assert_eq!(g.counts(), CellCounts { free: 1, occupied: 0 });
         assert_eq!(changes, 2);
     }
 
