@@ -1,7 +1,7 @@
 //! Dynamic obstacles: doors that open and close on a schedule, and people walking paths.
 //!
 //! A [`Door`] is a set of cells of the world that are blocked while it is closed and free while
-//! it is open; its schedule lists the times [s] at which it changes. [`Dynamics::update`] writes
+//! it is open; its schedule lists the times \[s\] at which it changes. [`Dynamics::update`] writes
 //! the doors' current states into the [`World`], so physics and the laser see them with no
 //! extra work. A door never closes on something: while a robot or a person overlaps its cells,
 //! closing waits.
@@ -31,13 +31,13 @@ pub enum DoorState {
 pub struct Door {
     cells: Vec<Cell>,
     initial: DoorState,
-    /// (time [s], state from then on), sorted by time.
+    /// (time \[s\], state from then on), sorted by time.
     schedule: Vec<(f64, DoorState)>,
     applied: Option<DoorState>,
 }
 
 impl Door {
-    /// A door over the cells whose centres lie in `[x0, x1) x [y0, y1)` [m] of `world`, in
+    /// A door over the cells whose centres lie in `[x0, x1) x [y0, y1)` \[m\] of `world`, in
     /// state `initial` until the first scheduled change.
     pub fn new(world: &World, x0: f32, y0: f32, x1: f32, y1: f32, initial: DoorState) -> Self {
         Self::from_cells(world.cells_in_rect(x0, y0, x1, y1), initial)
@@ -53,7 +53,7 @@ impl Door {
         }
     }
 
-    /// Adds a change to `state` at `time_s` [s] (builder style; changes may be given in any
+    /// Adds a change to `state` at `time_s` \[s\] (builder style; changes may be given in any
     /// order).
     pub fn at(mut self, time_s: f64, state: DoorState) -> Self {
         self.schedule.push((time_s, state));
@@ -61,7 +61,7 @@ impl Door {
         self
     }
 
-    /// Adds changes that alternate the state every `period_s` [s] from `first_s` up to
+    /// Adds changes that alternate the state every `period_s` \[s\] from `first_s` up to
     /// `until_s`, starting with the opposite of the initial state.
     pub fn alternating(mut self, first_s: f64, period_s: f64, until_s: f64) -> Self {
         let mut state = self.initial;
@@ -79,7 +79,7 @@ impl Door {
         &self.cells
     }
 
-    /// The scheduled state at `time_s` [s] (what the schedule asks, before any wait for the
+    /// The scheduled state at `time_s` \[s\] (what the schedule asks, before any wait for the
     /// doorway to clear).
     pub fn scheduled_state(&self, time_s: f64) -> DoorState {
         self.schedule
@@ -127,7 +127,7 @@ pub struct Person {
 }
 
 impl Person {
-    /// A person of `radius_m` walking `path` [m] at `speed_m_s` from time `start_s` [s] (standing
+    /// A person of `radius_m` walking `path` \[m\] at `speed_m_s` from time `start_s` \[s\] (standing
     /// at the first point before), back and forth along it, or round it if `looped` (the last
     /// point joins the first). An empty path puts the person at the origin.
     pub fn new(
@@ -151,12 +151,12 @@ impl Person {
         }
     }
 
-    /// Radius [m].
+    /// Radius \[m\].
     pub fn radius_m(&self) -> f32 {
         self.radius_m
     }
 
-    /// Position at `time_s` [s].
+    /// Position at `time_s` \[s\].
     pub fn position_at(&self, time_s: f64) -> Point2 {
         let Some(&first) = self.path.first() else {
             return Point2::default();
@@ -189,7 +189,7 @@ impl Person {
         if self.looped { first } else { self.path[n - 1] }
     }
 
-    /// The person's disc at `time_s` [s].
+    /// The person's disc at `time_s` \[s\].
     pub fn disc_at(&self, time_s: f64) -> Disc {
         Disc::new(self.position_at(time_s), self.radius_m)
     }
@@ -235,12 +235,12 @@ impl Dynamics {
         self.doors.is_empty() && self.people.is_empty()
     }
 
-    /// The people's discs at `time_s` [s].
+    /// The people's discs at `time_s` \[s\].
     pub fn people_discs(&self, time_s: f64) -> Vec<Disc> {
         self.people.iter().map(|p| p.disc_at(time_s)).collect()
     }
 
-    /// Brings the doors to their scheduled states at `time_s` [s], writing them into `world`.
+    /// Brings the doors to their scheduled states at `time_s` \[s\], writing them into `world`.
     /// A door due to close stays open while one of `robots` or a person overlaps it. Returns
     /// how many doors changed state.
     pub fn update(&mut self, time_s: f64, world: &mut World, robots: &[Disc]) -> usize {

@@ -21,7 +21,7 @@ use papillon::sensor::{Beam, LaserConfig, Scan, ScanError};
 use crate::physics::Disc;
 use crate::world::World;
 
-/// Distance [m] from `origin` along the unit direction `(cos, sin)` of `angle_rad` to the first
+/// Distance \[m\] from `origin` along the unit direction `(cos, sin)` of `angle_rad` to the first
 /// blocked cell, if within `max_range_m`. A ray starting in a blocked cell returns 0.
 pub fn cast_ray(world: &World, origin: Point2, angle_rad: f32, max_range_m: f32) -> Option<f32> {
     let g = world.geometry();
@@ -77,7 +77,7 @@ pub fn cast_ray(world: &World, origin: Point2, angle_rad: f32, max_range_m: f32)
     }
 }
 
-/// Distance [m] along the unit direction `(dx, dy)` from `origin` to the disc's boundary, if the
+/// Distance \[m\] along the unit direction `(dx, dy)` from `origin` to the disc's boundary, if the
 /// ray hits it ahead; `None` when it misses or when the origin is inside the disc.
 pub fn ray_disc(origin: Point2, dx: f32, dy: f32, disc: &Disc) -> Option<f32> {
     let (ox, oy) = (origin.x - disc.center.x, origin.y - disc.center.y);

@@ -3,8 +3,8 @@
 //!
 //! Kinematics: the unicycle model of a differential drive (Siegwart, Nourbakhsh & Scaramuzza,
 //! *Introduction to Autonomous Mobile Robots*, 2nd ed., 2011, §3.2), integrated at a fixed step
-//! ([`BodyConfig::step_s`]) with the midpoint heading. Commanded translational speed [mm/s] and
-//! turn rate [deg/s] are reached through acceleration and deceleration limits, as the ARCOS
+//! ([`BodyConfig::step_s`]) with the midpoint heading. Commanded translational speed \[mm/s\] and
+//! turn rate \[deg/s\] are reached through acceleration and deceleration limits, as the ARCOS
 //! firmware does (SETA / SETRA). Wheel speeds follow from the track width:
 //! `left = v - ω·track/2`, `right = v + ω·track/2`; the default track (0.357 m) is the one
 //! implied by ARIA's `DiffConvFactor` 0.0056 for the P3-DX.
@@ -34,9 +34,9 @@ use crate::world::World;
 /// A disc obstacle in the map frame: another robot or a person.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Disc {
-    /// Centre [m].
+    /// Centre \[m\].
     pub center: Point2,
-    /// Radius [m].
+    /// Radius \[m\].
     pub radius_m: f32,
 }
 
@@ -50,15 +50,15 @@ impl Disc {
 /// Odometry slip: how the true motion departs from what the encoders measure.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SlipConfig {
-    /// Variance of the distance error per metre travelled [m²/m].
+    /// Variance of the distance error per metre travelled \[m²/m\].
     pub distance_var_m2_per_m: f32,
-    /// Variance of the heading error per radian turned [rad²/rad].
+    /// Variance of the heading error per radian turned \[rad²/rad\].
     pub rotation_var_rad2_per_rad: f32,
-    /// Variance of the heading error per metre travelled [rad²/m].
+    /// Variance of the heading error per metre travelled \[rad²/m\].
     pub drift_var_rad2_per_m: f32,
-    /// Standard deviation of the slide along the heading when a move ends [m].
+    /// Standard deviation of the slide along the heading when a move ends \[m\].
     pub end_of_move_m: f32,
-    /// Standard deviation of the heading slip when a move ends [rad].
+    /// Standard deviation of the heading slip when a move ends \[rad\].
     pub end_of_move_rad: f32,
 }
 
@@ -92,31 +92,31 @@ impl Default for SlipConfig {
 /// Physical parameters of the simulated robot.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BodyConfig {
-    /// Radius of the robot's disc [m].
+    /// Radius of the robot's disc \[m\].
     pub radius_m: f32,
-    /// Distance between the wheels [m].
+    /// Distance between the wheels \[m\].
     pub track_m: f32,
-    /// Largest translational speed [mm/s].
+    /// Largest translational speed \[mm/s\].
     pub max_speed_mm_s: f32,
-    /// Largest turn rate [deg/s].
+    /// Largest turn rate \[deg/s\].
     pub max_turn_deg_s: f32,
-    /// Translational acceleration [mm/s²].
+    /// Translational acceleration \[mm/s²\].
     pub accel_mm_s2: f32,
-    /// Translational deceleration [mm/s²].
+    /// Translational deceleration \[mm/s²\].
     pub decel_mm_s2: f32,
-    /// Rotational acceleration [deg/s²].
+    /// Rotational acceleration \[deg/s²\].
     pub turn_accel_deg_s2: f32,
-    /// Rotational deceleration [deg/s²].
+    /// Rotational deceleration \[deg/s²\].
     pub turn_decel_deg_s2: f32,
-    /// Integration step [s].
+    /// Integration step \[s\].
     pub step_s: f32,
     /// Encoder ticks per millimetre of wheel travel.
     pub ticks_per_mm: f32,
-    /// Battery voltage when fully charged [V].
+    /// Battery voltage when fully charged \[V\].
     pub battery_full_v: f32,
-    /// Battery drain while powered [V/s].
+    /// Battery drain while powered \[V/s\].
     pub battery_drain_v_per_s: f32,
-    /// Extra battery drain per metre travelled [V/m].
+    /// Extra battery drain per metre travelled \[V/m\].
     pub battery_drain_v_per_m: f32,
     /// Odometry slip.
     pub slip: SlipConfig,
@@ -145,7 +145,7 @@ impl Default for BodyConfig {
     }
 }
 
-/// How deep a disc at `p` of `radius_m` reaches into the world's blocked cells [m] (0 when
+/// How deep a disc at `p` of `radius_m` reaches into the world's blocked cells \[m\] (0 when
 /// clear). Cells outside the grid count as blocked.
 pub fn wall_penetration(world: &World, p: Point2, radius_m: f32) -> f32 {
     let g = world.geometry();
@@ -171,7 +171,7 @@ pub fn wall_penetration(world: &World, p: Point2, radius_m: f32) -> f32 {
     depth
 }
 
-/// How deep a disc at `p` of `radius_m` reaches into the world and the `discs` [m].
+/// How deep a disc at `p` of `radius_m` reaches into the world and the `discs` \[m\].
 pub fn penetration(world: &World, discs: &[Disc], p: Point2, radius_m: f32) -> f32 {
     let mut depth = wall_penetration(world, p, radius_m);
     for d in discs {
@@ -242,7 +242,7 @@ impl RobotBody {
         &self.config
     }
 
-    /// Commands a translational speed [mm/s] (positive forward) and a turn rate [deg/s]
+    /// Commands a translational speed \[mm/s\] (positive forward) and a turn rate \[deg/s\]
     /// (positive counter-clockwise), clamped to the limits; reached under the acceleration
     /// limits.
     pub fn command(&mut self, speed_mm_s: f32, turn_deg_s: f32) {
@@ -273,7 +273,7 @@ impl RobotBody {
         self.true_pose = pose;
     }
 
-    /// True pose in the map frame [m, rad].
+    /// True pose in the map frame \[m, rad\].
     pub fn true_pose(&self) -> Pose2 {
         self.true_pose
     }
@@ -283,7 +283,7 @@ impl RobotBody {
         Disc::new(self.true_pose.position(), self.config.radius_m)
     }
 
-    /// Odometry pose in the odometry frame (zero where the robot was created) [m, rad].
+    /// Odometry pose in the odometry frame (zero where the robot was created) \[m, rad\].
     pub fn odometry_pose(&self) -> Pose2 {
         self.odom_pose
     }
@@ -294,12 +294,12 @@ impl RobotBody {
         self.start_pose.compose(self.odom_pose)
     }
 
-    /// ARCOS XPOS: odometry x [mm] modulo 0x8000.
+    /// ARCOS XPOS: odometry x \[mm\] modulo 0x8000.
     pub fn arcos_x(&self) -> u16 {
         arcos_position(self.odom_pose.x)
     }
 
-    /// ARCOS YPOS: odometry y [mm] modulo 0x8000.
+    /// ARCOS YPOS: odometry y \[mm\] modulo 0x8000.
     pub fn arcos_y(&self) -> u16 {
         arcos_position(self.odom_pose.y)
     }
@@ -310,17 +310,17 @@ impl RobotBody {
         (if u <= -2048 { u + 4096 } else { u }) as i16
     }
 
-    /// Current translational speed [mm/s].
+    /// Current translational speed \[mm/s\].
     pub fn speed_mm_s(&self) -> f32 {
         self.speed_mm_s
     }
 
-    /// Current turn rate [deg/s].
+    /// Current turn rate \[deg/s\].
     pub fn turn_deg_s(&self) -> f32 {
         self.turn_deg_s
     }
 
-    /// Wheel speeds (left, right) [mm/s].
+    /// Wheel speeds (left, right) \[mm/s\].
     pub fn wheel_speeds_mm_s(&self) -> (f32, f32) {
         let half = m_to_mm(self.config.track_m) / 2.0 * deg_to_rad(self.turn_deg_s);
         (self.speed_mm_s - half, self.speed_mm_s + half)
@@ -373,22 +373,22 @@ impl RobotBody {
         self.e_stop
     }
 
-    /// Battery voltage [V].
+    /// Battery voltage \[V\].
     pub fn battery_v(&self) -> f32 {
         self.battery_v
     }
 
-    /// True distance travelled [m].
+    /// True distance travelled \[m\].
     pub fn distance_m(&self) -> f64 {
         self.distance_m
     }
 
-    /// True rotation, absolute, summed [rad].
+    /// True rotation, absolute, summed \[rad\].
     pub fn rotation_rad(&self) -> f64 {
         self.rotation_rad
     }
 
-    /// Simulated time this body has been stepped [s].
+    /// Simulated time this body has been stepped \[s\].
     pub fn time_s(&self) -> f64 {
         self.time_s
     }
@@ -575,7 +575,7 @@ fn ramp(v: f32, target: f32, accel: f32, decel: f32, dt: f32) -> f32 {
     v + (target - v).clamp(-limit, limit)
 }
 
-/// Turn rate [deg/s] from a wheel speed difference, for callers converting VEL2-style
+/// Turn rate \[deg/s\] from a wheel speed difference, for callers converting VEL2-style
 /// commands: `ω = (right - left) / track`.
 pub fn turn_rate_from_wheels(left_mm_s: f32, right_mm_s: f32, track_m: f32) -> f32 {
     rad_to_deg((right_mm_s - left_mm_s) / m_to_mm(track_m))

@@ -1,6 +1,6 @@
 //! The project's own worlds, drawn in code with rectangles (deterministic, any resolution).
 //!
-//! All coordinates are in the map frame [m] from the south-west corner; a rectangle blocks
+//! All coordinates are in the map frame \[m\] from the south-west corner; a rectangle blocks
 //! every cell whose centre lies inside it. Every world starts at (1 m, 1 m), heading east, with
 //! outer walls thin enough (0.5 m or less) that a P3-DX (radius 0.25 m) sits there clear of
 //! them.
@@ -39,14 +39,14 @@ fn blank(name: &str, width_m: f32, height_m: f32, resolution_m: f32) -> Result<W
     Ok(World::new(name, g))
 }
 
-/// Blocks rectangles given as `(x0, y0, x1, y1)` [m].
+/// Blocks rectangles given as `(x0, y0, x1, y1)` \[m\].
 fn draw(w: &mut World, rects: &[(f32, f32, f32, f32)]) {
     for &(x0, y0, x1, y1) in rects {
         w.fill_rect(x0, y0, x1, y1, true);
     }
 }
 
-/// Frees rectangles (doors) given as `(x0, y0, x1, y1)` [m].
+/// Frees rectangles (doors) given as `(x0, y0, x1, y1)` \[m\].
 fn open(w: &mut World, rects: &[(f32, f32, f32, f32)]) {
     for &(x0, y0, x1, y1) in rects {
         w.fill_rect(x0, y0, x1, y1, false);

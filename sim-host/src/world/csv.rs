@@ -17,7 +17,7 @@ use papillon::grid::GridGeometry;
 
 use super::{World, WorldError};
 
-/// Side of one CSV value [m].
+/// Side of one CSV value \[m\].
 pub const CSV_CELL_M: f32 = 1.0;
 
 /// Start pose of worlds loaded from CSV: the centre of metre cell (1, 1).

@@ -1,7 +1,7 @@
 //! Worlds: the true occupancy of the simulated environment.
 //!
 //! A [`World`] is a bitmap of blocked and free cells laid on a
-//! [`GridGeometry`](papillon::grid::GridGeometry) (map frame: x east, y north, cell (0, 0) at the
+//! [`GridGeometry`] (map frame: x east, y north, cell (0, 0) at the
 //! south-west corner, row 0 south), with a name and the robot's start pose. Worlds come from the
 //! built-in designs ([`builtin`]) or from files ([`World::load`]): the thesis's CSV format
 //! ([`csv`]) and plain PGM/PNG images ([`image`]). Ground truth for scoring lives in [`truth`].
@@ -131,7 +131,7 @@ impl From<GridError> for WorldError {
     }
 }
 
-/// Checks a cell size [m].
+/// Checks a cell size \[m\].
 pub(crate) fn check_resolution(resolution_m: f32) -> Result<f32, WorldError> {
     if resolution_m.is_finite() && resolution_m > 0.0 {
         Ok(resolution_m)
@@ -225,7 +225,7 @@ impl World {
         &self.geometry
     }
 
-    /// Where the robot starts [m, rad].
+    /// Where the robot starts \[m, rad\].
     pub fn start(&self) -> Pose2 {
         self.start
     }
@@ -278,14 +278,14 @@ impl World {
         }
     }
 
-    /// Blocks or frees every cell whose centre lies in `[x0, x1) x [y0, y1)` [m].
+    /// Blocks or frees every cell whose centre lies in `[x0, x1) x [y0, y1)` \[m\].
     pub fn fill_rect(&mut self, x0: f32, y0: f32, x1: f32, y1: f32, blocked: bool) {
         for cell in self.cells_in_rect(x0, y0, x1, y1) {
             self.set_blocked(cell, blocked);
         }
     }
 
-    /// The cells whose centres lie in `[x0, x1) x [y0, y1)` [m], clipped to the grid.
+    /// The cells whose centres lie in `[x0, x1) x [y0, y1)` \[m\], clipped to the grid.
     pub fn cells_in_rect(&self, x0: f32, y0: f32, x1: f32, y1: f32) -> Vec<Cell> {
         let g = &self.geometry;
         let r = g.resolution_m;

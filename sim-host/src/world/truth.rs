@@ -75,7 +75,7 @@ impl Truth {
         &self.cells
     }
 
-    /// Size of the observable set [cells].
+    /// Size of the observable set \[cells\].
     pub fn len(&self) -> usize {
         self.cells.len()
     }
