@@ -279,7 +279,8 @@ mod tests {
     /// The lab's door is the gap at x 3.9..4.1, y 4..5.
     fn lab_with_door() -> (World, Dynamics) {
         let w = builtin::lab(0.1).unwrap();
-        let door = Door::new(&w, 3.9, 4.0, 4.1, 5.0, DoorState::Open).at(10.0, DoorState::Closed);
+        let (x0, y0, x1, y1) = builtin::LAB_DOOR;
+        let door = Door::new(&w, x0, y0, x1, y1, DoorState::Open).at(10.0, DoorState::Closed);
         (w, Dynamics::new().with_door(door))
     }
 

@@ -74,6 +74,28 @@ pub fn empty(resolution_m: f32) -> Result<World, WorldError> {
     Ok(w)
 }
 
+/// The house's doorways `(x0, y0, x1, y1)` \[m\], each 1.5 m wide, for scheduling doors
+/// ([`crate::dynamic::Door`]).
+pub const HOUSE_DOORS: [(f32, f32, f32, f32); 10] = [
+    // Living room <-> kitchen, kitchen <-> bathroom.
+    (9.0, 6.0, 10.0, 7.5),
+    (17.0, 3.5, 18.0, 5.0),
+    // Hall doors to the south rooms.
+    (4.0, 8.0, 5.5, 9.0),
+    (14.0, 8.0, 15.5, 9.0),
+    (20.0, 8.0, 21.5, 9.0),
+    // Hall doors to the north rooms.
+    (3.0, 12.0, 4.5, 13.0),
+    (10.0, 12.0, 11.5, 13.0),
+    (19.5, 12.0, 21.0, 13.0),
+    // Study <-> north-east bedroom, west bedroom <-> middle bedroom.
+    (19.0, 17.5, 20.5, 18.5),
+    (7.0, 18.0, 8.0, 19.5),
+];
+
+/// The lab's doorway `(x0, y0, x1, y1)` \[m\] (1 m wide, in the wall between the rooms).
+pub const LAB_DOOR: (f32, f32, f32, f32) = (3.9, 4.0, 4.1, 5.0);
+
 /// 24 m x 24 m house: rooms, doors and a hall, about 27 % blocked.
 pub fn house(resolution_m: f32) -> Result<World, WorldError> {
     let mut w = blank("house", 24.0, 24.0, resolution_m)?;
@@ -105,25 +127,7 @@ pub fn house(resolution_m: f32) -> Result<World, WorldError> {
             (0.5, 21.5, 2.5, 23.5),
         ],
     );
-    open(
-        &mut w,
-        &[
-            // Living room <-> kitchen, kitchen <-> bathroom.
-            (9.0, 6.0, 10.0, 7.5),
-            (17.0, 3.5, 18.0, 5.0),
-            // Hall doors to the south rooms.
-            (4.0, 8.0, 5.5, 9.0),
-            (14.0, 8.0, 15.5, 9.0),
-            (20.0, 8.0, 21.5, 9.0),
-            // Hall doors to the north rooms.
-            (3.0, 12.0, 4.5, 13.0),
-            (10.0, 12.0, 11.5, 13.0),
-            (19.5, 12.0, 21.0, 13.0),
-            // Study <-> north-east bedroom, west bedroom <-> middle bedroom.
-            (19.0, 17.5, 20.5, 18.5),
-            (7.0, 18.0, 8.0, 19.5),
-        ],
-    );
+    open(&mut w, &HOUSE_DOORS);
     Ok(w)
 }
 
@@ -215,7 +219,7 @@ pub fn lab(resolution_m: f32) -> Result<World, WorldError> {
     let mut w = blank("lab", 8.0, 8.0, resolution_m)?;
     outer_walls(&mut w, 0.3);
     draw(&mut w, &[(3.9, 0.3, 4.1, 7.7), (5.5, 5.5, 6.5, 6.5)]);
-    open(&mut w, &[(3.9, 4.0, 4.1, 5.0)]);
+    open(&mut w, &[LAB_DOOR]);
     Ok(w)
 }
 
@@ -292,6 +296,27 @@ mod tests {
     }
 
     #[test]
+    fn house_doors_are_open_doorways_in_walls() {
+        let w = house(0.1).unwrap();
+        for &(x0, y0, x1, y1) in &HOUSE_DOORS {
+            let cells = w.cells_in_rect(x0, y0, x1, y1);
+            assert_eq!(cells.len(), 150, "door {x0},{y0}");
+            assert!(cells.iter().all(|&c| !w.is_blocked(c)));
+            // Closing the doorway leaves no gap: the wall runs on both sides of it.
+            let (wide, cx, cy) = (x1 - x0 > y1 - y0, (x0 + x1) / 2.0, (y0 + y1) / 2.0);
+            let (a, b) = if wide {
+                (Point2::new(x0 - 0.05, cy), Point2::new(x1 + 0.05, cy))
+            } else {
+                (Point2::new(cx, y0 - 0.05), Point2::new(cx, y1 + 0.05))
+            };
+            assert!(w.is_blocked_at(a) && w.is_blocked_at(b), "door {x0},{y0}");
+        }
+        let lab = lab(0.1).unwrap();
+        let (x0, y0, x1, y1) = LAB_DOOR;
+        assert_eq!(lab.cells_in_rect(x0, y0, x1, y1).len(), 20);
+    }
+
+    #[test]
     fn sizes_and_starts() {
         for (name, (w, h)) in NAMES
             .iter()
@@ -301,7 +326,7 @@ mod tests {
             assert_eq!((world.geometry().width, world.geometry().height), (w, h));
             assert_eq!(world.name(), *name);
             assert_eq!(world.start(), super::super::DEFAULT_START);
-            assert!(!world.disc_hits_blocked(world.start().position(), 0.35));
+            assert!(world.start_is_clear(0.35));
         }
         assert!(by_name("moon", 0.1).is_none());
     }

@@ -326,6 +326,11 @@ impl World {
         self.truth().mask().to_vec()
     }
 
+    /// Whether a robot disc of `radius_m` \[m\] at the start position touches nothing blocked.
+    pub fn start_is_clear(&self, radius_m: f32) -> bool {
+        !self.disc_hits_blocked(self.start.position(), radius_m)
+    }
+
     /// Whether a disc of `radius_m` centred at `p` overlaps a blocked cell (or leaves the grid).
     pub fn disc_hits_blocked(&self, p: Point2, radius_m: f32) -> bool {
         crate::physics::wall_penetration(self, p, radius_m) > 0.0
