@@ -15,6 +15,7 @@
 
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::Cell;
+use papillon::math;
 use papillon::random::{self, ProjectRng};
 use papillon::sensor::{Beam, LaserConfig, Scan, ScanError};
 
@@ -26,7 +27,7 @@ use crate::world::World;
 pub fn cast_ray(world: &World, origin: Point2, angle_rad: f32, max_range_m: f32) -> Option<f32> {
     let g = world.geometry();
     let r = g.resolution_m;
-    let (dx, dy) = (angle_rad.cos(), angle_rad.sin());
+    let (dx, dy) = (math::cos(angle_rad), math::sin(angle_rad));
     // Work in cell units from the grid origin.
     let (px, py) = ((origin.x - g.origin.x) / r, (origin.y - g.origin.y) / r);
     let mut cell = Cell::new(px.floor() as i32, py.floor() as i32);
@@ -157,7 +158,7 @@ impl LaserSim {
             let angle_rad = cfg.beam_angle(i);
             let a = laser.theta + angle_rad;
             let mut range = cast_ray(world, origin, a, max);
-            let (dx, dy) = (a.cos(), a.sin());
+            let (dx, dy) = (math::cos(a), math::sin(a));
             for d in discs {
                 if let Some(t) = ray_disc(origin, dx, dy, d)
                     && t <= max

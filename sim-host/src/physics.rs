@@ -26,6 +26,7 @@
 use core::f32::consts::PI;
 
 use papillon::geometry::{Point2, Pose2, normalize_angle};
+use papillon::math;
 use papillon::random::{self, ProjectRng};
 use papillon::units::{deg_to_rad, m_to_mm, rad_to_arcos_angle, rad_to_deg};
 
@@ -108,7 +109,7 @@ pub struct BodyConfig {
     pub turn_accel_deg_s2: f32,
     /// Rotational deceleration \[deg/s²\].
     pub turn_decel_deg_s2: f32,
-    /// Integration step \[s\].
+    /// Integration step \[s\] (a step that is not a positive number is replaced by 0.01 s).
     pub step_s: f32,
     /// Encoder ticks per millimetre of wheel travel.
     pub ticks_per_mm: f32,
@@ -210,7 +211,10 @@ pub struct RobotBody {
 impl RobotBody {
     /// A robot at rest at `pose` (map frame), motors enabled, odometry at zero, slip drawn from
     /// a generator seeded with `seed`.
-    pub fn new(config: BodyConfig, pose: Pose2, seed: u64) -> Self {
+    pub fn new(mut config: BodyConfig, pose: Pose2, seed: u64) -> Self {
+        if !(config.step_s.is_finite() && config.step_s > 0.0) {
+            config.step_s = 0.01;
+        }
         Self {
             config,
             rng: random::seeded(seed),
@@ -449,7 +453,10 @@ impl RobotBody {
             );
         let from = self.true_pose;
         let mid = from.theta + dth_true / 2.0;
-        let to = Point2::new(from.x + d_true * mid.cos(), from.y + d_true * mid.sin());
+        let to = Point2::new(
+            from.x + d_true * math::cos(mid),
+            from.y + d_true * math::sin(mid),
+        );
         let depth_from = penetration(world, discs, from.position(), c.radius_m).max(0.0);
         let depth_to = penetration(world, discs, to, c.radius_m);
         let mut fraction = 1.0f32;
@@ -492,7 +499,11 @@ impl RobotBody {
         self.right_ticks += ((dm + half) * 1000.0 * c.ticks_per_mm) as f64;
         let o = self.odom_pose;
         let omid = o.theta + dthm / 2.0;
-        self.odom_pose = Pose2::new(o.x + dm * omid.cos(), o.y + dm * omid.sin(), o.theta + dthm);
+        self.odom_pose = Pose2::new(
+            o.x + dm * math::cos(omid),
+            o.y + dm * math::sin(omid),
+            o.theta + dthm,
+        );
     }
 
     fn end_of_move_slip(&mut self, world: &World, discs: &[Disc]) {
@@ -504,8 +515,8 @@ impl RobotBody {
         let turn = s.end_of_move_rad * random::gaussian(&mut self.rng);
         let from = self.true_pose;
         let to = Point2::new(
-            from.x + along * from.theta.cos(),
-            from.y + along * from.theta.sin(),
+            from.x + along * math::cos(from.theta),
+            from.y + along * math::sin(from.theta),
         );
         let r = self.config.radius_m;
         if penetration(world, discs, to, r) > penetration(world, discs, from.position(), r).max(0.0)
@@ -771,6 +782,22 @@ mod tests {
         let mean = total / n as f32;
         // Mean of |N(0, 1.5 cm)| is 1.2 cm.
         assert!((0.008..0.016).contains(&mean), "mean slide {mean}");
+    }
+
+    #[test]
+    fn a_bad_step_falls_back_to_ten_milliseconds() {
+        let w = builtin::empty(0.1).unwrap();
+        for step_s in [0.0, -1.0, f32::NAN] {
+            let cfg = BodyConfig {
+                step_s,
+                ..no_slip()
+            };
+            let mut b = RobotBody::new(cfg, Pose2::new(5.0, 5.0, 0.0), 1);
+            assert_eq!(b.config().step_s, 0.01);
+            b.command(300.0, 0.0);
+            b.advance(1.0, &w, &[]);
+            assert!((b.time_s() - 1.0).abs() < 1e-6);
+        }
     }
 
     #[test]
