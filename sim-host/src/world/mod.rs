@@ -15,7 +15,7 @@ use std::fmt;
 use std::path::Path;
 
 use papillon::geometry::{Point2, Pose2};
-use papillon::grid::{Cell, GridError, GridGeometry};
+use papillon::grid::{Cell, CellClass, GridError, GridGeometry, LogOddsBounds, OccupancyGrid};
 
 pub use truth::Truth;
 
@@ -326,6 +326,22 @@ impl World {
         self.truth().mask().to_vec()
     }
 
+    /// The world as a fully known occupancy grid (blocked cells Occupied, free cells Free, at
+    /// the default bounds' certainty), built on the heap: for rendering, planning tests and
+    /// scoring. Errs if the world has more cells than `N`.
+    pub fn to_occupancy_grid<const N: usize>(&self) -> Result<Box<OccupancyGrid<N>>, GridError> {
+        let mut grid = OccupancyGrid::<N>::new_boxed(self.geometry, LogOddsBounds::default())?;
+        for (i, &b) in self.blocked.iter().enumerate() {
+            let class = if b {
+                CellClass::Occupied
+            } else {
+                CellClass::Free
+            };
+            grid.set_class(i, class, &mut ());
+        }
+        Ok(grid)
+    }
+
     /// Whether a robot disc of `radius_m` \[m\] at the start position touches nothing blocked.
     pub fn start_is_clear(&self, radius_m: f32) -> bool {
         !self.disc_hits_blocked(self.start.position(), radius_m)
@@ -371,6 +387,22 @@ mod tests {
             e.to_string().starts_with("/no/such/file.csv: cannot read"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn the_true_grid_matches_the_bitmap() {
+        let w = builtin::lab(0.1).unwrap();
+        let g = w.to_occupancy_grid::<6400>().unwrap();
+        assert_eq!(g.counts().occupied, w.blocked_count());
+        assert_eq!(g.counts().known(), 6400);
+        let inside = w.geometry().index(Cell::new(40, 20)).unwrap();
+        assert!(w.is_blocked_index(inside));
+        assert_eq!(g.class(inside), CellClass::Occupied);
+        assert!(matches!(
+            w.to_occupancy_grid::<100>().unwrap_err(),
+            GridError::CapacityExceeded { needed: 6400, .. }
+        ));
+        assert_eq!(w.truth().coverage(&g), 1.0);
     }
 
     #[test]
