@@ -3,3 +3,7 @@
 
 pub mod cli;
 pub mod movingai;
+pub mod dynamic;
+pub mod laser;
+pub mod physics;
+pub mod world;

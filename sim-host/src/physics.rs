@@ -1,0 +1,824 @@
+//! P3-DX body physics: differential drive with acceleration limits, disc collisions, odometry
+//! with seeded slip, encoders, bumpers, stall, e-stop and battery.
+//!
+//! Kinematics: the unicycle model of a differential drive (Siegwart, Nourbakhsh & Scaramuzza,
+//! *Introduction to Autonomous Mobile Robots*, 2nd ed., 2011, §3.2), integrated at a fixed step
+//! ([`BodyConfig::step_s`]) with the midpoint heading. Commanded translational speed \[mm/s\] and
+//! turn rate \[deg/s\] are reached through acceleration and deceleration limits, as the ARCOS
+//! firmware does (SETA / SETRA). Wheel speeds follow from the track width:
+//! `left = v - ω·track/2`, `right = v + ω·track/2`; the default track (0.357 m) is the one
+//! implied by ARIA's `DiffConvFactor` 0.0056 for the P3-DX.
+//!
+//! Collisions: the robot is a disc ([`BodyConfig::radius_m`], 0.25 m) tested against blocked
+//! cells (each an axis-aligned square) and against other discs (robots, people). A step that
+//! would push the disc deeper into an obstacle is cut at the contact point (bisection), both
+//! velocities drop to zero, and the stall flag and a bumper flag are set (front when the robot
+//! was moving forward, rear when backward). Moves that do not go deeper are allowed, so a robot
+//! can always back away, even if a door closed on it. The flags clear at the next free
+//! translation.
+//!
+//! Odometry: the encoders measure the commanded wheel motion exactly; the true motion differs
+//! by slip ([`SlipConfig`]): Gaussian errors whose variance grows with distance and rotation
+//! (a random walk, independent of the step size), plus a slide when a move ends (the thesis,
+//! Bendahmane 2023, saw 1–2 cm at the end of each move). So the odometry pose drifts from the
+//! true pose, as on the real robot. All draws come from the body's own seeded RNG.
+
+use core::f32::consts::PI;
+
+use papillon::geometry::{Point2, Pose2, normalize_angle};
+use papillon::math;
+use papillon::random::{self, ProjectRng};
+use papillon::units::{deg_to_rad, m_to_mm, rad_to_arcos_angle, rad_to_deg};
+
+use crate::world::World;
+
+/// A disc obstacle in the map frame: another robot or a person.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Disc {
+    /// Centre \[m\].
+    pub center: Point2,
+    /// Radius \[m\].
+    pub radius_m: f32,
+}
+
+impl Disc {
+    /// A disc of `radius_m` at `center`.
+    pub const fn new(center: Point2, radius_m: f32) -> Self {
+        Self { center, radius_m }
+    }
+}
+
+/// Odometry slip: how the true motion departs from what the encoders measure.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlipConfig {
+    /// Variance of the distance error per metre travelled \[m²/m\].
+    pub distance_var_m2_per_m: f32,
+    /// Variance of the heading error per radian turned \[rad²/rad\].
+    pub rotation_var_rad2_per_rad: f32,
+    /// Variance of the heading error per metre travelled \[rad²/m\].
+    pub drift_var_rad2_per_m: f32,
+    /// Standard deviation of the slide along the heading when a move ends \[m\].
+    pub end_of_move_m: f32,
+    /// Standard deviation of the heading slip when a move ends \[rad\].
+    pub end_of_move_rad: f32,
+}
+
+impl SlipConfig {
+    /// No slip: odometry equals the true motion.
+    pub const fn none() -> Self {
+        Self {
+            distance_var_m2_per_m: 0.0,
+            rotation_var_rad2_per_rad: 0.0,
+            drift_var_rad2_per_m: 0.0,
+            end_of_move_m: 0.0,
+            end_of_move_rad: 0.0,
+        }
+    }
+}
+
+impl Default for SlipConfig {
+    /// About 1 cm per metre and 1° per quarter turn (1 σ), and a 1.5 cm, 0.5° slide at the
+    /// end of each move.
+    fn default() -> Self {
+        Self {
+            distance_var_m2_per_m: 1e-4,
+            rotation_var_rad2_per_rad: 2e-4,
+            drift_var_rad2_per_m: 1e-4,
+            end_of_move_m: 0.015,
+            end_of_move_rad: 0.5 * PI / 180.0,
+        }
+    }
+}
+
+/// Physical parameters of the simulated robot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyConfig {
+    /// Radius of the robot's disc \[m\].
+    pub radius_m: f32,
+    /// Distance between the wheels \[m\].
+    pub track_m: f32,
+    /// Largest translational speed \[mm/s\].
+    pub max_speed_mm_s: f32,
+    /// Largest turn rate \[deg/s\].
+    pub max_turn_deg_s: f32,
+    /// Translational acceleration \[mm/s²\].
+    pub accel_mm_s2: f32,
+    /// Translational deceleration \[mm/s²\].
+    pub decel_mm_s2: f32,
+    /// Rotational acceleration \[deg/s²\].
+    pub turn_accel_deg_s2: f32,
+    /// Rotational deceleration \[deg/s²\].
+    pub turn_decel_deg_s2: f32,
+    /// Integration step \[s\] (a step that is not a positive number is replaced by 0.01 s).
+    pub step_s: f32,
+    /// Encoder ticks per millimetre of wheel travel.
+    pub ticks_per_mm: f32,
+    /// Battery voltage when fully charged \[V\].
+    pub battery_full_v: f32,
+    /// Battery drain while powered \[V/s\].
+    pub battery_drain_v_per_s: f32,
+    /// Extra battery drain per metre travelled \[V/m\].
+    pub battery_drain_v_per_m: f32,
+    /// Odometry slip.
+    pub slip: SlipConfig,
+}
+
+impl Default for BodyConfig {
+    /// A P3-DX: radius 0.25 m, track 0.357 m, 1200 mm/s and 300 deg/s at most, 300 mm/s² and
+    /// 100 deg/s² (ARCOS defaults), 10 ms steps, 128 ticks/mm, 13.0 V battery.
+    fn default() -> Self {
+        Self {
+            radius_m: 0.25,
+            track_m: 0.357,
+            max_speed_mm_s: 1200.0,
+            max_turn_deg_s: 300.0,
+            accel_mm_s2: 300.0,
+            decel_mm_s2: 300.0,
+            turn_accel_deg_s2: 100.0,
+            turn_decel_deg_s2: 100.0,
+            step_s: 0.01,
+            ticks_per_mm: 128.0,
+            battery_full_v: 13.0,
+            battery_drain_v_per_s: 1e-4,
+            battery_drain_v_per_m: 5e-4,
+            slip: SlipConfig::default(),
+        }
+    }
+}
+
+/// How deep a disc at `p` of `radius_m` reaches into the world's blocked cells \[m\] (0 when
+/// clear). Cells outside the grid count as blocked.
+pub fn wall_penetration(world: &World, p: Point2, radius_m: f32) -> f32 {
+    let g = world.geometry();
+    let r = g.resolution_m;
+    let c0 = ((p.x - radius_m - g.origin.x) / r).floor() as i32;
+    let c1 = ((p.x + radius_m - g.origin.x) / r).floor() as i32;
+    let r0 = ((p.y - radius_m - g.origin.y) / r).floor() as i32;
+    let r1 = ((p.y + radius_m - g.origin.y) / r).floor() as i32;
+    let mut depth = 0.0f32;
+    for row in r0..=r1 {
+        let y0 = g.origin.y + row as f32 * r;
+        let dy = (y0 - p.y).max(p.y - (y0 + r)).max(0.0);
+        for col in c0..=c1 {
+            if !world.is_blocked(papillon::grid::Cell::new(col, row)) {
+                continue;
+            }
+            let x0 = g.origin.x + col as f32 * r;
+            let dx = (x0 - p.x).max(p.x - (x0 + r)).max(0.0);
+            let d = (dx * dx + dy * dy).sqrt();
+            depth = depth.max(radius_m - d);
+        }
+    }
+    depth
+}
+
+/// How deep a disc at `p` of `radius_m` reaches into the world and the `discs` \[m\].
+pub fn penetration(world: &World, discs: &[Disc], p: Point2, radius_m: f32) -> f32 {
+    let mut depth = wall_penetration(world, p, radius_m);
+    for d in discs {
+        depth = depth.max(radius_m + d.radius_m - p.distance(d.center));
+    }
+    depth
+}
+
+/// The simulated robot: true state, odometry, encoders and status flags.
+#[derive(Clone, Debug)]
+pub struct RobotBody {
+    config: BodyConfig,
+    rng: ProjectRng,
+    true_pose: Pose2,
+    start_pose: Pose2,
+    odom_pose: Pose2,
+    speed_mm_s: f32,
+    turn_deg_s: f32,
+    cmd_speed_mm_s: f32,
+    cmd_turn_deg_s: f32,
+    left_ticks: f64,
+    right_ticks: f64,
+    stall: bool,
+    front_bumper: bool,
+    rear_bumper: bool,
+    motors_enabled: bool,
+    e_stop: bool,
+    battery_v: f32,
+    distance_m: f64,
+    rotation_rad: f64,
+    time_s: f64,
+    pending_s: f32,
+    moving: bool,
+}
+
+impl RobotBody {
+    /// A robot at rest at `pose` (map frame), motors enabled, odometry at zero, slip drawn from
+    /// a generator seeded with `seed`.
+    pub fn new(mut config: BodyConfig, pose: Pose2, seed: u64) -> Self {
+        if !(config.step_s.is_finite() && config.step_s > 0.0) {
+            config.step_s = 0.01;
+        }
+        Self {
+            config,
+            rng: random::seeded(seed),
+            true_pose: pose,
+            start_pose: pose,
+            odom_pose: Pose2::default(),
+            speed_mm_s: 0.0,
+            turn_deg_s: 0.0,
+            cmd_speed_mm_s: 0.0,
+            cmd_turn_deg_s: 0.0,
+            left_ticks: 0.0,
+            right_ticks: 0.0,
+            stall: false,
+            front_bumper: false,
+            rear_bumper: false,
+            motors_enabled: true,
+            e_stop: false,
+            battery_v: config.battery_full_v,
+            distance_m: 0.0,
+            rotation_rad: 0.0,
+            time_s: 0.0,
+            pending_s: 0.0,
+            moving: false,
+        }
+    }
+
+    /// The parameters.
+    pub fn config(&self) -> &BodyConfig {
+        &self.config
+    }
+
+    /// Commands a translational speed \[mm/s\] (positive forward) and a turn rate \[deg/s\]
+    /// (positive counter-clockwise), clamped to the limits; reached under the acceleration
+    /// limits.
+    pub fn command(&mut self, speed_mm_s: f32, turn_deg_s: f32) {
+        let finite = |v: f32| if v.is_finite() { v } else { 0.0 };
+        let c = &self.config;
+        self.cmd_speed_mm_s = finite(speed_mm_s).clamp(-c.max_speed_mm_s, c.max_speed_mm_s);
+        self.cmd_turn_deg_s = finite(turn_deg_s).clamp(-c.max_turn_deg_s, c.max_turn_deg_s);
+    }
+
+    /// Commands zero speed and turn rate (a normal, decelerated stop).
+    pub fn stop(&mut self) {
+        self.command(0.0, 0.0);
+    }
+
+    /// Enables or disables the motors; disabled motors stop the wheels at once.
+    pub fn set_motors_enabled(&mut self, enabled: bool) {
+        self.motors_enabled = enabled;
+    }
+
+    /// Presses (`true`) or releases the emergency stop: pressed, the wheels stop at once and
+    /// commands are ignored.
+    pub fn set_e_stop(&mut self, pressed: bool) {
+        self.e_stop = pressed;
+    }
+
+    /// Moves the robot without physics (and without touching odometry or encoders).
+    pub fn teleport(&mut self, pose: Pose2) {
+        self.true_pose = pose;
+    }
+
+    /// True pose in the map frame \[m, rad\].
+    pub fn true_pose(&self) -> Pose2 {
+        self.true_pose
+    }
+
+    /// The robot's disc at its true position.
+    pub fn disc(&self) -> Disc {
+        Disc::new(self.true_pose.position(), self.config.radius_m)
+    }
+
+    /// Odometry pose in the odometry frame (zero where the robot was created) \[m, rad\].
+    pub fn odometry_pose(&self) -> Pose2 {
+        self.odom_pose
+    }
+
+    /// Odometry pose expressed in the map frame (the odometry frame anchored at the start
+    /// pose): differs from [`Self::true_pose`] by the accumulated slip.
+    pub fn odometry_in_map(&self) -> Pose2 {
+        self.start_pose.compose(self.odom_pose)
+    }
+
+    /// ARCOS XPOS: odometry x \[mm\] modulo 0x8000.
+    pub fn arcos_x(&self) -> u16 {
+        arcos_position(self.odom_pose.x)
+    }
+
+    /// ARCOS YPOS: odometry y \[mm\] modulo 0x8000.
+    pub fn arcos_y(&self) -> u16 {
+        arcos_position(self.odom_pose.y)
+    }
+
+    /// ARCOS THPOS: odometry heading in 2π/4096 units, in (-2048, 2048].
+    pub fn arcos_heading(&self) -> i16 {
+        let u = rad_to_arcos_angle(normalize_angle(self.odom_pose.theta)).round() as i32;
+        (if u <= -2048 { u + 4096 } else { u }) as i16
+    }
+
+    /// Current translational speed \[mm/s\].
+    pub fn speed_mm_s(&self) -> f32 {
+        self.speed_mm_s
+    }
+
+    /// Current turn rate \[deg/s\].
+    pub fn turn_deg_s(&self) -> f32 {
+        self.turn_deg_s
+    }
+
+    /// Wheel speeds (left, right) \[mm/s\].
+    pub fn wheel_speeds_mm_s(&self) -> (f32, f32) {
+        let half = m_to_mm(self.config.track_m) / 2.0 * deg_to_rad(self.turn_deg_s);
+        (self.speed_mm_s - half, self.speed_mm_s + half)
+    }
+
+    /// Accumulated encoder counts (left, right), wrapping like a 32-bit counter.
+    pub fn encoder_ticks(&self) -> (i32, i32) {
+        let wrap = |t: f64| (t.round() as i64) as i32;
+        (wrap(self.left_ticks), wrap(self.right_ticks))
+    }
+
+    /// Whether the last motion was blocked (the wheels stalled).
+    pub fn stalled(&self) -> bool {
+        self.stall
+    }
+
+    /// Whether the front bumper is pressed.
+    pub fn front_bumper(&self) -> bool {
+        self.front_bumper
+    }
+
+    /// Whether the rear bumper is pressed.
+    pub fn rear_bumper(&self) -> bool {
+        self.rear_bumper
+    }
+
+    /// ARCOS STALL AND BUMPERS word: bits 0 and 8 wheel stalls, bits 1-7 rear bumper
+    /// segments, bits 9-15 front bumper segments (all segments on contact).
+    pub fn arcos_stall_bumpers(&self) -> u16 {
+        let mut w = 0u16;
+        if self.stall {
+            w |= 0x0101;
+        }
+        if self.rear_bumper {
+            w |= 0x00FE;
+        }
+        if self.front_bumper {
+            w |= 0xFE00;
+        }
+        w
+    }
+
+    /// Whether the motors are enabled.
+    pub fn motors_enabled(&self) -> bool {
+        self.motors_enabled
+    }
+
+    /// Whether the emergency stop is pressed.
+    pub fn e_stop(&self) -> bool {
+        self.e_stop
+    }
+
+    /// Battery voltage \[V\].
+    pub fn battery_v(&self) -> f32 {
+        self.battery_v
+    }
+
+    /// True distance travelled \[m\].
+    pub fn distance_m(&self) -> f64 {
+        self.distance_m
+    }
+
+    /// True rotation, absolute, summed \[rad\].
+    pub fn rotation_rad(&self) -> f64 {
+        self.rotation_rad
+    }
+
+    /// Simulated time this body has been stepped \[s\].
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// Advances by `dt_s` seconds in whole fixed steps (a remainder is carried to the next
+    /// call), against the world's blocked cells and the given discs.
+    pub fn advance(&mut self, dt_s: f32, world: &World, discs: &[Disc]) {
+        self.pending_s += dt_s.max(0.0);
+        while self.pending_s >= self.config.step_s * 0.999 {
+            self.pending_s -= self.config.step_s;
+            self.step(world, discs);
+        }
+    }
+
+    /// One fixed integration step.
+    pub fn step(&mut self, world: &World, discs: &[Disc]) {
+        let c = self.config;
+        let dt = c.step_s;
+        self.time_s += dt as f64;
+        self.battery_v = (self.battery_v - c.battery_drain_v_per_s * dt).max(0.0);
+        let halted = self.e_stop || !self.motors_enabled;
+        if halted {
+            self.speed_mm_s = 0.0;
+            self.turn_deg_s = 0.0;
+        } else {
+            self.speed_mm_s = ramp(
+                self.speed_mm_s,
+                self.cmd_speed_mm_s,
+                c.accel_mm_s2,
+                c.decel_mm_s2,
+                dt,
+            );
+            self.turn_deg_s = ramp(
+                self.turn_deg_s,
+                self.cmd_turn_deg_s,
+                c.turn_accel_deg_s2,
+                c.turn_decel_deg_s2,
+                dt,
+            );
+        }
+        let d = self.speed_mm_s * 0.001 * dt;
+        let dth = deg_to_rad(self.turn_deg_s) * dt;
+        if d == 0.0 && dth == 0.0 {
+            if self.moving {
+                self.moving = false;
+                self.end_of_move_slip(world, discs);
+            }
+            return;
+        }
+        self.moving = true;
+        // True motion = measured motion + slip.
+        let s = c.slip;
+        let d_true = d + gauss(&mut self.rng, s.distance_var_m2_per_m * d.abs());
+        let dth_true = dth
+            + gauss(
+                &mut self.rng,
+                s.rotation_var_rad2_per_rad * dth.abs() + s.drift_var_rad2_per_m * d.abs(),
+            );
+        let from = self.true_pose;
+        let mid = from.theta + dth_true / 2.0;
+        let to = Point2::new(
+            from.x + d_true * math::cos(mid),
+            from.y + d_true * math::sin(mid),
+        );
+        let depth_from = penetration(world, discs, from.position(), c.radius_m).max(0.0);
+        let depth_to = penetration(world, discs, to, c.radius_m);
+        let mut fraction = 1.0f32;
+        if depth_to > depth_from {
+            // Cut the step at the contact point.
+            let (mut lo, mut hi) = (0.0f32, 1.0f32);
+            for _ in 0..10 {
+                let m = 0.5 * (lo + hi);
+                let p = lerp(from.position(), to, m);
+                if penetration(world, discs, p, c.radius_m) > depth_from {
+                    hi = m;
+                } else {
+                    lo = m;
+                }
+            }
+            fraction = lo;
+            self.stall = true;
+            if d > 0.0 {
+                self.front_bumper = true;
+            } else if d < 0.0 {
+                self.rear_bumper = true;
+            }
+            self.speed_mm_s = 0.0;
+            self.turn_deg_s = 0.0;
+        } else if d != 0.0 {
+            self.stall = false;
+            self.front_bumper = false;
+            self.rear_bumper = false;
+        }
+        let p = lerp(from.position(), to, fraction);
+        self.true_pose = Pose2::new(p.x, p.y, from.theta + dth_true * fraction);
+        self.distance_m += (d_true.abs() * fraction) as f64;
+        self.rotation_rad += (dth_true.abs() * fraction) as f64;
+        self.battery_v =
+            (self.battery_v - c.battery_drain_v_per_m * d_true.abs() * fraction).max(0.0);
+        // The encoders see the measured wheel motion up to the contact.
+        let (dm, dthm) = (d * fraction, dth * fraction);
+        let half = c.track_m / 2.0 * dthm;
+        self.left_ticks += ((dm - half) * 1000.0 * c.ticks_per_mm) as f64;
+        self.right_ticks += ((dm + half) * 1000.0 * c.ticks_per_mm) as f64;
+        let o = self.odom_pose;
+        let omid = o.theta + dthm / 2.0;
+        self.odom_pose = Pose2::new(
+            o.x + dm * math::cos(omid),
+            o.y + dm * math::sin(omid),
+            o.theta + dthm,
+        );
+    }
+
+    fn end_of_move_slip(&mut self, world: &World, discs: &[Disc]) {
+        let s = self.config.slip;
+        if s.end_of_move_m == 0.0 && s.end_of_move_rad == 0.0 {
+            return;
+        }
+        let along = s.end_of_move_m * random::gaussian(&mut self.rng);
+        let turn = s.end_of_move_rad * random::gaussian(&mut self.rng);
+        let from = self.true_pose;
+        let to = Point2::new(
+            from.x + along * math::cos(from.theta),
+            from.y + along * math::sin(from.theta),
+        );
+        let r = self.config.radius_m;
+        if penetration(world, discs, to, r) > penetration(world, discs, from.position(), r).max(0.0)
+        {
+            return;
+        }
+        self.true_pose = Pose2::new(to.x, to.y, from.theta + turn);
+    }
+}
+
+/// Advances several robots together by `dt_s`, step by step, each seeing the others (and
+/// `extra` discs such as people) as obstacles. Robots are stepped in slice order.
+pub fn advance_all(bodies: &mut [RobotBody], dt_s: f32, world: &World, extra: &[Disc]) {
+    for b in bodies.iter_mut() {
+        b.pending_s += dt_s.max(0.0);
+    }
+    let mut discs: Vec<Disc> = Vec::with_capacity(bodies.len() + extra.len());
+    loop {
+        let mut any = false;
+        for i in 0..bodies.len() {
+            if bodies[i].pending_s < bodies[i].config.step_s * 0.999 {
+                continue;
+            }
+            discs.clear();
+            discs.extend(extra.iter().copied());
+            discs.extend(
+                bodies
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .map(|(_, b)| b.disc()),
+            );
+            let b = &mut bodies[i];
+            b.pending_s -= b.config.step_s;
+            b.step(world, &discs);
+            any = true;
+        }
+        if !any {
+            break;
+        }
+    }
+}
+
+fn arcos_position(m: f32) -> u16 {
+    (m_to_mm(m).round() as i64).rem_euclid(0x8000) as u16
+}
+
+fn lerp(a: Point2, b: Point2, t: f32) -> Point2 {
+    Point2::new(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t)
+}
+
+/// A zero-mean Gaussian draw of variance `var` (no draw is consumed when `var` is 0, so turning
+/// slip off does not shift other random streams).
+fn gauss(rng: &mut ProjectRng, var: f32) -> f32 {
+    if var > 0.0 {
+        var.sqrt() * random::gaussian(rng)
+    } else {
+        0.0
+    }
+}
+
+/// Moves `v` toward `target` by at most `accel·dt` when speeding up (same sign, larger
+/// magnitude) and `decel·dt` otherwise.
+fn ramp(v: f32, target: f32, accel: f32, decel: f32, dt: f32) -> f32 {
+    let speeding_up = v * target >= 0.0 && target.abs() > v.abs();
+    let limit = if speeding_up { accel } else { decel } * dt;
+    v + (target - v).clamp(-limit, limit)
+}
+
+/// Turn rate \[deg/s\] from a wheel speed difference, for callers converting VEL2-style
+/// commands: `ω = (right - left) / track`.
+pub fn turn_rate_from_wheels(left_mm_s: f32, right_mm_s: f32, track_m: f32) -> f32 {
+    rad_to_deg((right_mm_s - left_mm_s) / m_to_mm(track_m))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::builtin;
+
+    fn no_slip() -> BodyConfig {
+        BodyConfig {
+            slip: SlipConfig::none(),
+            ..BodyConfig::default()
+        }
+    }
+
+    fn run(b: &mut RobotBody, world: &World, seconds: f32) {
+        b.advance(seconds, world, &[]);
+    }
+
+    #[test]
+    fn speed_ramps_under_the_acceleration_limit() {
+        let w = builtin::empty(0.1).unwrap();
+        let mut b = RobotBody::new(no_slip(), Pose2::new(5.0, 5.0, 0.0), 1);
+        b.command(600.0, 0.0);
+        run(&mut b, &w, 1.0);
+        assert!((b.speed_mm_s() - 300.0).abs() < 1.0, "{}", b.speed_mm_s());
+        run(&mut b, &w, 2.0);
+        assert!((b.speed_mm_s() - 600.0).abs() < 1e-3);
+        // 0.5·300·1² + 300·1 + 600·... : distance after 3 s = 0.6 m + 1.2 m... check x.
+        // Ramp 0→600 over 2 s covers 0.6 m, then 1 s at 600 mm/s covers 0.6 m.
+        assert!((b.true_pose().x - 6.2).abs() < 0.01, "{:?}", b.true_pose());
+        b.stop();
+        run(&mut b, &w, 3.0);
+        assert_eq!(b.speed_mm_s(), 0.0);
+        // Decelerating from 600 at 300 mm/s² covers 0.6 m more.
+        assert!((b.true_pose().x - 6.8).abs() < 0.01, "{:?}", b.true_pose());
+        let (l, r) = b.encoder_ticks();
+        assert!((l as f32 - 1800.0 * 128.0).abs() < 200.0, "{l}");
+        assert_eq!(l, r);
+    }
+
+    #[test]
+    fn turning_follows_the_rate_and_wheels_differ() {
+        let w = builtin::empty(0.1).unwrap();
+        let mut b = RobotBody::new(no_slip(), Pose2::new(5.0, 5.0, 0.0), 1);
+        b.command(0.0, 90.0);
+        run(&mut b, &w, 0.5);
+        let (l, r) = b.wheel_speeds_mm_s();
+        assert!((b.turn_deg_s() - 50.0).abs() < 0.5);
+        assert!((r + l).abs() < 1e-3 && r > 0.0);
+        assert!((turn_rate_from_wheels(l, r, 0.357) - b.turn_deg_s()).abs() < 0.01);
+        b.stop();
+        run(&mut b, &w, 2.0);
+        // Up 0.5 s (12.5°), down 0.5 s (12.5°): 25°.
+        assert!((rad_to_deg(b.true_pose().theta) - 25.0).abs() < 0.5);
+        assert_eq!(b.true_pose().position(), Point2::new(5.0, 5.0));
+    }
+
+    #[test]
+    fn walls_stop_the_robot_and_set_the_front_bumper() {
+        let w = builtin::empty(0.1).unwrap();
+        // Facing the east wall (inner face at x = 23.5 m).
+        let mut b = RobotBody::new(no_slip(), Pose2::new(22.0, 5.0, 0.0), 3);
+        b.command(500.0, 0.0);
+        run(&mut b, &w, 10.0);
+        let x = b.true_pose().x;
+        assert!(x <= 23.25 + 1e-3 && x > 23.2, "stopped at {x}");
+        assert!(b.stalled() && b.front_bumper() && !b.rear_bumper());
+        assert_eq!(b.arcos_stall_bumpers(), 0xFF01);
+        assert!(wall_penetration(&w, b.true_pose().position(), 0.25) <= 0.0);
+        // Backing off frees it and sets nothing.
+        b.command(-200.0, 0.0);
+        run(&mut b, &w, 2.0);
+        assert!(!b.stalled() && !b.front_bumper());
+        assert!(b.true_pose().x < x);
+    }
+
+    #[test]
+    fn backing_into_a_wall_sets_the_rear_bumper() {
+        let w = builtin::empty(0.1).unwrap();
+        let mut b = RobotBody::new(no_slip(), Pose2::new(1.0, 5.0, 0.0), 3);
+        b.command(-300.0, 0.0);
+        run(&mut b, &w, 5.0);
+        assert!(b.stalled() && b.rear_bumper() && !b.front_bumper());
+        assert!(b.true_pose().x >= 0.75 - 1e-3);
+    }
+
+    #[test]
+    fn robots_do_not_pass_through_each_other() {
+        let w = builtin::empty(0.1).unwrap();
+        let mut bodies = vec![
+            RobotBody::new(no_slip(), Pose2::new(5.0, 5.0, 0.0), 1),
+            RobotBody::new(no_slip(), Pose2::new(8.0, 5.0, PI), 2),
+        ];
+        bodies[0].command(400.0, 0.0);
+        bodies[1].command(400.0, 0.0);
+        for _ in 0..100 {
+            advance_all(&mut bodies, 0.1, &w, &[]);
+        }
+        let gap = bodies[0]
+            .true_pose()
+            .position()
+            .distance(bodies[1].true_pose().position());
+        assert!((0.5 - 1e-3..0.52).contains(&gap), "gap {gap}");
+        assert!(bodies.iter().all(|b| b.stalled() && b.front_bumper()));
+    }
+
+    #[test]
+    fn e_stop_and_disabled_motors_hold_the_robot() {
+        let w = builtin::empty(0.1).unwrap();
+        let mut b = RobotBody::new(no_slip(), Pose2::new(5.0, 5.0, 0.0), 1);
+        b.command(500.0, 0.0);
+        b.set_e_stop(true);
+        run(&mut b, &w, 1.0);
+        assert_eq!(b.true_pose().position(), Point2::new(5.0, 5.0));
+        assert!(b.e_stop());
+        b.set_e_stop(false);
+        b.set_motors_enabled(false);
+        run(&mut b, &w, 1.0);
+        assert_eq!(b.true_pose().position(), Point2::new(5.0, 5.0));
+        b.set_motors_enabled(true);
+        run(&mut b, &w, 1.0);
+        assert!(b.true_pose().x > 5.1);
+        assert!(b.battery_v() < 13.0 && b.battery_v() > 12.9);
+    }
+
+    #[test]
+    fn slip_makes_odometry_drift_deterministically() {
+        let w = builtin::empty(0.1).unwrap();
+        let drive = |seed: u64| {
+            let mut b = RobotBody::new(BodyConfig::default(), Pose2::new(5.0, 5.0, 0.0), seed);
+            for _ in 0..4 {
+                b.command(400.0, 0.0);
+                b.advance(5.0, &w, &[]);
+                b.stop();
+                b.advance(2.0, &w, &[]);
+                b.command(0.0, 45.0);
+                b.advance(2.0, &w, &[]);
+                b.stop();
+                b.advance(2.0, &w, &[]);
+            }
+            b
+        };
+        let a = drive(7);
+        let b = drive(7);
+        assert_eq!(a.true_pose(), b.true_pose());
+        assert_eq!(a.odometry_pose(), b.odometry_pose());
+        let err = a
+            .true_pose()
+            .position()
+            .distance(a.odometry_in_map().position());
+        assert!(err > 0.002 && err < 0.5, "drift {err}");
+        let c = drive(8);
+        assert_ne!(a.true_pose(), c.true_pose());
+        // Without slip, odometry is exact.
+        let mut e = RobotBody::new(no_slip(), Pose2::new(5.0, 5.0, 0.3), 1);
+        e.command(300.0, 20.0);
+        e.advance(4.0, &w, &[]);
+        let d = e
+            .true_pose()
+            .position()
+            .distance(e.odometry_in_map().position());
+        assert!(d < 1e-4, "{d}");
+    }
+
+    #[test]
+    fn end_of_move_slip_is_about_a_centimetre_or_two() {
+        let w = builtin::empty(0.1).unwrap();
+        let mut total = 0.0;
+        let n = 200;
+        for seed in 0..n {
+            let cfg = BodyConfig {
+                slip: SlipConfig {
+                    distance_var_m2_per_m: 0.0,
+                    rotation_var_rad2_per_rad: 0.0,
+                    drift_var_rad2_per_m: 0.0,
+                    ..SlipConfig::default()
+                },
+                ..BodyConfig::default()
+            };
+            let mut b = RobotBody::new(cfg, Pose2::new(5.0, 5.0, 0.0), seed);
+            b.command(300.0, 0.0);
+            b.advance(2.0, &w, &[]);
+            b.stop();
+            b.advance(2.0, &w, &[]);
+            total += b
+                .true_pose()
+                .position()
+                .distance(b.odometry_in_map().position());
+        }
+        let mean = total / n as f32;
+        // Mean of |N(0, 1.5 cm)| is 1.2 cm.
+        assert!((0.008..0.016).contains(&mean), "mean slide {mean}");
+    }
+
+    #[test]
+    fn a_bad_step_falls_back_to_ten_milliseconds() {
+        let w = builtin::empty(0.1).unwrap();
+        for step_s in [0.0, -1.0, f32::NAN] {
+            let cfg = BodyConfig {
+                step_s,
+                ..no_slip()
+            };
+            let mut b = RobotBody::new(cfg, Pose2::new(5.0, 5.0, 0.0), 1);
+            assert_eq!(b.config().step_s, 0.01);
+            b.command(300.0, 0.0);
+            b.advance(1.0, &w, &[]);
+            assert!((b.time_s() - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn arcos_fields_wrap() {
+        let w = builtin::empty(0.1).unwrap();
+        let mut b = RobotBody::new(no_slip(), Pose2::new(5.0, 5.0, 0.0), 1);
+        assert_eq!((b.arcos_x(), b.arcos_y(), b.arcos_heading()), (0, 0, 0));
+        b.command(-300.0, 0.0);
+        b.advance(1.0, &w, &[]);
+        // About 150 mm backwards: negative x wraps modulo 0x8000.
+        let x_mm = (b.odometry_pose().x * 1000.0).round() as i32;
+        assert!((-155..=-148).contains(&x_mm), "{x_mm}");
+        assert_eq!(b.arcos_x() as i32, 0x8000 + x_mm);
+        assert_eq!(arcos_position(40.0), (40_000 % 0x8000) as u16);
+        let mut t = RobotBody::new(no_slip(), Pose2::new(5.0, 5.0, 0.0), 1);
+        t.command(0.0, 90.0);
+        t.advance(1.9, &w, &[]);
+        t.stop();
+        t.advance(2.0, &w, &[]);
+        let want = rad_to_arcos_angle(normalize_angle(t.odometry_pose().theta)).round() as i16;
+        assert_eq!(t.arcos_heading(), want);
+        assert!(t.arcos_heading() > 0);
+    }
+}

@@ -1,0 +1,420 @@
+//! Worlds: the true occupancy of the simulated environment.
+//!
+//! A [`World`] is a bitmap of blocked and free cells laid on a
+//! [`GridGeometry`] (map frame: x east, y north, cell (0, 0) at the
+//! south-west corner, row 0 south), with a name and the robot's start pose. Worlds come from the
+//! built-in designs ([`builtin`]) or from files ([`World::load`]): the thesis's CSV format
+//! ([`csv`]) and plain PGM/PNG images ([`image`]). Ground truth for scoring lives in [`truth`].
+
+pub mod builtin;
+pub mod csv;
+pub mod image;
+pub mod truth;
+
+use std::fmt;
+use std::path::Path;
+
+use papillon::geometry::{Point2, Pose2};
+use papillon::grid::{Cell, CellClass, GridError, GridGeometry, LogOddsBounds, OccupancyGrid};
+
+pub use truth::Truth;
+
+/// Default start: 1 m east and 1 m north of the map's south-west corner, heading east.
+pub const DEFAULT_START: Pose2 = Pose2 {
+    x: 1.0,
+    y: 1.0,
+    theta: 0.0,
+};
+
+/// Errors building or loading a world. File errors name the file and what is wrong.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum WorldError {
+    /// The spec is neither a built-in world name nor a file name with a known extension.
+    UnknownWorld {
+        /// What was asked for.
+        spec: String,
+    },
+    /// The file's extension names no format the simulator reads.
+    UnsupportedFormat {
+        /// The file.
+        path: String,
+        /// Its extension (without the dot).
+        extension: String,
+    },
+    /// The format is recognised but its loader is not wired into world loading yet.
+    NotYetSupported {
+        /// The file.
+        path: String,
+        /// The format's name.
+        format: &'static str,
+    },
+    /// The file could not be read.
+    Io {
+        /// The file.
+        path: String,
+        /// The operating system's message.
+        message: String,
+    },
+    /// A CSV map file is malformed.
+    Csv {
+        /// The file.
+        path: String,
+        /// 1-based line number.
+        line: usize,
+        /// What was wrong on that line.
+        message: String,
+    },
+    /// An image file could not be decoded or has no pixels.
+    Image {
+        /// The file.
+        path: String,
+        /// What was wrong.
+        message: String,
+    },
+    /// The cell size is not a positive finite number of metres.
+    BadResolution(f32),
+    /// The blocked-cell bitmap does not match the geometry.
+    SizeMismatch {
+        /// Cells the geometry has.
+        expected: usize,
+        /// Cells the bitmap has.
+        found: usize,
+    },
+    /// The grid geometry is invalid.
+    Grid(GridError),
+}
+
+impl fmt::Display for WorldError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            WorldError::UnknownWorld { spec } => write!(
+                f,
+                "unknown world '{spec}': expected one of {} or a .csv, .png, .pgm, .map or .yaml file",
+                builtin::NAMES.join(", ")
+            ),
+            WorldError::UnsupportedFormat { path, extension } => write!(
+                f,
+                "{path}: unsupported map format '.{extension}' (expected .csv, .png, .pgm, .map or .yaml)"
+            ),
+            WorldError::NotYetSupported { path, format } => {
+                write!(
+                    f,
+                    "{path}: {format} maps are not yet supported by the simulator"
+                )
+            }
+            WorldError::Io { path, message } => write!(f, "{path}: cannot read: {message}"),
+            WorldError::Csv {
+                path,
+                line,
+                message,
+            } => write!(f, "{path} line {line}: {message}"),
+            WorldError::Image { path, message } => write!(f, "{path}: {message}"),
+            WorldError::BadResolution(r) => write!(
+                f,
+                "resolution must be a positive number of metres per cell, got {r}"
+            ),
+            WorldError::SizeMismatch { expected, found } => write!(
+                f,
+                "world bitmap has {found} cells but its geometry has {expected}"
+            ),
+            WorldError::Grid(e) => write!(f, "bad world geometry: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for WorldError {}
+
+impl From<GridError> for WorldError {
+    fn from(e: GridError) -> Self {
+        WorldError::Grid(e)
+    }
+}
+
+/// Checks a cell size \[m\].
+pub(crate) fn check_resolution(resolution_m: f32) -> Result<f32, WorldError> {
+    if resolution_m.is_finite() && resolution_m > 0.0 {
+        Ok(resolution_m)
+    } else {
+        Err(WorldError::BadResolution(resolution_m))
+    }
+}
+
+/// The true environment: blocked or free per cell, a name and a start pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct World {
+    name: String,
+    geometry: GridGeometry,
+    blocked: Vec<bool>,
+    start: Pose2,
+}
+
+impl World {
+    /// An all-free world of the given geometry, starting at [`DEFAULT_START`].
+    pub fn new(name: impl Into<String>, geometry: GridGeometry) -> Self {
+        Self {
+            name: name.into(),
+            blocked: vec![false; geometry.cell_count()],
+            geometry,
+            start: DEFAULT_START,
+        }
+    }
+
+    /// A world from a bitmap in flat-index order (`row · width + col`, row 0 south).
+    pub fn from_blocked(
+        name: impl Into<String>,
+        geometry: GridGeometry,
+        blocked: Vec<bool>,
+    ) -> Result<Self, WorldError> {
+        if blocked.len() != geometry.cell_count() {
+            return Err(WorldError::SizeMismatch {
+                expected: geometry.cell_count(),
+                found: blocked.len(),
+            });
+        }
+        Ok(Self {
+            name: name.into(),
+            geometry,
+            blocked,
+            start: DEFAULT_START,
+        })
+    }
+
+    /// A built-in world or a map file, chosen by `spec`:
+    /// - `empty`, `house`, `factory`, `lab`: the built-in designs ([`builtin`]);
+    /// - `*.csv`: the thesis's CSV format ([`csv`]), upsampled to `resolution_m`;
+    /// - `*.png`, `*.pgm`: a plain image, one pixel per cell of `resolution_m` ([`image`]);
+    /// - `*.map` (Moving AI) and `*.yaml` (ROS map_server): recognised, but not yet wired in
+    ///   ([`WorldError::NotYetSupported`]).
+    pub fn load(spec: &str, resolution_m: f32) -> Result<Self, WorldError> {
+        let resolution_m = check_resolution(resolution_m)?;
+        if let Some(world) = builtin::by_name(spec, resolution_m) {
+            return world;
+        }
+        let path = Path::new(spec);
+        let Some(extension) = path.extension().and_then(|e| e.to_str()) else {
+            return Err(WorldError::UnknownWorld {
+                spec: spec.to_string(),
+            });
+        };
+        match extension.to_ascii_lowercase().as_str() {
+            "csv" => csv::load(path, resolution_m),
+            "png" | "pgm" => image::load(path, resolution_m),
+            "map" => Err(WorldError::NotYetSupported {
+                path: spec.to_string(),
+                format: "Moving AI .map",
+            }),
+            "yaml" | "yml" => Err(WorldError::NotYetSupported {
+                path: spec.to_string(),
+                format: "ROS map_server .yaml",
+            }),
+            other => Err(WorldError::UnsupportedFormat {
+                path: spec.to_string(),
+                extension: other.to_string(),
+            }),
+        }
+    }
+
+    /// The world's name (a built-in name or the file it came from).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Size and placement of the cells.
+    pub fn geometry(&self) -> &GridGeometry {
+        &self.geometry
+    }
+
+    /// Where the robot starts \[m, rad\].
+    pub fn start(&self) -> Pose2 {
+        self.start
+    }
+
+    /// Moves the start pose.
+    pub fn set_start(&mut self, start: Pose2) {
+        self.start = start;
+    }
+
+    /// The start pose with the start moved.
+    pub fn with_start(mut self, start: Pose2) -> Self {
+        self.start = start;
+        self
+    }
+
+    /// The cell under the start position, if inside the grid.
+    pub fn start_cell(&self) -> Option<Cell> {
+        self.geometry.cell_at(self.start.position())
+    }
+
+    /// Blocked flags in flat-index order.
+    pub fn blocked(&self) -> &[bool] {
+        &self.blocked
+    }
+
+    /// Whether a cell is blocked; cells outside the grid count as blocked.
+    #[inline]
+    pub fn is_blocked(&self, cell: Cell) -> bool {
+        match self.geometry.index(cell) {
+            Some(i) => self.blocked[i],
+            None => true,
+        }
+    }
+
+    /// Whether the cell at a flat index is blocked (panics past the cell count, a caller bug).
+    #[inline]
+    pub fn is_blocked_index(&self, index: usize) -> bool {
+        self.blocked[index]
+    }
+
+    /// Whether the map-frame point lies in a blocked cell or outside the grid.
+    pub fn is_blocked_at(&self, p: Point2) -> bool {
+        self.is_blocked(self.geometry.cell_at_unchecked(p))
+    }
+
+    /// Blocks or frees one cell; cells outside the grid are ignored.
+    pub fn set_blocked(&mut self, cell: Cell, blocked: bool) {
+        if let Some(i) = self.geometry.index(cell) {
+            self.blocked[i] = blocked;
+        }
+    }
+
+    /// Blocks or frees every cell whose centre lies in `[x0, x1) x [y0, y1)` \[m\].
+    pub fn fill_rect(&mut self, x0: f32, y0: f32, x1: f32, y1: f32, blocked: bool) {
+        for cell in self.cells_in_rect(x0, y0, x1, y1) {
+            self.set_blocked(cell, blocked);
+        }
+    }
+
+    /// The cells whose centres lie in `[x0, x1) x [y0, y1)` \[m\], clipped to the grid.
+    pub fn cells_in_rect(&self, x0: f32, y0: f32, x1: f32, y1: f32) -> Vec<Cell> {
+        let g = &self.geometry;
+        let r = g.resolution_m;
+        // Cell c's centre is origin + (c + 0.5) r; it lies in [a, b) when c >= (a - o)/r - 0.5
+        // and c < (b - o)/r - 0.5.
+        let lo = |a: f32, o: f32| ((a - o) / r - 0.5 - 1e-4).ceil().max(0.0) as i64;
+        let hi = |b: f32, o: f32, n: usize| {
+            (((b - o) / r - 0.5 - 1e-4).ceil().max(0.0) as i64).min(n as i64)
+        };
+        let (c0, c1) = (lo(x0, g.origin.x), hi(x1, g.origin.x, g.width));
+        let (r0, r1) = (lo(y0, g.origin.y), hi(y1, g.origin.y, g.height));
+        let mut cells = Vec::new();
+        for row in r0..r1 {
+            for col in c0..c1 {
+                cells.push(Cell::new(col as i32, row as i32));
+            }
+        }
+        cells
+    }
+
+    /// Number of blocked cells.
+    pub fn blocked_count(&self) -> usize {
+        self.blocked.iter().filter(|&&b| b).count()
+    }
+
+    /// Fraction of the area that is blocked (0..1).
+    pub fn occupied_fraction(&self) -> f32 {
+        self.blocked_count() as f32 / self.blocked.len() as f32
+    }
+
+    /// The ground truth for scoring: the observable set from the start cell ([`truth`]).
+    pub fn truth(&self) -> Truth {
+        Truth::new(self)
+    }
+
+    /// Observable-set membership per cell, flat-index order ([`truth`]).
+    pub fn truth_mask(&self) -> Vec<bool> {
+        self.truth().mask().to_vec()
+    }
+
+    /// The world as a fully known occupancy grid (blocked cells Occupied, free cells Free, at
+    /// the default bounds' certainty), built on the heap: for rendering, planning tests and
+    /// scoring. Errs if the world has more cells than `N`.
+    pub fn to_occupancy_grid<const N: usize>(&self) -> Result<Box<OccupancyGrid<N>>, GridError> {
+        let mut grid = OccupancyGrid::<N>::new_boxed(self.geometry, LogOddsBounds::default())?;
+        for (i, &b) in self.blocked.iter().enumerate() {
+            let class = if b {
+                CellClass::Occupied
+            } else {
+                CellClass::Free
+            };
+            grid.set_class(i, class, &mut ());
+        }
+        Ok(grid)
+    }
+
+    /// Whether a robot disc of `radius_m` \[m\] at the start position touches nothing blocked.
+    pub fn start_is_clear(&self, radius_m: f32) -> bool {
+        !self.disc_hits_blocked(self.start.position(), radius_m)
+    }
+
+    /// Whether a disc of `radius_m` centred at `p` overlaps a blocked cell (or leaves the grid).
+    pub fn disc_hits_blocked(&self, p: Point2, radius_m: f32) -> bool {
+        crate::physics::wall_penetration(self, p, radius_m) > 0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rectangles_fill_cells_by_centre() {
+        let g = GridGeometry::from_extent(2.0, 1.0, 0.1, Point2::default()).unwrap();
+        let mut w = World::new("t", g);
+        w.fill_rect(0.0, 0.0, 1.0, 0.5, true);
+        assert_eq!(w.blocked_count(), 50);
+        assert!(w.is_blocked(Cell::new(9, 4)));
+        assert!(!w.is_blocked(Cell::new(10, 4)));
+        assert!(!w.is_blocked(Cell::new(9, 5)));
+        assert!(w.is_blocked(Cell::new(-1, 0)), "outside counts as blocked");
+    }
+
+    #[test]
+    fn load_names_the_problem() {
+        let e = World::load("nowhere", 0.1).unwrap_err();
+        assert!(e.to_string().contains("unknown world 'nowhere'"), "{e}");
+        let e = World::load("maps/x.map", 0.1).unwrap_err();
+        assert!(matches!(e, WorldError::NotYetSupported { .. }));
+        assert!(e.to_string().contains("maps/x.map"), "{e}");
+        let e = World::load("a.yaml", 0.1).unwrap_err();
+        assert!(e.to_string().contains("not yet supported"), "{e}");
+        let e = World::load("a.bmp", 0.1).unwrap_err();
+        assert!(e.to_string().contains("'.bmp'"), "{e}");
+        let e = World::load("house", 0.0).unwrap_err();
+        assert_eq!(e, WorldError::BadResolution(0.0));
+        let e = World::load("/no/such/file.csv", 0.1).unwrap_err();
+        assert!(
+            e.to_string().starts_with("/no/such/file.csv: cannot read"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_true_grid_matches_the_bitmap() {
+        let w = builtin::lab(0.1).unwrap();
+        let g = w.to_occupancy_grid::<6400>().unwrap();
+        assert_eq!(g.counts().occupied, w.blocked_count());
+        assert_eq!(g.counts().known(), 6400);
+        let inside = w.geometry().index(Cell::new(40, 20)).unwrap();
+        assert!(w.is_blocked_index(inside));
+        assert_eq!(g.class(inside), CellClass::Occupied);
+        assert!(matches!(
+            w.to_occupancy_grid::<100>().unwrap_err(),
+            GridError::CapacityExceeded { needed: 6400, .. }
+        ));
+        assert_eq!(w.truth().coverage(&g), 1.0);
+    }
+
+    #[test]
+    fn bitmap_must_match_geometry() {
+        let g = GridGeometry::new(3, 3, 0.1, Point2::default()).unwrap();
+        let e = World::from_blocked("x", g, vec![false; 8]).unwrap_err();
+        assert_eq!(
+            e,
+            WorldError::SizeMismatch {
+                expected: 9,
+                found: 8
+            }
+        );
+    }
+}
