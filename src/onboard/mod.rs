@@ -12,7 +12,9 @@
 //! - [`runtime`]: `papillon run` and `papillon probe`.
 
 pub mod arcos;
+pub mod laser;
 pub mod link;
+pub mod persist;
 pub mod robot;
 
 #[cfg(test)]
