@@ -16,6 +16,7 @@ pub mod laser;
 pub mod link;
 pub mod persist;
 pub mod robot;
+pub mod runtime;
 
 #[cfg(test)]
 mod testkit;

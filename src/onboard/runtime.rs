@@ -1,0 +1,609 @@
+//! `papillon run` and `papillon probe`: start-up, the mission pump, safety checks, persistence
+//! and a safe shutdown.
+//!
+//! Integration points (marked `INTEGRATION POINT` below):
+//! 1. [`arcos_codec`] and [`laser_codec`] return the wire codecs once `crate::wire` is merged
+//!    (adapters implementing [`ArcosCodec`] and [`LaserCodec`]); today they return `None` and
+//!    the binary says that this build cannot talk to a robot yet.
+//! 2. [`mission_driver`] returns the core mission state machine wrapped in a
+//!    [`MissionDriver`]; today it returns `None` and `papillon run` connects, starts up,
+//!    reports that autonomous missions are not yet available, and shuts down safely.
+//! 3. [`pump`] already does what the mission needs around it: status and scan timestamps,
+//!    stale-data and e-stop checks that stop the robot at once and latch the fault until the
+//!    mission re-plans, periodic atomic saves, telemetry, and a stop on SIGINT/SIGTERM.
+
+use std::io;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use tokio::time::Instant;
+
+use super::arcos::{ArcosCodec, RobotStatus};
+use super::laser::{LaserCodec, Lms1xxClient};
+use super::link::{Backoff, TcpLink, connect_with_backoff, open_robot_link};
+use super::persist::{MapImage, MissionState, PersistError, STATE_VERSION, StateStore, Telemetry};
+use super::robot::{ArcosClient, Fault, MotionLimits, SessionError, SessionOptions};
+use crate::config::{BoardConfig, LaserModel};
+use crate::sensor::Scan;
+
+/// INTEGRATION POINT 1: the ARCOS codec of `crate::wire::arcos` (not merged yet).
+pub fn arcos_codec() -> Option<Box<dyn ArcosCodec>> {
+    None
+}
+
+/// INTEGRATION POINT 1: the CoLa-A codec of `crate::wire::lms1xx` (not merged yet).
+pub fn laser_codec() -> Option<Box<dyn LaserCodec>> {
+    None
+}
+
+/// INTEGRATION POINT 2: the mission state machine for a board, resumed from `resume` if given.
+pub fn mission_driver(
+    _board: &BoardConfig,
+    _resume: Option<&(MissionState, Option<MapImage>)>,
+) -> Option<Box<dyn MissionDriver>> {
+    None
+}
+
+/// What the mission asks the robot to do after a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum MissionCommand {
+    /// Drive at `speed_mm_s` [mm/s] and `turn_deg_s` [deg/s, counter-clockwise].
+    Drive {
+        /// Translational velocity [mm/s].
+        speed_mm_s: i16,
+        /// Rotational velocity [deg/s].
+        turn_deg_s: i16,
+    },
+    /// Stand still (thinking, or waiting for scans).
+    Hold,
+    /// The mission is complete.
+    Done,
+}
+
+/// The mission state machine as the runtime sees it (sans-IO: it is given times and data).
+pub trait MissionDriver: Send {
+    /// A status packet arrived at mission time `t_s` [s].
+    fn on_status(&mut self, t_s: f64, status: &RobotStatus);
+    /// A scan arrived at mission time `t_s` [s].
+    fn on_scan(&mut self, t_s: f64, scan: &Scan);
+    /// The runtime stopped the robot for `fault`; the mission must re-plan before moving.
+    fn on_fault(&mut self, t_s: f64, fault: Fault);
+    /// Whether the mission has re-planned since its last fault (the runtime then clears the
+    /// latch and lets motion through again).
+    fn replanned(&self) -> bool;
+    /// One control step at mission time `t_s` [s].
+    fn step(&mut self, t_s: f64) -> MissionCommand;
+    /// The state to save.
+    fn snapshot(&self) -> (MissionState, Option<MapImage>);
+}
+
+/// Errors of `papillon run` / `probe`.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum RuntimeError {
+    /// This build has no codec for the robot or the laser.
+    NoCodec(&'static str),
+    /// The link could not be opened.
+    Link(io::Error),
+    /// The ARCOS session failed.
+    Session(SessionError),
+    /// The laser session failed.
+    Laser(super::laser::LaserError),
+    /// Saving or loading the mission state failed.
+    Persist(PersistError),
+    /// `--resume` found no saved mission.
+    NothingToResume(PathBuf),
+}
+
+impl std::fmt::Display for RuntimeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RuntimeError::NoCodec(what) => write!(
+                f,
+                "this build has no {what} codec yet (the wire module is not integrated); nothing was sent"
+            ),
+            RuntimeError::Link(e) => write!(f, "{e}"),
+            RuntimeError::Session(e) => write!(f, "{e}"),
+            RuntimeError::Laser(e) => write!(f, "{e}"),
+            RuntimeError::Persist(e) => write!(f, "{e}"),
+            RuntimeError::NothingToResume(dir) => {
+                write!(f, "--resume: no saved mission in {}", dir.display())
+            }
+        }
+    }
+}
+
+impl std::error::Error for RuntimeError {}
+
+impl From<SessionError> for RuntimeError {
+    fn from(e: SessionError) -> Self {
+        RuntimeError::Session(e)
+    }
+}
+
+impl From<PersistError> for RuntimeError {
+    fn from(e: PersistError) -> Self {
+        RuntimeError::Persist(e)
+    }
+}
+
+impl From<io::Error> for RuntimeError {
+    fn from(e: io::Error) -> Self {
+        RuntimeError::Link(e)
+    }
+}
+
+/// Options of `papillon run` (command-line flags already applied over the board).
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// The board (with `--port`, `--tcp`, `--laser` applied).
+    pub board: BoardConfig,
+    /// Log directory.
+    pub log_dir: PathBuf,
+    /// Continue the mission saved in `log_dir`.
+    pub resume: bool,
+}
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum RunOutcome {
+    /// The mission completed.
+    Finished,
+    /// Stopped by SIGINT/SIGTERM; state saved.
+    Interrupted,
+    /// This build has no mission yet: connected, started up, stopped safely.
+    MissionUnavailable,
+}
+
+/// Resolves on SIGINT or SIGTERM.
+pub async fn shutdown_signal() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{SignalKind, signal};
+        match signal(SignalKind::terminate()) {
+            Ok(mut term) => {
+                tokio::select! {
+                    _ = tokio::signal::ctrl_c() => {}
+                    _ = term.recv() => {}
+                }
+            }
+            Err(_) => {
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+    }
+}
+
+/// Opens the robot link with back-off and runs the ARCOS start-up (handshake, CONFIG check,
+/// HOSTBAUD, ENABLE, limits).
+pub async fn connect_robot(
+    board: &BoardConfig,
+    codec: Box<dyn ArcosCodec>,
+) -> Result<ArcosClient, RuntimeError> {
+    let tcp = board.link.tcp.as_ref().map(|a| a.as_str().to_string());
+    let port = board.link.port.as_str().to_string();
+    let baud = board.link.baud;
+    let link = connect_with_backoff(
+        Backoff::default(),
+        || open_robot_link(tcp.as_deref(), &port, baud),
+        |attempt, e| tracing::warn!(attempt, error = %e, "robot link not available, retrying"),
+    )
+    .await?;
+    tracing::info!(link = %link.describe(), "robot link open");
+    let mut client = ArcosClient::connect(link, codec, SessionOptions::from_board(board)).await?;
+    let id = client.identity().clone();
+    tracing::info!(name = %id.name, class = %id.class, subclass = %id.subclass, baud = ?client.baud_switch(), "connected");
+    client.start(&MotionLimits::from_board(board)).await?;
+    Ok(client)
+}
+
+/// Connects the laser the board names.
+pub async fn connect_laser(
+    board: &BoardConfig,
+    codec: Box<dyn LaserCodec>,
+) -> Result<Lms1xxClient, RuntimeError> {
+    match board.laser_model() {
+        Some(LaserModel::Lms1xx) => {
+            let addr = board
+                .laser
+                .address
+                .as_ref()
+                .map(|a| a.as_str().to_string())
+                .unwrap_or_default();
+            let link = connect_with_backoff(
+                Backoff::default(),
+                || TcpLink::connect(&addr),
+                |attempt, e| tracing::warn!(attempt, error = %e, "laser not available, retrying"),
+            )
+            .await?;
+            Lms1xxClient::connect(Box::new(link), codec, board.laser_config())
+                .await
+                .map_err(RuntimeError::Laser)
+        }
+        // INTEGRATION POINT 1: the LMS200 session (serial link at 9600 baud, then the
+        // board's speed) awaits `crate::wire::lms200`.
+        _ => Err(RuntimeError::NoCodec("LMS200")),
+    }
+}
+
+/// `papillon run`, with the codecs and the mission given (the binary passes
+/// [`arcos_codec`], [`laser_codec`] and [`mission_driver`]).
+pub async fn run_with(
+    options: RunOptions,
+    arcos: Option<Box<dyn ArcosCodec>>,
+    laser: Option<Box<dyn LaserCodec>>,
+    make_mission: impl FnOnce(
+        &BoardConfig,
+        Option<&(MissionState, Option<MapImage>)>,
+    ) -> Option<Box<dyn MissionDriver>>,
+    shutdown: impl std::future::Future<Output = ()>,
+) -> Result<RunOutcome, RuntimeError> {
+    let board = &options.board;
+    let store = StateStore::open(&options.log_dir)?;
+    let mut telemetry = Telemetry::open(&options.log_dir)?;
+    let resumed = if options.resume {
+        match store.load()? {
+            Some(saved) => {
+                tracing::info!(coverage = saved.0.coverage, time_s = saved.0.mission_time_s, "resuming saved mission");
+                Some(saved)
+            }
+            None => return Err(RuntimeError::NothingToResume(options.log_dir.clone())),
+        }
+    } else {
+        None
+    };
+    let arcos = arcos.ok_or(RuntimeError::NoCodec("ARCOS"))?;
+    let mut client = connect_robot(board, arcos).await?;
+    let mission = make_mission(board, resumed.as_ref());
+    let outcome = match mission {
+        None => {
+            // INTEGRATION POINT 2: no mission in this build. Say so and stop safely.
+            tracing::warn!("autonomous missions are not yet available in this build; stopping");
+            telemetry.record(0.0, "note", serde_json::json!({"note": "mission not available; start-up checked, robot stopped"}))?;
+            RunOutcome::MissionUnavailable
+        }
+        Some(mut mission) => {
+            let laser = laser.ok_or(RuntimeError::NoCodec("laser"))?;
+            let mut laser = connect_laser(board, laser).await?;
+            let outcome = pump(board, &mut client, &mut laser, mission.as_mut(), &store, &mut telemetry, shutdown).await;
+            let _ = laser.close().await;
+            let (state, map) = mission.snapshot();
+            store.save(&state, map.as_ref())?;
+            if let Some(map) = map {
+                map.write_png(&options.log_dir.join("map.png"))?;
+            }
+            outcome?
+        }
+    };
+    if outcome == RunOutcome::MissionUnavailable
+        && let Some((state, map)) = &resumed
+    {
+        // Nothing ran: keep the saved mission exactly as it was.
+        store.save(state, map.as_ref())?;
+    }
+    let stats = client.stop_and_close().await?;
+    telemetry.link_stats(0.0, &stats)?;
+    telemetry.flush()?;
+    tracing::info!(%stats.codec, "robot stopped, motors disabled, session closed");
+    Ok(outcome)
+}
+
+/// The mission pump: feeds the mission with status packets and scans, applies its commands,
+/// enforces the safety rules and saves the state every `save_every_s`.
+pub async fn pump(
+    board: &BoardConfig,
+    client: &mut ArcosClient,
+    laser: &mut Lms1xxClient,
+    mission: &mut dyn MissionDriver,
+    store: &StateStore,
+    telemetry: &mut Telemetry,
+    shutdown: impl std::future::Future<Output = ()>,
+) -> Result<RunOutcome, RuntimeError> {
+    let start = Instant::now();
+    let t = |i: Instant| (i - start).as_secs_f64();
+    let stale = Duration::from_secs_f32(board.safety.stale_timeout_s);
+    let save_every = Duration::from_secs_f32(board.persistence.save_every_s);
+    let tick = Duration::from_millis(20);
+    let mut last_status = start;
+    let mut last_scan = start;
+    let mut next_save = start + save_every;
+    tokio::pin!(shutdown);
+    loop {
+        let now = Instant::now();
+        let event = tokio::select! {
+            ev = client.next_event(now + tick) => ev?,
+            _ = &mut shutdown => {
+                client.halt(Fault::Operator).await?;
+                telemetry.fault(t(Instant::now()), "stopped by signal")?;
+                return Ok(RunOutcome::Interrupted);
+            }
+        };
+        if let Some(super::robot::RobotEvent::Status { at, status }) = event {
+            last_status = at;
+            mission.on_status(t(at), &status);
+            let fault = if status.estop() {
+                Some(Fault::EStop)
+            } else if status.stalled() || status.bumped() {
+                Some(Fault::Contact)
+            } else {
+                None
+            };
+            if let Some(f) = fault {
+                stop_for(client, mission, telemetry, t(at), f).await?;
+            }
+        }
+        match laser.next_scan(Instant::now() + Duration::from_millis(1)).await {
+            Ok(Some((at, scan))) => {
+                last_scan = at;
+                mission.on_scan(t(at), &scan);
+            }
+            Ok(None) => {}
+            Err(e) => {
+                tracing::warn!(error = %e, "laser link lost");
+                stop_for(client, mission, telemetry, t(Instant::now()), Fault::StaleScan).await?;
+                return Err(RuntimeError::Laser(e));
+            }
+        }
+        let now = Instant::now();
+        if now - last_status > stale {
+            stop_for(client, mission, telemetry, t(now), Fault::StaleStatus).await?;
+        } else if now - last_scan > stale {
+            stop_for(client, mission, telemetry, t(now), Fault::StaleScan).await?;
+        } else if client.fault().is_some() && mission.replanned() {
+            client.clear_fault();
+        }
+        match mission.step(t(now)) {
+            MissionCommand::Done => return Ok(RunOutcome::Finished),
+            MissionCommand::Hold => {}
+            MissionCommand::Drive {
+                speed_mm_s,
+                turn_deg_s,
+            } => match client.drive(speed_mm_s, turn_deg_s).await {
+                Ok(()) | Err(SessionError::Faulted(_)) => {}
+                Err(e) => return Err(e.into()),
+            },
+        }
+        if now >= next_save {
+            next_save = now + save_every;
+            let (mut state, map) = mission.snapshot();
+            state.version = STATE_VERSION;
+            store.save(&state, map.as_ref())?;
+            telemetry.coverage(t(now), state.coverage)?;
+            telemetry.link_stats(t(now), &client.stats())?;
+            telemetry.flush()?;
+        }
+    }
+}
+
+async fn stop_for(
+    client: &mut ArcosClient,
+    mission: &mut dyn MissionDriver,
+    telemetry: &mut Telemetry,
+    t_s: f64,
+    fault: Fault,
+) -> Result<(), RuntimeError> {
+    if client.fault().is_none() {
+        tracing::warn!(%fault, "stopping the robot");
+        telemetry.fault(t_s, &fault.to_string())?;
+        mission.on_fault(t_s, fault);
+    }
+    client.halt(fault).await?;
+    Ok(())
+}
+
+/// Options of `papillon probe`.
+#[derive(Clone, Debug)]
+pub struct ProbeOptions {
+    /// Serial device (ignored when `tcp` is set).
+    pub port: String,
+    /// TCP address instead of a serial port.
+    pub tcp: Option<String>,
+    /// Drive a small square at low speed and report the odometry.
+    pub drive: bool,
+}
+
+/// `papillon probe`: connects, prints the robot's identity, CONFIG highlights, battery and
+/// pose, optionally drives a 0.5 m square at 100 mm/s, then disconnects cleanly. Lines are
+/// written to `out`.
+pub async fn probe_with(
+    options: &ProbeOptions,
+    codec: Option<Box<dyn ArcosCodec>>,
+    out: &mut impl io::Write,
+) -> Result<(), RuntimeError> {
+    let codec = codec.ok_or(RuntimeError::NoCodec("ARCOS"))?;
+    let link = open_robot_link(options.tcp.as_deref(), &options.port, 9600).await?;
+    writeln!(out, "link: {}", link.describe())?;
+    let session = SessionOptions {
+        expected_subclass: None,
+        ..SessionOptions::default()
+    };
+    let mut client = ArcosClient::connect(link, codec, session).await?;
+    let id = client.identity().clone();
+    writeln!(out, "robot: name {:?}, class {:?}, subclass {:?}", id.name, id.class, id.subclass)?;
+    if let Some(c) = client.config() {
+        writeln!(
+            out,
+            "config: firmware {:?}, serial {:?}, top speeds {} mm/s / {} deg/s, current max {} mm/s / {} deg/s, watchdog {} ms, SIP cycle {} ms, host baud code {}, autobaud {}",
+            c.firmware, c.serial, c.trans_vel_top_mm_s, c.rot_vel_top_deg_s, c.trans_vel_max_mm_s, c.rot_vel_max_deg_s, c.watchdog_ms, c.sip_cycle_ms, c.host_baud_code, c.auto_baud
+        )?;
+    }
+    writeln!(out, "baud: {:?}", client.baud_switch())?;
+    let status = next_status(&mut client, Duration::from_secs(2)).await?;
+    match status {
+        Some(s) => writeln!(
+            out,
+            "status: battery {:.1} V, pose counters x {} mm, y {} mm, th {} units, motors {}, e-stop {}",
+            s.battery_v(),
+            s.x_pos,
+            s.y_pos,
+            s.th_pos,
+            if s.motors_enabled() { "enabled" } else { "disabled" },
+            if s.estop() { "PRESSED" } else { "released" }
+        )?,
+        None => writeln!(out, "status: no status packet within 2 s")?,
+    }
+    if options.drive {
+        client
+            .start(&MotionLimits {
+                max_speed_mm_s: 150,
+                max_turn_rate_deg_s: 30,
+                accel_mm_s2: 200,
+                decel_mm_s2: 200,
+                rot_accel_deg_s2: 60,
+            })
+            .await?;
+        for side in 0..4 {
+            drive_for(&mut client, 100, 0, Duration::from_secs(5)).await?;
+            drive_for(&mut client, 0, 30, Duration::from_secs(3)).await?;
+            if let Some(s) = next_status(&mut client, Duration::from_secs(1)).await? {
+                writeln!(out, "square side {}: x {} mm, y {} mm, th {} units", side + 1, s.x_pos, s.y_pos, s.th_pos)?;
+            }
+        }
+    }
+    let stats = client.stop_and_close().await?;
+    writeln!(out, "link: {}", stats.codec)?;
+    writeln!(out, "disconnected: motors disabled, session closed")?;
+    Ok(())
+}
+
+async fn next_status(client: &mut ArcosClient, wait: Duration) -> Result<Option<RobotStatus>, RuntimeError> {
+    let deadline = Instant::now() + wait;
+    while let Some(ev) = client.next_event(deadline).await? {
+        if let super::robot::RobotEvent::Status { status, .. } = ev {
+            return Ok(Some(status));
+        }
+    }
+    Ok(None)
+}
+
+/// Drives at a constant command for `duration`, re-sending it every 200 ms (fresh, not stale:
+/// the loop is alive), then stops.
+async fn drive_for(
+    client: &mut ArcosClient,
+    speed_mm_s: i16,
+    turn_deg_s: i16,
+    duration: Duration,
+) -> Result<(), RuntimeError> {
+    let end = Instant::now() + duration;
+    while Instant::now() < end {
+        client.drive(speed_mm_s, turn_deg_s).await?;
+        let _ = client.next_event((Instant::now() + Duration::from_millis(200)).min(end)).await?;
+    }
+    client.drive(0, 0).await?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+
+    /// A fake robot behind a loopback TCP listener.
+    async fn tcp_robot(script: FakeRobotScript) -> (String, CommandLog) {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        let log = CommandLog::default();
+        let log2 = log.clone();
+        tokio::spawn(async move {
+            let (sock, _) = listener.accept().await.unwrap();
+            let (a, mut b) = tokio::io::duplex(4096);
+            tokio::spawn(run_fake_robot(a, script, log2));
+            let mut sock = sock;
+            let _ = tokio::io::copy_bidirectional(&mut sock, &mut b).await;
+        });
+        (addr, log)
+    }
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("papillon-runtime-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        d
+    }
+
+    #[tokio::test]
+    async fn run_without_a_mission_starts_up_then_stops_safely() {
+        let (addr, log) = tcp_robot(FakeRobotScript::default()).await;
+        let mut board = BoardConfig::default();
+        board.robot.subclass = crate::config::Name::new("p3dx-sh").unwrap();
+        board.link.tcp = crate::config::Address::new(&addr);
+        let dir = temp_dir("nomission");
+        let outcome = run_with(
+            RunOptions { board, log_dir: dir.clone(), resume: false },
+            Some(Box::new(MiniArcos::default())),
+            None,
+            mission_driver,
+            std::future::pending(),
+        )
+        .await
+        .unwrap();
+        assert_eq!(outcome, RunOutcome::MissionUnavailable);
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        let sent: Vec<(u8, Option<i16>)> = log.lock().unwrap().iter().map(|&(_, n, a)| (n, a)).collect();
+        assert!(sent.contains(&(4, Some(1))), "motors were enabled at start-up");
+        let n = sent.len();
+        assert_eq!(&sent[n - 2..], [(4, Some(0)), (2, Some(1))], "ENABLE 0 then CLOSE last");
+        assert!(!sent.iter().any(|&(c, a)| (c == 11 || c == 21) && a != Some(0)));
+        let telemetry = std::fs::read_to_string(dir.join("telemetry.jsonl")).unwrap();
+        assert!(telemetry.contains("mission not available"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[tokio::test]
+    async fn resume_without_saved_state_is_refused_before_connecting() {
+        let dir = temp_dir("noresume");
+        let err = run_with(
+            RunOptions { board: BoardConfig::default(), log_dir: dir.clone(), resume: true },
+            Some(Box::new(MiniArcos::default())),
+            None,
+            mission_driver,
+            std::future::pending(),
+        )
+        .await
+        .unwrap_err();
+        assert!(matches!(err, RuntimeError::NothingToResume(_)));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[tokio::test]
+    async fn without_a_codec_nothing_is_sent() {
+        let dir = temp_dir("nocodec");
+        let err = run_with(
+            RunOptions { board: BoardConfig::default(), log_dir: dir.clone(), resume: false },
+            None,
+            None,
+            mission_driver,
+            std::future::pending(),
+        )
+        .await
+        .unwrap_err();
+        assert!(matches!(err, RuntimeError::NoCodec("ARCOS")));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[tokio::test]
+    async fn probe_prints_identity_config_and_status() {
+        let (addr, log) = tcp_robot(FakeRobotScript::default()).await;
+        let mut out = Vec::new();
+        probe_with(
+            &ProbeOptions { port: String::new(), tcp: Some(addr), drive: false },
+            Some(Box::new(MiniArcos::default())),
+            &mut out,
+        )
+        .await
+        .unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.contains("subclass \"p3dx-sh\""), "{text}");
+        assert!(text.contains("watchdog 2000 ms"), "{text}");
+        assert!(text.contains("battery 13.0 V"), "{text}");
+        assert!(text.contains("disconnected"), "{text}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        let last = log.lock().unwrap().last().map(|&(_, n, a)| (n, a));
+        assert_eq!(last, Some((2, Some(1))));
+    }
+}
