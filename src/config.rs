@@ -46,19 +46,19 @@ pub const KNOWN_METHODS: [&str; 12] = [
 /// regard to case.
 pub const KNOWN_SUBCLASSES: [&str; 4] = ["p3dx", "p3dx-sh", "p3dx-sh-lms1xx", "p3dx-sh-lms500"];
 
-/// Serial speeds the ARCOS HOSTBAUD command can select [baud], indexed by HOSTBAUD code.
+/// Serial speeds the ARCOS HOSTBAUD command can select \[baud\], indexed by HOSTBAUD code.
 pub const ARCOS_BAUD_RATES: [u32; 5] = [9600, 19200, 38400, 57600, 115200];
 
-/// Serial speeds a SICK LMS200 can be switched to [baud].
+/// Serial speeds a SICK LMS200 can be switched to \[baud\].
 pub const LMS200_BAUD_RATES: [u32; 3] = [9600, 19200, 38400];
 
-/// Absolute translational speed limit of a P3-DX [mm/s] (AriaCoda p3dx-sh.p MaxVelocity).
+/// Absolute translational speed limit of a P3-DX \[mm/s\] (AriaCoda p3dx-sh.p MaxVelocity).
 pub const P3DX_MAX_SPEED_MM_S: f32 = 2200.0;
 
-/// Absolute rotational speed limit of a P3-DX [deg/s] (AriaCoda p3dx-sh.p MaxRVelocity).
+/// Absolute rotational speed limit of a P3-DX \[deg/s\] (AriaCoda p3dx-sh.p MaxRVelocity).
 pub const P3DX_MAX_TURN_RATE_DEG_S: f32 = 500.0;
 
-/// Default ARCOS firmware watchdog [s]: a stale timeout longer than this means the firmware
+/// Default ARCOS firmware watchdog \[s\]: a stale timeout longer than this means the firmware
 /// stops the robot before the onboard program notices.
 pub const ARCOS_WATCHDOG_S: f32 = 2.0;
 
@@ -123,17 +123,17 @@ pub struct RobotConfig {
     pub name: Name,
     /// The ARCOS subclass the robot must report (`p3dx-sh`), compared without regard to case.
     pub subclass: Name,
-    /// Radius of the robot's footprint [m].
+    /// Radius of the robot's footprint \[m\].
     pub radius_m: f32,
-    /// Translational speed limit sent as SETV [mm/s].
+    /// Translational speed limit sent as SETV \[mm/s\].
     pub max_speed_mm_s: f32,
-    /// Rotational speed limit sent as SETRV [deg/s].
+    /// Rotational speed limit sent as SETRV \[deg/s\].
     pub max_turn_rate_deg_s: f32,
-    /// Translational acceleration sent as SETA [mm/s²].
+    /// Translational acceleration sent as SETA \[mm/s²\].
     pub accel_mm_s2: f32,
-    /// Translational deceleration sent as SETA with a negative argument [mm/s²].
+    /// Translational deceleration sent as SETA with a negative argument \[mm/s²\].
     pub decel_mm_s2: f32,
-    /// Rotational acceleration and deceleration sent as SETRA [deg/s²].
+    /// Rotational acceleration and deceleration sent as SETRA \[deg/s²\].
     pub rot_accel_deg_s2: f32,
 }
 
@@ -147,9 +147,9 @@ pub struct LinkConfig {
     /// `papillon-sim serve`, serial-to-ethernet bridges).
     #[serde(default)]
     pub tcp: Option<Address>,
-    /// Serial speed the connection starts at [baud] (ARCOS robots start at 9600).
+    /// Serial speed the connection starts at \[baud\] (ARCOS robots start at 9600).
     pub baud: u32,
-    /// Serial speed to switch to with HOSTBAUD when the robot allows it [baud].
+    /// Serial speed to switch to with HOSTBAUD when the robot allows it \[baud\].
     pub switch_to_baud: u32,
 }
 
@@ -178,11 +178,11 @@ impl LaserModel {
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MountConfig {
-    /// Forward offset from the robot's centre [m].
+    /// Forward offset from the robot's centre \[m\].
     pub x_m: f32,
-    /// Leftward offset [m].
+    /// Leftward offset \[m\].
     pub y_m: f32,
-    /// Yaw, counter-clockwise [deg].
+    /// Yaw, counter-clockwise \[deg\].
     pub theta_deg: f32,
 }
 
@@ -198,18 +198,18 @@ pub struct LaserBoardConfig {
     /// Serial device of an LMS200 (`/dev/ttyS2`).
     #[serde(default)]
     pub port: Option<Address>,
-    /// Serial speed of an LMS200 after start-up [baud].
+    /// Serial speed of an LMS200 after start-up \[baud\].
     #[serde(default)]
     pub baud: Option<u32>,
     /// Beams per scan.
     pub beam_count: u16,
-    /// Angle of the first beam in the laser frame [deg], counter-clockwise from forward.
+    /// Angle of the first beam in the laser frame \[deg\], counter-clockwise from forward.
     pub first_angle_deg: f32,
-    /// Angle between consecutive beams [deg].
+    /// Angle between consecutive beams \[deg\].
     pub step_deg: f32,
-    /// Usable range [m].
+    /// Usable range \[m\].
     pub max_range_m: f32,
-    /// Blind zone [m].
+    /// Blind zone \[m\].
     pub min_range_m: f32,
     /// Range noise standard deviation as a fraction of the range.
     pub noise_fraction: f32,
@@ -223,20 +223,20 @@ pub struct LaserBoardConfig {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GridConfig {
-    /// East-west extent [m].
+    /// East-west extent \[m\].
     pub width_m: f32,
-    /// North-south extent [m].
+    /// North-south extent \[m\].
     pub height_m: f32,
-    /// Cell side [m].
+    /// Cell side \[m\].
     pub resolution_m: f32,
-    /// Map-frame east coordinate of the grid's south-west corner [m].
+    /// Map-frame east coordinate of the grid's south-west corner \[m\].
     pub origin_x_m: f32,
-    /// Map-frame north coordinate of the grid's south-west corner [m].
+    /// Map-frame north coordinate of the grid's south-west corner \[m\].
     pub origin_y_m: f32,
 }
 
 impl GridConfig {
-    /// Columns and rows the grid needs [cells] (each extent rounded up to whole cells).
+    /// Columns and rows the grid needs \[cells\] (each extent rounded up to whole cells).
     pub fn size_cells(&self) -> (usize, usize) {
         let cols = math::ceil(self.width_m / self.resolution_m);
         let rows = math::ceil(self.height_m / self.resolution_m);
@@ -271,7 +271,7 @@ impl Strategy {
 pub struct MissionConfig {
     /// Target-selection method, one of [`KNOWN_METHODS`].
     pub method: Name,
-    /// Optimizer population [individuals], 2..=[`MAX_POPULATION`].
+    /// Optimizer population \[individuals\], 2..=[`MAX_POPULATION`].
     pub population: u16,
     /// Optimizer generations per decision.
     pub generations: u16,
@@ -279,9 +279,9 @@ pub struct MissionConfig {
     pub strategy: Name,
     /// Candidate targets considered per decision.
     pub targets: u16,
-    /// Energy budget [steps] (one step = 1 m of travel or 45° of rotation).
+    /// Energy budget \[steps\] (one step = 1 m of travel or 45° of rotation).
     pub battery_steps: f32,
-    /// Energy kept in reserve [steps]; the mission ends when only this is left.
+    /// Energy kept in reserve \[steps\]; the mission ends when only this is left.
     pub reserve_steps: f32,
     /// Known-area fraction at which the mission is complete (0..=1).
     pub coverage_target: f32,
@@ -293,13 +293,13 @@ pub struct MissionConfig {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PidConfig {
-    /// Heading loop proportional gain [(deg/s)/deg].
+    /// Heading loop proportional gain \[(deg/s)/deg\].
     pub heading_kp: f32,
     /// Heading loop integral gain.
     pub heading_ki: f32,
     /// Heading loop derivative gain.
     pub heading_kd: f32,
-    /// Distance loop proportional gain [(mm/s)/mm].
+    /// Distance loop proportional gain \[(mm/s)/mm\].
     pub distance_kp: f32,
     /// Distance loop integral gain.
     pub distance_ki: f32,
@@ -311,11 +311,11 @@ pub struct PidConfig {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SafetyConfig {
-    /// Stop when a laser return is closer than this to the robot's edge [m].
+    /// Stop when a laser return is closer than this to the robot's edge \[m\].
     pub obstacle_stop_m: f32,
-    /// Stop when no status packet or no scan arrived for this long [s].
+    /// Stop when no status packet or no scan arrived for this long \[s\].
     pub stale_timeout_s: f32,
-    /// Distance to back off after a bump or a too-close obstacle [m].
+    /// Distance to back off after a bump or a too-close obstacle \[m\].
     pub back_off_m: f32,
 }
 
@@ -323,7 +323,7 @@ pub struct SafetyConfig {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PersistenceConfig {
-    /// Interval between two saves of the mission state [s].
+    /// Interval between two saves of the mission state \[s\].
     pub save_every_s: f32,
 }
 
@@ -595,7 +595,10 @@ impl BoardConfig {
             }
             None => {
                 if link.port.is_empty() {
-                    r("$.link.port", "must name a serial device when no tcp is given");
+                    r(
+                        "$.link.port",
+                        "must name a serial device when no tcp is given",
+                    );
                 }
             }
         }
@@ -683,7 +686,10 @@ impl BoardConfig {
     fn validate_grid(&self, r: &mut impl FnMut(&str, &str)) {
         let g = &self.grid;
         let mut sizes_ok = true;
-        for (path, v) in [("$.grid.width_m", g.width_m), ("$.grid.height_m", g.height_m)] {
+        for (path, v) in [
+            ("$.grid.width_m", g.width_m),
+            ("$.grid.height_m", g.height_m),
+        ] {
             if !positive(v) {
                 r(path, "must be a positive size [m]");
                 sizes_ok = false;
@@ -752,10 +758,16 @@ impl BoardConfig {
             r("$.mission.targets", "must be at least 1");
         }
         if !positive(m.battery_steps) {
-            r("$.mission.battery_steps", "must be a positive energy [steps]");
+            r(
+                "$.mission.battery_steps",
+                "must be a positive energy [steps]",
+            );
         }
         if !(m.reserve_steps.is_finite() && m.reserve_steps >= 0.0) {
-            r("$.mission.reserve_steps", "must be zero or positive [steps]");
+            r(
+                "$.mission.reserve_steps",
+                "must be zero or positive [steps]",
+            );
         } else if positive(m.battery_steps) && m.reserve_steps >= m.battery_steps {
             r("$.mission.reserve_steps", "must be less than battery_steps");
         }
@@ -789,7 +801,10 @@ impl BoardConfig {
     fn validate_safety(&self, r: &mut impl FnMut(&str, &str)) {
         let s = &self.safety;
         if !positive(s.obstacle_stop_m) {
-            r("$.safety.obstacle_stop_m", "must be a positive distance [m]");
+            r(
+                "$.safety.obstacle_stop_m",
+                "must be a positive distance [m]",
+            );
         } else if positive(self.robot.radius_m)
             && self.laser.min_range_m.is_finite()
             && s.obstacle_stop_m < self.laser.min_range_m - self.robot.radius_m
@@ -959,10 +974,7 @@ impl Scanner<'_> {
     fn line_column(&self, pos: usize) -> (usize, usize) {
         let upto = &self.json[..pos.min(self.json.len())];
         let line = 1 + upto.iter().filter(|&&b| b == b'\n').count();
-        let line_start = upto
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
+        let line_start = upto.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
         (line, pos - line_start + 1)
     }
 

@@ -11,7 +11,11 @@ use papillon::config::{Address, BoardConfig, ConfigError};
 use papillon::onboard::runtime::{self, ProbeOptions, RunOptions, RunOutcome};
 
 #[derive(Parser)]
-#[command(name = "papillon", version, about = "Autonomous exploration on a Pioneer P3-DX")]
+#[command(
+    name = "papillon",
+    version,
+    about = "Autonomous exploration on a Pioneer P3-DX"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -167,7 +171,10 @@ fn ports() -> ExitCode {
     if let Ok(dir) = std::fs::read_dir("/dev") {
         for entry in dir.flatten() {
             let name = entry.file_name().to_string_lossy().into_owned();
-            if ["ttyS", "ttyUSB", "ttyACM"].iter().any(|p| name.starts_with(p)) {
+            if ["ttyS", "ttyUSB", "ttyACM"]
+                .iter()
+                .any(|p| name.starts_with(p))
+            {
                 let full = format!("/dev/{name}");
                 if !names.contains(&full) {
                     names.push(full);

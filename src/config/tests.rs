@@ -28,7 +28,11 @@ fn only_problem_at(path: &str, change: impl FnOnce(&mut BoardConfig)) {
 
 #[test]
 fn shipped_boards_parse_and_validate() {
-    for (file, text) in [("p3dx-lms1xx", LMS1XX), ("p3dx-lms200", LMS200), ("sim", SIM)] {
+    for (file, text) in [
+        ("p3dx-lms1xx", LMS1XX),
+        ("p3dx-lms200", LMS200),
+        ("sim", SIM),
+    ] {
         let c = BoardConfig::from_json(text.as_bytes())
             .unwrap_or_else(|e| panic!("{file}.json does not parse: {e}"));
         assert_eq!(problems(&c), [], "{file}.json has problems");
@@ -195,7 +199,9 @@ fn robot_rules() {
     only_problem_at("$.robot.name", |c| c.robot.name = Name::default());
     only_problem_at("$.robot.subclass", |c| c.robot.subclass = name("box"));
     only_problem_at("$.robot.radius_m", |c| c.robot.radius_m = 0.0);
-    only_problem_at("$.robot.max_speed_mm_s", |c| c.robot.max_speed_mm_s = 3000.0);
+    only_problem_at("$.robot.max_speed_mm_s", |c| {
+        c.robot.max_speed_mm_s = 3000.0
+    });
     only_problem_at("$.robot.max_turn_rate_deg_s", |c| {
         c.robot.max_turn_rate_deg_s = -1.0
     });
@@ -242,7 +248,9 @@ fn laser_rules() {
     });
     only_problem_at("$.laser.beam_count", |c| c.laser.beam_count = 1);
     only_problem_at("$.laser.beam_count", |c| c.laser.beam_count = 2000);
-    only_problem_at("$.laser.first_angle_deg", |c| c.laser.first_angle_deg = 200.0);
+    only_problem_at("$.laser.first_angle_deg", |c| {
+        c.laser.first_angle_deg = 200.0
+    });
     only_problem_at("$.laser.step_deg", |c| c.laser.step_deg = 0.0);
     only_problem_at("$.laser.step_deg", |c| c.laser.step_deg = 1.0);
     only_problem_at("$.laser.min_range_m", |c| c.laser.min_range_m = -0.1);
@@ -252,7 +260,9 @@ fn laser_rules() {
     only_problem_at("$.laser.rate_hz", |c| c.laser.rate_hz = 0.0);
     only_problem_at("$.laser.mount.x_m", |c| c.laser.mount.x_m = 2.0);
     only_problem_at("$.laser.mount.y_m", |c| c.laser.mount.y_m = f32::INFINITY);
-    only_problem_at("$.laser.mount.theta_deg", |c| c.laser.mount.theta_deg = 270.0);
+    only_problem_at("$.laser.mount.theta_deg", |c| {
+        c.laser.mount.theta_deg = 270.0
+    });
 }
 
 #[test]
@@ -290,13 +300,23 @@ fn mission_rules() {
         c.mission.population = MAX_POPULATION + 1
     });
     only_problem_at("$.mission.generations", |c| c.mission.generations = 0);
-    only_problem_at("$.mission.strategy", |c| c.mission.strategy = name("medium"));
+    only_problem_at("$.mission.strategy", |c| {
+        c.mission.strategy = name("medium")
+    });
     only_problem_at("$.mission.targets", |c| c.mission.targets = 0);
     only_problem_at("$.mission.battery_steps", |c| c.mission.battery_steps = 0.0);
-    only_problem_at("$.mission.reserve_steps", |c| c.mission.reserve_steps = -1.0);
-    only_problem_at("$.mission.reserve_steps", |c| c.mission.reserve_steps = 400.0);
-    only_problem_at("$.mission.coverage_target", |c| c.mission.coverage_target = 1.5);
-    only_problem_at("$.mission.coverage_target", |c| c.mission.coverage_target = 0.0);
+    only_problem_at("$.mission.reserve_steps", |c| {
+        c.mission.reserve_steps = -1.0
+    });
+    only_problem_at("$.mission.reserve_steps", |c| {
+        c.mission.reserve_steps = 400.0
+    });
+    only_problem_at("$.mission.coverage_target", |c| {
+        c.mission.coverage_target = 1.5
+    });
+    only_problem_at("$.mission.coverage_target", |c| {
+        c.mission.coverage_target = 0.0
+    });
     let mut c = BoardConfig::default();
     for m in KNOWN_METHODS {
         c.mission.method = name(m);
@@ -320,12 +340,16 @@ fn pid_rules() {
 
 #[test]
 fn safety_and_persistence_rules() {
-    only_problem_at("$.safety.obstacle_stop_m", |c| c.safety.obstacle_stop_m = 0.0);
+    only_problem_at("$.safety.obstacle_stop_m", |c| {
+        c.safety.obstacle_stop_m = 0.0
+    });
     only_problem_at("$.safety.obstacle_stop_m", |c| {
         c.laser.min_range_m = 0.5;
         c.safety.obstacle_stop_m = 0.1;
     });
-    only_problem_at("$.safety.stale_timeout_s", |c| c.safety.stale_timeout_s = 2.0);
+    only_problem_at("$.safety.stale_timeout_s", |c| {
+        c.safety.stale_timeout_s = 2.0
+    });
     only_problem_at("$.safety.back_off_m", |c| c.safety.back_off_m = -0.1);
     only_problem_at("$.persistence.save_every_s", |c| {
         c.persistence.save_every_s = 0.0

@@ -26,21 +26,21 @@ pub enum ClientCommand {
     Close,
     /// 4: enable (true) or disable the motors.
     Enable(bool),
-    /// 5: translational acceleration (+) or deceleration (−) [mm/s²].
+    /// 5: translational acceleration (+) or deceleration (−) \[mm/s²\].
     SetA(i16),
-    /// 6: maximum translational velocity [mm/s].
+    /// 6: maximum translational velocity \[mm/s\].
     SetV(i16),
     /// 7: reset odometry to (0, 0, 0).
     SetO,
-    /// 10: maximum rotational velocity [deg/s].
+    /// 10: maximum rotational velocity \[deg/s\].
     SetRv(i16),
-    /// 11: translational velocity [mm/s].
+    /// 11: translational velocity \[mm/s\].
     Vel(i16),
     /// 18 with int 1: request a CONFIG packet.
     Config,
-    /// 21: rotational velocity [deg/s], counter-clockwise positive.
+    /// 21: rotational velocity \[deg/s\], counter-clockwise positive.
     RVel(i16),
-    /// 23: rotational acceleration (+) or deceleration (−) [deg/s²].
+    /// 23: rotational acceleration (+) or deceleration (−) \[deg/s²\].
     SetRa(i16),
     /// 29: stop.
     Stop,
@@ -79,23 +79,23 @@ pub struct ConfigHighlights {
     pub serial: String,
     /// Robot name.
     pub name: String,
-    /// Absolute rotational speed limit [deg/s].
+    /// Absolute rotational speed limit \[deg/s\].
     pub rot_vel_top_deg_s: u16,
-    /// Absolute translational speed limit [mm/s].
+    /// Absolute translational speed limit \[mm/s\].
     pub trans_vel_top_mm_s: u16,
-    /// Absolute rotational acceleration limit [deg/s²].
+    /// Absolute rotational acceleration limit \[deg/s²\].
     pub rot_acc_top_deg_s2: u16,
-    /// Absolute translational acceleration limit [mm/s²].
+    /// Absolute translational acceleration limit \[mm/s²\].
     pub trans_acc_top_mm_s2: u16,
-    /// Status packet period [ms].
+    /// Status packet period \[ms\].
     pub sip_cycle_ms: u8,
     /// Host port baud code (0 = 9600 … 4 = 115200).
     pub host_baud_code: u8,
-    /// Firmware watchdog [ms].
+    /// Firmware watchdog \[ms\].
     pub watchdog_ms: u16,
-    /// Current rotational speed limit [deg/s].
+    /// Current rotational speed limit \[deg/s\].
     pub rot_vel_max_deg_s: u16,
-    /// Current translational speed limit [mm/s].
+    /// Current translational speed limit \[mm/s\].
     pub trans_vel_max_mm_s: u16,
     /// 2 when the firmware implements auto-baud (HOSTBAUD switching allowed).
     pub auto_baud: u8,
@@ -108,17 +108,17 @@ pub struct ConfigHighlights {
 pub struct RobotStatus {
     /// Sent with ID 0x33 (moving) rather than 0x32.
     pub moving: bool,
-    /// XPOS, 15-bit wrapping counter [mm].
+    /// XPOS, 15-bit wrapping counter \[mm\].
     pub x_pos: u16,
     /// YPOS, as `x_pos`.
     pub y_pos: u16,
-    /// THPOS [2π/4096 rad].
+    /// THPOS \[2π/4096 rad\].
     pub th_pos: i16,
-    /// Left wheel velocity [mm/s].
+    /// Left wheel velocity \[mm/s\].
     pub left_vel_mm_s: i16,
-    /// Right wheel velocity [mm/s].
+    /// Right wheel velocity \[mm/s\].
     pub right_vel_mm_s: i16,
-    /// Battery [0.1 V].
+    /// Battery \[0.1 V\].
     pub battery_dv: u8,
     /// Stall and bumper bits.
     pub stall_bumpers: u16,
@@ -147,7 +147,7 @@ impl RobotStatus {
         self.stall_bumpers & 0xFEFE != 0
     }
 
-    /// Battery voltage [V].
+    /// Battery voltage \[V\].
     pub fn battery_v(&self) -> f32 {
         self.battery_dv as f32 * 0.1
     }

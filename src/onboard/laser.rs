@@ -59,8 +59,8 @@ pub enum LaserReply {
         /// What the laser said.
         detail: String,
     },
-    /// A scan, already converted to the core's type.
-    Scan(Scan),
+    /// A scan, already converted to the core's type (boxed: a scan is about 9 KB).
+    Scan(Box<Scan>),
     /// A telegram the session does not use.
     Other,
 }
@@ -247,13 +247,16 @@ impl Lms1xxClient {
 
     /// The next scan and its arrival time, or `None` at `deadline` (a dropout when it
     /// exceeds the board's stale timeout).
-    pub async fn next_scan(&mut self, deadline: Instant) -> Result<Option<(Instant, Scan)>, LaserError> {
+    pub async fn next_scan(
+        &mut self,
+        deadline: Instant,
+    ) -> Result<Option<(Instant, Scan)>, LaserError> {
         loop {
             match self.next_reply(deadline).await? {
                 None => return Ok(None),
                 Some(LaserReply::Scan(scan)) => {
                     self.scans += 1;
-                    return Ok(Some((Instant::now(), scan)));
+                    return Ok(Some((Instant::now(), *scan)));
                 }
                 Some(_) => {}
             }
@@ -334,7 +337,7 @@ mod tests {
                                 range_m: Some(cm as f32 * 0.01),
                             });
                         }
-                        LaserReply::Scan(scan)
+                        LaserReply::Scan(Box::new(scan))
                     }
                     _ => LaserReply::Other,
                 });
@@ -345,7 +348,12 @@ mod tests {
         }
     }
 
-    async fn fake_laser(mut s: DuplexStream, ready_after: u32, refuse: Option<u8>, log: std::sync::Arc<std::sync::Mutex<Vec<u8>>>) {
+    async fn fake_laser(
+        mut s: DuplexStream,
+        ready_after: u32,
+        refuse: Option<u8>,
+        log: std::sync::Arc<std::sync::Mutex<Vec<u8>>>,
+    ) {
         let mut polls = 0;
         let mut buf = [0u8; 64];
         loop {
@@ -367,7 +375,9 @@ mod tests {
                 s.write_all(&reply).await.unwrap();
                 if i == 7 {
                     for k in 0..3u8 {
-                        s.write_all(&[0x02, b'N', 100 + k, 150, 200, 0x03]).await.unwrap();
+                        s.write_all(&[0x02, b'N', 100 + k, 150, 200, 0x03])
+                            .await
+                            .unwrap();
                     }
                 }
             }
@@ -386,7 +396,11 @@ mod tests {
             .unwrap();
         assert_eq!(*log.lock().unwrap(), [0, 1, 2, 3, 4, 5, 5, 5, 6, 7]);
         let mut firsts = Vec::new();
-        while let Some((_, scan)) = c.next_scan(Instant::now() + Duration::from_millis(300)).await.unwrap() {
+        while let Some((_, scan)) = c
+            .next_scan(Instant::now() + Duration::from_millis(300))
+            .await
+            .unwrap()
+        {
             assert_eq!(scan.len(), 3);
             firsts.push(scan.beams()[0].range_m.unwrap());
         }
@@ -403,13 +417,26 @@ mod tests {
         let (link, peer) = DuplexLink::pair(4096, None);
         tokio::spawn(fake_laser(peer, 0, Some(0), Default::default()));
         assert!(matches!(
-            Lms1xxClient::connect(Box::new(link), Box::new(ByteCodec::default()), LaserConfig::thesis()).await,
-            Err(LaserError::Refused { request: LaserRequest::SetAccessMode, .. })
+            Lms1xxClient::connect(
+                Box::new(link),
+                Box::new(ByteCodec::default()),
+                LaserConfig::thesis()
+            )
+            .await,
+            Err(LaserError::Refused {
+                request: LaserRequest::SetAccessMode,
+                ..
+            })
         ));
         let (link, peer) = DuplexLink::pair(4096, None);
         tokio::spawn(fake_laser(peer, u32::MAX, None, Default::default()));
         assert!(matches!(
-            Lms1xxClient::connect(Box::new(link), Box::new(ByteCodec::default()), LaserConfig::thesis()).await,
+            Lms1xxClient::connect(
+                Box::new(link),
+                Box::new(ByteCodec::default()),
+                LaserConfig::thesis()
+            )
+            .await,
             Err(LaserError::NotReady(6))
         ));
     }

@@ -34,10 +34,10 @@ pub trait RobotLink: AsyncRead + AsyncWrite + Unpin + Send {
     /// What kind of link this is.
     fn kind(&self) -> LinkKind;
 
-    /// The current serial speed [baud], `None` when the link has none (TCP, memory).
+    /// The current serial speed \[baud\], `None` when the link has none (TCP, memory).
     fn baud(&self) -> Option<u32>;
 
-    /// Changes the serial speed [baud]. Links without a speed return an
+    /// Changes the serial speed \[baud\]. Links without a speed return an
     /// [`io::ErrorKind::Unsupported`] error.
     fn set_baud(&mut self, baud: u32) -> io::Result<()>;
 
@@ -205,7 +205,7 @@ impl RobotLink for TcpLink {
 pub struct DuplexLink {
     stream: DuplexStream,
     baud: Option<u32>,
-    /// Every speed the link was set to, in order [baud].
+    /// Every speed the link was set to, in order \[baud\].
     pub baud_history: Vec<u32>,
 }
 

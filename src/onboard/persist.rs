@@ -56,14 +56,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     result
 }
 
-/// A pose record [m, m, rad] in the map frame.
+/// A pose record \[m, m, rad\] in the map frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PoseRecord {
-    /// East [m].
+    /// East \[m\].
     pub x_m: f32,
-    /// North [m].
+    /// North \[m\].
     pub y_m: f32,
-    /// Heading [rad].
+    /// Heading \[rad\].
     pub theta_rad: f32,
 }
 
@@ -72,9 +72,9 @@ pub struct PoseRecord {
 pub struct Counters {
     /// Target decisions made.
     pub decisions: u64,
-    /// Distance driven [m].
+    /// Distance driven \[m\].
     pub distance_m: f32,
-    /// Energy used [steps].
+    /// Energy used \[steps\].
     pub energy_used_steps: f32,
     /// Faults seen (stops).
     pub faults: u64,
@@ -89,7 +89,7 @@ pub struct Counters {
 pub struct MissionState {
     /// Format version (1).
     pub version: u32,
-    /// Mission time when saved [s].
+    /// Mission time when saved \[s\].
     pub mission_time_s: f64,
     /// Current pose (map frame).
     pub pose: PoseRecord,
@@ -118,15 +118,15 @@ pub const PGM_UNKNOWN: u8 = 205;
 /// A map as an image: one byte per cell, rows from north to south.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapImage {
-    /// Columns [cells].
+    /// Columns \[cells\].
     pub width: usize,
-    /// Rows [cells].
+    /// Rows \[cells\].
     pub height: usize,
-    /// Cell side [m].
+    /// Cell side \[m\].
     pub resolution_m: f32,
-    /// Map-frame position of the south-west corner [m].
+    /// Map-frame position of the south-west corner \[m\].
     pub origin_x_m: f32,
-    /// Map-frame position of the south-west corner [m].
+    /// Map-frame position of the south-west corner \[m\].
     pub origin_y_m: f32,
     /// `width × height` PGM values, first row = north edge.
     pub pixels: Vec<u8>,
@@ -230,8 +230,11 @@ impl MapImage {
 
     /// Writes the map as a PNG (grey levels as in the PGM).
     pub fn write_png(&self, path: &Path) -> Result<(), PersistError> {
-        let img = image::GrayImage::from_raw(self.width as u32, self.height as u32, self.pixels.clone())
-            .ok_or_else(|| PersistError::Corrupt("map size does not match its pixels".into()))?;
+        let img =
+            image::GrayImage::from_raw(self.width as u32, self.height as u32, self.pixels.clone())
+                .ok_or_else(|| {
+                    PersistError::Corrupt("map size does not match its pixels".into())
+                })?;
         let mut bytes = Vec::new();
         img.write_to(&mut io::Cursor::new(&mut bytes), image::ImageFormat::Png)
             .map_err(|e| PersistError::Io(io::Error::other(e)))?;
@@ -289,7 +292,10 @@ impl StateStore {
 
     fn write_map(&self, map: &MapImage) -> io::Result<()> {
         write_atomic(&self.dir.join("map.pgm"), &map.to_pgm())?;
-        write_atomic(&self.dir.join("map.yaml"), map.to_yaml("map.pgm").as_bytes())
+        write_atomic(
+            &self.dir.join("map.yaml"),
+            map.to_yaml("map.pgm").as_bytes(),
+        )
     }
 
     /// Saves the map (if given) then the state, each atomically.
@@ -297,8 +303,8 @@ impl StateStore {
         if let Some(map) = map {
             self.write_map(map)?;
         }
-        let json = serde_json::to_vec_pretty(state)
-            .map_err(|e| PersistError::Io(io::Error::other(e)))?;
+        let json =
+            serde_json::to_vec_pretty(state).map_err(|e| PersistError::Io(io::Error::other(e)))?;
         write_atomic(&self.dir.join("state.json"), &json)?;
         Ok(())
     }
@@ -311,9 +317,8 @@ impl StateStore {
             Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(e.into()),
         };
-        let state: MissionState = serde_json::from_slice(&text).map_err(|e| {
-            PersistError::Corrupt(format!("{}: {e}", state_path.display()))
-        })?;
+        let state: MissionState = serde_json::from_slice(&text)
+            .map_err(|e| PersistError::Corrupt(format!("{}: {e}", state_path.display())))?;
         if state.version != STATE_VERSION {
             return Err(PersistError::Corrupt(format!(
                 "{}: version {} (this program reads version {STATE_VERSION})",
@@ -332,7 +337,7 @@ impl StateStore {
     }
 }
 
-/// The telemetry log: one JSON object per line, each with `t_s` (mission time [s]) and `kind`.
+/// The telemetry log: one JSON object per line, each with `t_s` (mission time \[s\]) and `kind`.
 pub struct Telemetry {
     out: BufWriter<File>,
 }
@@ -371,8 +376,14 @@ impl Telemetry {
         )
     }
 
-    /// A target decision with its compute time [ms].
-    pub fn decision(&mut self, t_s: f64, target_x_m: f32, target_y_m: f32, compute_ms: f64) -> io::Result<()> {
+    /// A target decision with its compute time \[ms\].
+    pub fn decision(
+        &mut self,
+        t_s: f64,
+        target_x_m: f32,
+        target_y_m: f32,
+        compute_ms: f64,
+    ) -> io::Result<()> {
         self.record(
             t_s,
             "decision",
@@ -419,7 +430,8 @@ mod tests {
     use super::*;
 
     fn temp_dir(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("papillon-persist-{name}-{}", std::process::id()));
+        let d =
+            std::env::temp_dir().join(format!("papillon-persist-{name}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&d);
         fs::create_dir_all(&d).unwrap();
         d
@@ -440,12 +452,24 @@ mod tests {
         MissionState {
             version: STATE_VERSION,
             mission_time_s: 12.5,
-            pose: PoseRecord { x_m: 1.0, y_m: 2.0, theta_rad: 0.5 },
+            pose: PoseRecord {
+                x_m: 1.0,
+                y_m: 2.0,
+                theta_rad: 0.5,
+            },
             odom_pose: PoseRecord::default(),
             trajectory: (0..n)
-                .map(|i| PoseRecord { x_m: i as f32 * 0.1, y_m: 0.0, theta_rad: 0.0 })
+                .map(|i| PoseRecord {
+                    x_m: i as f32 * 0.1,
+                    y_m: 0.0,
+                    theta_rad: 0.0,
+                })
                 .collect(),
-            counters: Counters { decisions: 3, distance_m: 4.5, ..Counters::default() },
+            counters: Counters {
+                decisions: 3,
+                distance_m: 4.5,
+                ..Counters::default()
+            },
             coverage: 0.42,
             finished: false,
         }
@@ -475,7 +499,11 @@ mod tests {
         let store = StateStore::open(&dir).unwrap();
         store.save(&sample_state(5), Some(&sample_map())).unwrap();
         // A save interrupted by a power cut: half-written temporary files beside the good ones.
-        fs::write(dir.join(".state.json.tmp.99999"), b"{\"version\": 1, \"missi").unwrap();
+        fs::write(
+            dir.join(".state.json.tmp.99999"),
+            b"{\"version\": 1, \"missi",
+        )
+        .unwrap();
         fs::write(dir.join(".map.pgm.tmp.99999"), b"P5\n3 2\n255\n\x00").unwrap();
         let (state, map) = store.load().unwrap().unwrap();
         assert_eq!(state, sample_state(5));
@@ -492,7 +520,10 @@ mod tests {
         let store = StateStore::open(&dir).unwrap();
         fs::write(dir.join("state.json"), b"{\"version\": 1, \"missi").unwrap();
         let err = store.load().unwrap_err();
-        assert!(matches!(err, PersistError::Corrupt(ref m) if m.contains("state.json")), "{err}");
+        assert!(
+            matches!(err, PersistError::Corrupt(ref m) if m.contains("state.json")),
+            "{err}"
+        );
         store.save(&sample_state(1), Some(&sample_map())).unwrap();
         fs::write(dir.join("map.pgm"), b"P5\n3 2\n255\n\x00\x00").unwrap();
         assert!(matches!(store.load(), Err(PersistError::Corrupt(m)) if m.contains("map.pgm")));
@@ -530,12 +561,22 @@ mod tests {
     fn telemetry_lines_are_json_objects() {
         let dir = temp_dir("telemetry");
         let mut t = Telemetry::open(&dir).unwrap();
-        t.pose(0.5, PoseRecord { x_m: 1.0, y_m: 0.0, theta_rad: 0.0 }).unwrap();
+        t.pose(
+            0.5,
+            PoseRecord {
+                x_m: 1.0,
+                y_m: 0.0,
+                theta_rad: 0.0,
+            },
+        )
+        .unwrap();
         t.fault(1.0, "no laser scan").unwrap();
         t.flush().unwrap();
         let text = fs::read_to_string(dir.join("telemetry.jsonl")).unwrap();
-        let lines: Vec<serde_json::Value> =
-            text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+        let lines: Vec<serde_json::Value> = text
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
         assert_eq!(lines.len(), 2);
         assert_eq!(lines[0]["kind"], "pose");
         assert_eq!(lines[1]["fault"], "no laser scan");

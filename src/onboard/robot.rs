@@ -35,7 +35,7 @@ pub struct SessionOptions {
     /// Subclass the robot must report (case-insensitive); `None` accepts any known P3-DX
     /// subclass.
     pub expected_subclass: Option<String>,
-    /// Serial speed to switch to when the robot allows it [baud]; `None` never switches.
+    /// Serial speed to switch to when the robot allows it \[baud\]; `None` never switches.
     pub switch_to_baud: Option<u32>,
     /// Wait for each SYNC reply.
     pub sync_timeout: Duration,
@@ -81,15 +81,15 @@ impl SessionOptions {
 /// Motion limits sent at start-up (SETV, SETRV, SETA ±, SETRA ±).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MotionLimits {
-    /// SETV [mm/s].
+    /// SETV \[mm/s\].
     pub max_speed_mm_s: i16,
-    /// SETRV [deg/s].
+    /// SETRV \[deg/s\].
     pub max_turn_rate_deg_s: i16,
-    /// SETA [mm/s²].
+    /// SETA \[mm/s²\].
     pub accel_mm_s2: i16,
-    /// SETA with a negative argument [mm/s²].
+    /// SETA with a negative argument \[mm/s²\].
     pub decel_mm_s2: i16,
-    /// SETRA, both signs [deg/s²].
+    /// SETRA, both signs \[deg/s²\].
     pub rot_accel_deg_s2: i16,
 }
 
@@ -229,7 +229,10 @@ impl fmt::Display for SessionError {
                 write!(f, "the microcontroller reset (packet 0x{id:02X})")
             }
             SessionError::Faulted(fault) => {
-                write!(f, "motion refused until a re-plan clears the fault: {fault}")
+                write!(
+                    f,
+                    "motion refused until a re-plan clears the fault: {fault}"
+                )
             }
         }
     }
@@ -269,9 +272,9 @@ pub enum RobotEvent {
 pub enum BaudSwitch {
     /// Not attempted: TCP link, no auto-baud, or no higher speed asked for.
     NotAttempted,
-    /// Switched to this speed [baud].
+    /// Switched to this speed \[baud\].
     Switched(u32),
-    /// Tried this speed [baud]; no packet came back, so the link went back to its old speed.
+    /// Tried this speed \[baud\]; no packet came back, so the link went back to its old speed.
     Reverted(u32),
 }
 
@@ -505,7 +508,7 @@ impl ArcosClient {
         self.fault
     }
 
-    /// Commands a velocity [mm/s] and a turn rate [deg/s, counter-clockwise]. Refused while a
+    /// Commands a velocity \[mm/s\] and a turn rate \[deg/s, counter-clockwise\]. Refused while a
     /// fault is latched.
     pub async fn drive(&mut self, speed_mm_s: i16, turn_deg_s: i16) -> Result<(), SessionError> {
         if let Some(fault) = self.fault {

@@ -48,11 +48,11 @@ pub fn mission_driver(
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum MissionCommand {
-    /// Drive at `speed_mm_s` [mm/s] and `turn_deg_s` [deg/s, counter-clockwise].
+    /// Drive at `speed_mm_s` \[mm/s\] and `turn_deg_s` \[deg/s, counter-clockwise\].
     Drive {
-        /// Translational velocity [mm/s].
+        /// Translational velocity \[mm/s\].
         speed_mm_s: i16,
-        /// Rotational velocity [deg/s].
+        /// Rotational velocity \[deg/s\].
         turn_deg_s: i16,
     },
     /// Stand still (thinking, or waiting for scans).
@@ -63,16 +63,16 @@ pub enum MissionCommand {
 
 /// The mission state machine as the runtime sees it (sans-IO: it is given times and data).
 pub trait MissionDriver: Send {
-    /// A status packet arrived at mission time `t_s` [s].
+    /// A status packet arrived at mission time `t_s` \[s\].
     fn on_status(&mut self, t_s: f64, status: &RobotStatus);
-    /// A scan arrived at mission time `t_s` [s].
+    /// A scan arrived at mission time `t_s` \[s\].
     fn on_scan(&mut self, t_s: f64, scan: &Scan);
     /// The runtime stopped the robot for `fault`; the mission must re-plan before moving.
     fn on_fault(&mut self, t_s: f64, fault: Fault);
     /// Whether the mission has re-planned since its last fault (the runtime then clears the
     /// latch and lets motion through again).
     fn replanned(&self) -> bool;
-    /// One control step at mission time `t_s` [s].
+    /// One control step at mission time `t_s` \[s\].
     fn step(&mut self, t_s: f64) -> MissionCommand;
     /// The state to save.
     fn snapshot(&self) -> (MissionState, Option<MapImage>);
@@ -250,7 +250,11 @@ pub async fn run_with(
     let resumed = if options.resume {
         match store.load()? {
             Some(saved) => {
-                tracing::info!(coverage = saved.0.coverage, time_s = saved.0.mission_time_s, "resuming saved mission");
+                tracing::info!(
+                    coverage = saved.0.coverage,
+                    time_s = saved.0.mission_time_s,
+                    "resuming saved mission"
+                );
                 Some(saved)
             }
             None => return Err(RuntimeError::NothingToResume(options.log_dir.clone())),
@@ -271,7 +275,16 @@ pub async fn run_with(
         Some(mut mission) => {
             let laser = laser.ok_or(RuntimeError::NoCodec("laser"))?;
             let mut laser = connect_laser(board, laser).await?;
-            let outcome = pump(board, &mut client, &mut laser, mission.as_mut(), &store, &mut telemetry, shutdown).await;
+            let outcome = pump(
+                board,
+                &mut client,
+                &mut laser,
+                mission.as_mut(),
+                &store,
+                &mut telemetry,
+                shutdown,
+            )
+            .await;
             let _ = laser.close().await;
             let (state, map) = mission.snapshot();
             store.save(&state, map.as_ref())?;
@@ -338,7 +351,10 @@ pub async fn pump(
                 stop_for(client, mission, telemetry, t(at), f).await?;
             }
         }
-        match laser.next_scan(Instant::now() + Duration::from_millis(1)).await {
+        match laser
+            .next_scan(Instant::now() + Duration::from_millis(1))
+            .await
+        {
             Ok(Some((at, scan))) => {
                 last_scan = at;
                 mission.on_scan(t(at), &scan);
@@ -346,7 +362,14 @@ pub async fn pump(
             Ok(None) => {}
             Err(e) => {
                 tracing::warn!(error = %e, "laser link lost");
-                stop_for(client, mission, telemetry, t(Instant::now()), Fault::StaleScan).await?;
+                stop_for(
+                    client,
+                    mission,
+                    telemetry,
+                    t(Instant::now()),
+                    Fault::StaleScan,
+                )
+                .await?;
                 return Err(RuntimeError::Laser(e));
             }
         }
@@ -425,12 +448,25 @@ pub async fn probe_with(
     };
     let mut client = ArcosClient::connect(link, codec, session).await?;
     let id = client.identity().clone();
-    writeln!(out, "robot: name {:?}, class {:?}, subclass {:?}", id.name, id.class, id.subclass)?;
+    writeln!(
+        out,
+        "robot: name {:?}, class {:?}, subclass {:?}",
+        id.name, id.class, id.subclass
+    )?;
     if let Some(c) = client.config() {
         writeln!(
             out,
             "config: firmware {:?}, serial {:?}, top speeds {} mm/s / {} deg/s, current max {} mm/s / {} deg/s, watchdog {} ms, SIP cycle {} ms, host baud code {}, autobaud {}",
-            c.firmware, c.serial, c.trans_vel_top_mm_s, c.rot_vel_top_deg_s, c.trans_vel_max_mm_s, c.rot_vel_max_deg_s, c.watchdog_ms, c.sip_cycle_ms, c.host_baud_code, c.auto_baud
+            c.firmware,
+            c.serial,
+            c.trans_vel_top_mm_s,
+            c.rot_vel_top_deg_s,
+            c.trans_vel_max_mm_s,
+            c.rot_vel_max_deg_s,
+            c.watchdog_ms,
+            c.sip_cycle_ms,
+            c.host_baud_code,
+            c.auto_baud
         )?;
     }
     writeln!(out, "baud: {:?}", client.baud_switch())?;
@@ -443,7 +479,11 @@ pub async fn probe_with(
             s.x_pos,
             s.y_pos,
             s.th_pos,
-            if s.motors_enabled() { "enabled" } else { "disabled" },
+            if s.motors_enabled() {
+                "enabled"
+            } else {
+                "disabled"
+            },
             if s.estop() { "PRESSED" } else { "released" }
         )?,
         None => writeln!(out, "status: no status packet within 2 s")?,
@@ -462,7 +502,14 @@ pub async fn probe_with(
             drive_for(&mut client, 100, 0, Duration::from_secs(5)).await?;
             drive_for(&mut client, 0, 30, Duration::from_secs(3)).await?;
             if let Some(s) = next_status(&mut client, Duration::from_secs(1)).await? {
-                writeln!(out, "square side {}: x {} mm, y {} mm, th {} units", side + 1, s.x_pos, s.y_pos, s.th_pos)?;
+                writeln!(
+                    out,
+                    "square side {}: x {} mm, y {} mm, th {} units",
+                    side + 1,
+                    s.x_pos,
+                    s.y_pos,
+                    s.th_pos
+                )?;
             }
         }
     }
@@ -472,7 +519,10 @@ pub async fn probe_with(
     Ok(())
 }
 
-async fn next_status(client: &mut ArcosClient, wait: Duration) -> Result<Option<RobotStatus>, RuntimeError> {
+async fn next_status(
+    client: &mut ArcosClient,
+    wait: Duration,
+) -> Result<Option<RobotStatus>, RuntimeError> {
     let deadline = Instant::now() + wait;
     while let Some(ev) = client.next_event(deadline).await? {
         if let super::robot::RobotEvent::Status { status, .. } = ev {
@@ -493,7 +543,9 @@ async fn drive_for(
     let end = Instant::now() + duration;
     while Instant::now() < end {
         client.drive(speed_mm_s, turn_deg_s).await?;
-        let _ = client.next_event((Instant::now() + Duration::from_millis(200)).min(end)).await?;
+        let _ = client
+            .next_event((Instant::now() + Duration::from_millis(200)).min(end))
+            .await?;
     }
     client.drive(0, 0).await?;
     Ok(())
@@ -521,7 +573,8 @@ mod tests {
     }
 
     fn temp_dir(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("papillon-runtime-{name}-{}", std::process::id()));
+        let d =
+            std::env::temp_dir().join(format!("papillon-runtime-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&d);
         d
     }
@@ -534,7 +587,11 @@ mod tests {
         board.link.tcp = crate::config::Address::new(&addr);
         let dir = temp_dir("nomission");
         let outcome = run_with(
-            RunOptions { board, log_dir: dir.clone(), resume: false },
+            RunOptions {
+                board,
+                log_dir: dir.clone(),
+                resume: false,
+            },
             Some(Box::new(MiniArcos::default())),
             None,
             mission_driver,
@@ -544,11 +601,27 @@ mod tests {
         .unwrap();
         assert_eq!(outcome, RunOutcome::MissionUnavailable);
         tokio::time::sleep(Duration::from_millis(50)).await;
-        let sent: Vec<(u8, Option<i16>)> = log.lock().unwrap().iter().map(|&(_, n, a)| (n, a)).collect();
-        assert!(sent.contains(&(4, Some(1))), "motors were enabled at start-up");
+        let sent: Vec<(u8, Option<i16>)> = log
+            .lock()
+            .unwrap()
+            .iter()
+            .map(|&(_, n, a)| (n, a))
+            .collect();
+        assert!(
+            sent.contains(&(4, Some(1))),
+            "motors were enabled at start-up"
+        );
         let n = sent.len();
-        assert_eq!(&sent[n - 2..], [(4, Some(0)), (2, Some(1))], "ENABLE 0 then CLOSE last");
-        assert!(!sent.iter().any(|&(c, a)| (c == 11 || c == 21) && a != Some(0)));
+        assert_eq!(
+            &sent[n - 2..],
+            [(4, Some(0)), (2, Some(1))],
+            "ENABLE 0 then CLOSE last"
+        );
+        assert!(
+            !sent
+                .iter()
+                .any(|&(c, a)| (c == 11 || c == 21) && a != Some(0))
+        );
         let telemetry = std::fs::read_to_string(dir.join("telemetry.jsonl")).unwrap();
         assert!(telemetry.contains("mission not available"));
         std::fs::remove_dir_all(&dir).unwrap();
@@ -558,7 +631,11 @@ mod tests {
     async fn resume_without_saved_state_is_refused_before_connecting() {
         let dir = temp_dir("noresume");
         let err = run_with(
-            RunOptions { board: BoardConfig::default(), log_dir: dir.clone(), resume: true },
+            RunOptions {
+                board: BoardConfig::default(),
+                log_dir: dir.clone(),
+                resume: true,
+            },
             Some(Box::new(MiniArcos::default())),
             None,
             mission_driver,
@@ -574,7 +651,11 @@ mod tests {
     async fn without_a_codec_nothing_is_sent() {
         let dir = temp_dir("nocodec");
         let err = run_with(
-            RunOptions { board: BoardConfig::default(), log_dir: dir.clone(), resume: false },
+            RunOptions {
+                board: BoardConfig::default(),
+                log_dir: dir.clone(),
+                resume: false,
+            },
             None,
             None,
             mission_driver,
@@ -591,7 +672,11 @@ mod tests {
         let (addr, log) = tcp_robot(FakeRobotScript::default()).await;
         let mut out = Vec::new();
         probe_with(
-            &ProbeOptions { port: String::new(), tcp: Some(addr), drive: false },
+            &ProbeOptions {
+                port: String::new(),
+                tcp: Some(addr),
+                drive: false,
+            },
             Some(Box::new(MiniArcos::default())),
             &mut out,
         )

@@ -10,7 +10,11 @@ fn spawn_robot(script: FakeRobotScript, baud: Option<u32>) -> (Box<dyn RobotLink
 }
 
 fn numbers(log: &CommandLog) -> Vec<(u8, Option<i16>)> {
-    log.lock().unwrap().iter().map(|&(_, n, a)| (n, a)).collect()
+    log.lock()
+        .unwrap()
+        .iter()
+        .map(|&(_, n, a)| (n, a))
+        .collect()
 }
 
 fn options(subclass: &str) -> SessionOptions {
@@ -69,7 +73,10 @@ async fn handshake_retries_after_silence() {
         .unwrap();
     assert_eq!(client.identity().subclass, "p3dx-sh");
     let sent = numbers(&log);
-    assert_eq!(&sent[..5], [(0, None), (0, None), (0, None), (1, None), (2, None)]);
+    assert_eq!(
+        &sent[..5],
+        [(0, None), (0, None), (0, None), (1, None), (2, None)]
+    );
 }
 
 #[tokio::test(start_paused = true)]
@@ -113,7 +120,12 @@ async fn an_old_open_session_is_closed_first() {
 #[tokio::test(start_paused = true)]
 async fn wrong_subclass_and_class_are_refused() {
     let (link, _) = spawn_robot(FakeRobotScript::default(), None);
-    match ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh-lms1xx")).await
+    match ArcosClient::connect(
+        link,
+        Box::new(MiniArcos::default()),
+        options("p3dx-sh-lms1xx"),
+    )
+    .await
     {
         Err(SessionError::WrongSubclass { got, expected }) => {
             assert_eq!(got, "p3dx-sh");
@@ -162,10 +174,18 @@ async fn missing_config_is_an_error() {
 async fn hostbaud_switch_on_a_serial_link() {
     let (link, peer) = DuplexLink::pair(4096, Some(9600));
     let log = CommandLog::default();
-    tokio::spawn(run_fake_robot(peer, FakeRobotScript::default(), log.clone()));
-    let client = ArcosClient::connect(Box::new(link), Box::new(MiniArcos::default()), options("p3dx-sh"))
-        .await
-        .unwrap();
+    tokio::spawn(run_fake_robot(
+        peer,
+        FakeRobotScript::default(),
+        log.clone(),
+    ));
+    let client = ArcosClient::connect(
+        Box::new(link),
+        Box::new(MiniArcos::default()),
+        options("p3dx-sh"),
+    )
+    .await
+    .unwrap();
     assert_eq!(client.baud_switch(), BaudSwitch::Switched(38400));
     let sent = numbers(&log);
     let hb = sent.iter().position(|&c| c == (50, Some(2))).unwrap();
@@ -222,7 +242,11 @@ async fn status_events_arrive_and_pulses_keep_the_link_alive() {
     let entries = log.lock().unwrap().clone();
     let after: Vec<_> = entries.iter().filter(|e| e.0 > start).collect();
     assert!(after.iter().all(|e| e.1 == 0), "only PULSE while idle");
-    assert!((3..=5).contains(&after.len()), "{} pulses in 2 s", after.len());
+    assert!(
+        (3..=5).contains(&after.len()),
+        "{} pulses in 2 s",
+        after.len()
+    );
     for w in after.windows(2) {
         assert!(w[1].0 - w[0].0 >= Duration::from_millis(500));
     }
@@ -251,7 +275,9 @@ async fn after_a_fault_motion_is_refused_and_never_resent() {
     let sent = numbers(&log);
     let halt = sent.iter().rposition(|&c| c == (11, Some(0))).unwrap();
     assert!(
-        sent[halt..].iter().all(|&(n, a)| !(n == 11 || n == 21) || a == Some(0)),
+        sent[halt..]
+            .iter()
+            .all(|&(n, a)| !(n == 11 || n == 21) || a == Some(0)),
         "no non-zero velocity after the halt: {sent:?}"
     );
     client.clear_fault();
@@ -264,7 +290,10 @@ async fn stop_and_close_disables_motors_and_closes() {
     let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
         .await
         .unwrap();
-    client.start(&MotionLimits::from_board(&BoardConfig::default())).await.unwrap();
+    client
+        .start(&MotionLimits::from_board(&BoardConfig::default()))
+        .await
+        .unwrap();
     client.drive(150, 0).await.unwrap();
     client.stop_and_close().await.unwrap();
     tokio::time::sleep(Duration::from_millis(50)).await;
@@ -272,7 +301,13 @@ async fn stop_and_close_disables_motors_and_closes() {
     let n = sent.len();
     assert_eq!(
         &sent[n - 5..],
-        [(11, Some(0)), (21, Some(0)), (29, None), (4, Some(0)), (2, Some(1))]
+        [
+            (11, Some(0)),
+            (21, Some(0)),
+            (29, None),
+            (4, Some(0)),
+            (2, Some(1))
+        ]
     );
 }
 
@@ -281,13 +316,22 @@ async fn closed_link_is_reported_and_latches_a_fault() {
     let (link, peer) = DuplexLink::pair(4096, None);
     let log = CommandLog::default();
     let robot = tokio::spawn(run_fake_robot(peer, FakeRobotScript::default(), log));
-    let mut client = ArcosClient::connect(Box::new(link), Box::new(MiniArcos::default()), options("p3dx-sh"))
-        .await
-        .unwrap();
+    let mut client = ArcosClient::connect(
+        Box::new(link),
+        Box::new(MiniArcos::default()),
+        options("p3dx-sh"),
+    )
+    .await
+    .unwrap();
     robot.abort();
     let _ = robot.await;
-    let r = client.next_event(Instant::now() + Duration::from_secs(1)).await;
-    assert!(matches!(r, Err(SessionError::Closed) | Err(SessionError::Io(_))));
+    let r = client
+        .next_event(Instant::now() + Duration::from_secs(1))
+        .await;
+    assert!(matches!(
+        r,
+        Err(SessionError::Closed) | Err(SessionError::Io(_))
+    ));
     assert_eq!(client.fault(), Some(Fault::Link));
 }
 
