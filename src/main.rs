@@ -261,8 +261,8 @@ fn run(args: RunArgs) -> ExitCode {
     };
     let result = runtime().block_on(runtime::run_with(
         options,
-        runtime::arcos_codec(),
-        runtime::laser_codec(),
+        runtime::arcos_codec,
+        runtime::laser_codec,
         runtime::mission_driver,
         runtime::shutdown_signal(),
     ));

@@ -282,7 +282,7 @@ impl Lms1xxClient {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::onboard::link::DuplexLink;
     use crate::sensor::Beam;
@@ -291,7 +291,7 @@ mod tests {
     /// A test codec: requests as one ASCII digit (their index), replies as `A<idx>`, `S<state>`,
     /// `R<idx>` (refused) or `N<ranges in cm, one byte each>` (a scan), each framed STX…ETX.
     #[derive(Default)]
-    struct ByteCodec {
+    pub(crate) struct ByteCodec {
         pending: Vec<u8>,
         stats: LaserCodecStats,
     }
@@ -345,6 +345,50 @@ mod tests {
         }
         fn stats(&self) -> LaserCodecStats {
             self.stats
+        }
+    }
+
+    /// A laser that answers the connect sequence (ready at once), then streams a 3-beam scan
+    /// every `period` after the subscription, except from `dropout.0` to `dropout.1` after it.
+    pub(crate) async fn streaming_laser(
+        mut s: DuplexStream,
+        period: Duration,
+        dropout: (Duration, Duration),
+    ) {
+        let mut buf = [0u8; 64];
+        let mut subscribed_at: Option<Instant> = None;
+        let mut next = Instant::now();
+        loop {
+            tokio::select! {
+                read = s.read(&mut buf) => {
+                    let n = match read { Ok(0) | Err(_) => return, Ok(n) => n };
+                    for t in buf[..n].chunks(3) {
+                        let i = t[1] - b'0';
+                        let reply: Vec<u8> = if i == 5 {
+                            vec![0x02, b'S', 7, 0x03]
+                        } else {
+                            vec![0x02, b'A', b'0' + i, 0x03]
+                        };
+                        if s.write_all(&reply).await.is_err() { return; }
+                        if i == 7 {
+                            subscribed_at = Some(Instant::now());
+                            next = Instant::now() + period;
+                        }
+                        if i == 8 {
+                            subscribed_at = None;
+                        }
+                    }
+                }
+                _ = tokio::time::sleep_until(next), if subscribed_at.is_some() => {
+                    next += period;
+                    let since = Instant::now() - subscribed_at.unwrap_or_else(Instant::now);
+                    if !(dropout.0..dropout.1).contains(&since)
+                        && s.write_all(&[0x02, b'N', 100, 150, 200, 0x03]).await.is_err()
+                    {
+                        return;
+                    }
+                }
+            }
         }
     }
 

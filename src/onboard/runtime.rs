@@ -232,12 +232,17 @@ pub async fn connect_laser(
     }
 }
 
-/// `papillon run`, with the codecs and the mission given (the binary passes
-/// [`arcos_codec`], [`laser_codec`] and [`mission_driver`]).
+/// Link losses `run` recovers from (reconnecting with back-off each time) before giving up.
+pub const MAX_RECONNECTS: u32 = 20;
+
+/// `papillon run`, with the codec factories and the mission given (the binary passes
+/// [`arcos_codec`], [`laser_codec`] and [`mission_driver`]). A lost robot or laser link is
+/// reconnected with back-off (the robot was stopped at once, and its firmware watchdog stops
+/// it too), then the mission resumes after a fresh re-plan.
 pub async fn run_with(
     options: RunOptions,
-    arcos: Option<Box<dyn ArcosCodec>>,
-    laser: Option<Box<dyn LaserCodec>>,
+    arcos: impl Fn() -> Option<Box<dyn ArcosCodec>>,
+    laser: impl Fn() -> Option<Box<dyn LaserCodec>>,
     make_mission: impl FnOnce(
         &BoardConfig,
         Option<&(MissionState, Option<MapImage>)>,
@@ -262,48 +267,93 @@ pub async fn run_with(
     } else {
         None
     };
-    let arcos = arcos.ok_or(RuntimeError::NoCodec("ARCOS"))?;
-    let mut client = connect_robot(board, arcos).await?;
+    let mut shutdown = std::pin::pin!(shutdown);
+    let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
+    let mut client = connect_robot(board, codec).await?;
     let mission = make_mission(board, resumed.as_ref());
     let outcome = match mission {
         None => {
             // INTEGRATION POINT 2: no mission in this build. Say so and stop safely.
             tracing::warn!("autonomous missions are not yet available in this build; stopping");
-            telemetry.record(0.0, "note", serde_json::json!({"note": "mission not available; start-up checked, robot stopped"}))?;
-            RunOutcome::MissionUnavailable
+            telemetry.record(
+                0.0,
+                "note",
+                serde_json::json!({"note": "mission not available; start-up checked, robot stopped"}),
+            )?;
+            if let Some((state, map)) = &resumed {
+                // Nothing ran: keep the saved mission exactly as it was.
+                store.save(state, map.as_ref())?;
+            }
+            Ok(RunOutcome::MissionUnavailable)
         }
         Some(mut mission) => {
-            let laser = laser.ok_or(RuntimeError::NoCodec("laser"))?;
-            let mut laser = connect_laser(board, laser).await?;
-            let outcome = pump(
-                board,
-                &mut client,
-                &mut laser,
-                mission.as_mut(),
-                &store,
-                &mut telemetry,
-                shutdown,
-            )
-            .await;
-            let _ = laser.close().await;
+            let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
+            let mut laser_client = connect_laser(board, codec).await?;
+            let mut reconnects = 0u32;
+            let outcome = loop {
+                let r = pump(
+                    board,
+                    &mut client,
+                    &mut laser_client,
+                    mission.as_mut(),
+                    &store,
+                    &mut telemetry,
+                    &mut shutdown,
+                )
+                .await;
+                let robot_lost = matches!(
+                    r,
+                    Err(RuntimeError::Session(
+                        SessionError::Closed
+                            | SessionError::Io(_)
+                            | SessionError::MicrocontrollerReset { .. }
+                    ))
+                );
+                let laser_lost = matches!(r, Err(RuntimeError::Laser(_)));
+                if !(robot_lost || laser_lost) || reconnects >= MAX_RECONNECTS {
+                    break r;
+                }
+                reconnects += 1;
+                let (state, map) = mission.snapshot();
+                store.save(&state, map.as_ref())?;
+                telemetry.record(
+                    state.mission_time_s,
+                    "reconnect",
+                    serde_json::json!({"robot": robot_lost, "laser": laser_lost, "count": reconnects}),
+                )?;
+                let reconnect = async {
+                    if robot_lost {
+                        let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
+                        client = connect_robot(board, codec).await?;
+                    } else {
+                        let _ = client.halt(Fault::Link).await;
+                        let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
+                        laser_client = connect_laser(board, codec).await?;
+                    }
+                    Ok::<(), RuntimeError>(())
+                };
+                tokio::select! {
+                    r = reconnect => r?,
+                    _ = &mut shutdown => break Ok(RunOutcome::Interrupted),
+                }
+            };
+            let _ = laser_client.close().await;
             let (state, map) = mission.snapshot();
             store.save(&state, map.as_ref())?;
             if let Some(map) = map {
                 map.write_png(&options.log_dir.join("map.png"))?;
             }
-            outcome?
+            outcome
         }
     };
-    if outcome == RunOutcome::MissionUnavailable
-        && let Some((state, map)) = &resumed
-    {
-        // Nothing ran: keep the saved mission exactly as it was.
-        store.save(state, map.as_ref())?;
+    let stats = client.stop_and_close().await;
+    if let Ok(stats) = &stats {
+        telemetry.link_stats(0.0, stats)?;
+        tracing::info!(%stats.codec, "robot stopped, motors disabled, session closed");
     }
-    let stats = client.stop_and_close().await?;
-    telemetry.link_stats(0.0, &stats)?;
     telemetry.flush()?;
-    tracing::info!(%stats.codec, "robot stopped, motors disabled, session closed");
+    let outcome = outcome?;
+    stats?;
     Ok(outcome)
 }
 
@@ -316,7 +366,7 @@ pub async fn pump(
     mission: &mut dyn MissionDriver,
     store: &StateStore,
     telemetry: &mut Telemetry,
-    shutdown: impl std::future::Future<Output = ()>,
+    shutdown: &mut (impl std::future::Future<Output = ()> + Unpin),
 ) -> Result<RunOutcome, RuntimeError> {
     let start = Instant::now();
     let t = |i: Instant| (i - start).as_secs_f64();
@@ -326,12 +376,11 @@ pub async fn pump(
     let mut last_status = start;
     let mut last_scan = start;
     let mut next_save = start + save_every;
-    tokio::pin!(shutdown);
     loop {
         let now = Instant::now();
         let event = tokio::select! {
             ev = client.next_event(now + tick) => ev?,
-            _ = &mut shutdown => {
+            _ = &mut *shutdown => {
                 client.halt(Fault::Operator).await?;
                 telemetry.fault(t(Instant::now()), "stopped by signal")?;
                 return Ok(RunOutcome::Interrupted);
@@ -592,8 +641,8 @@ mod tests {
                 log_dir: dir.clone(),
                 resume: false,
             },
-            Some(Box::new(MiniArcos::default())),
-            None,
+            || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
+            laser_codec,
             mission_driver,
             std::future::pending(),
         )
@@ -636,8 +685,8 @@ mod tests {
                 log_dir: dir.clone(),
                 resume: true,
             },
-            Some(Box::new(MiniArcos::default())),
-            None,
+            || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
+            laser_codec,
             mission_driver,
             std::future::pending(),
         )
@@ -656,8 +705,8 @@ mod tests {
                 log_dir: dir.clone(),
                 resume: false,
             },
-            None,
-            None,
+            arcos_codec,
+            laser_codec,
             mission_driver,
             std::future::pending(),
         )
