@@ -741,3 +741,239 @@ mod tests {
         assert_eq!(last, Some((2, Some(1))));
     }
 }
+
+#[cfg(test)]
+mod pump_tests {
+    use super::*;
+    use crate::onboard::laser::tests::{ByteCodec, streaming_laser};
+    use crate::onboard::link::DuplexLink;
+    use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+    use std::sync::{Arc, Mutex};
+
+    /// Faults a mission saw, with their mission times \[s\].
+    type FaultLog = Arc<Mutex<Vec<(f64, Fault)>>>;
+
+    /// Drives straight; re-plans 0.3 s after a fault; done at `done_at_s`.
+    struct ScriptedMission {
+        faults: FaultLog,
+        fault_at: Option<f64>,
+        replanned: bool,
+        scans: u64,
+        statuses: u64,
+        now_s: f64,
+        done_at_s: f64,
+    }
+
+    impl MissionDriver for ScriptedMission {
+        fn on_status(&mut self, _t_s: f64, _status: &RobotStatus) {
+            self.statuses += 1;
+        }
+        fn on_scan(&mut self, _t_s: f64, scan: &Scan) {
+            assert_eq!(scan.len(), 3);
+            self.scans += 1;
+        }
+        fn on_fault(&mut self, t_s: f64, fault: Fault) {
+            self.faults.lock().unwrap().push((t_s, fault));
+            self.fault_at = Some(t_s);
+            self.replanned = false;
+        }
+        fn replanned(&self) -> bool {
+            self.replanned
+        }
+        fn step(&mut self, t_s: f64) -> MissionCommand {
+            self.now_s = t_s;
+            if let Some(f) = self.fault_at
+                && t_s - f > 0.3
+            {
+                self.replanned = true;
+            }
+            if t_s >= self.done_at_s {
+                MissionCommand::Done
+            } else {
+                MissionCommand::Drive {
+                    speed_mm_s: 100,
+                    turn_deg_s: 0,
+                }
+            }
+        }
+        fn snapshot(&self) -> (MissionState, Option<MapImage>) {
+            (
+                MissionState {
+                    version: STATE_VERSION,
+                    mission_time_s: self.now_s,
+                    counters: crate::onboard::persist::Counters {
+                        scans: self.scans,
+                        ..Default::default()
+                    },
+                    ..MissionState::default()
+                },
+                None,
+            )
+        }
+    }
+
+    struct Rig {
+        client: ArcosClient,
+        laser: Lms1xxClient,
+        log: CommandLog,
+        board: BoardConfig,
+        store: StateStore,
+        telemetry: Telemetry,
+        dir: PathBuf,
+        t0: Instant,
+    }
+
+    async fn rig(name: &str, dropout: (Duration, Duration)) -> Rig {
+        let (link, peer) = DuplexLink::pair(8192, None);
+        let log = CommandLog::default();
+        tokio::spawn(run_fake_robot(
+            peer,
+            FakeRobotScript::default(),
+            log.clone(),
+        ));
+        let mut board = BoardConfig::default();
+        board.safety.stale_timeout_s = 0.5;
+        board.persistence.save_every_s = 1.0;
+        let client = ArcosClient::connect(
+            Box::new(link),
+            Box::new(MiniArcos::default()),
+            SessionOptions::default(),
+        )
+        .await
+        .unwrap();
+        let (llink, lpeer) = DuplexLink::pair(8192, None);
+        tokio::spawn(streaming_laser(lpeer, Duration::from_millis(100), dropout));
+        let mut laser_config = board.laser_config();
+        laser_config.beam_count = 3;
+        let laser = Lms1xxClient::connect(
+            Box::new(llink),
+            Box::new(ByteCodec::default()),
+            laser_config,
+        )
+        .await
+        .unwrap();
+        let dir = std::env::temp_dir().join(format!("papillon-pump-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        Rig {
+            client,
+            laser,
+            log,
+            board,
+            store: StateStore::open(&dir).unwrap(),
+            telemetry: Telemetry::open(&dir).unwrap(),
+            dir,
+            t0: Instant::now(),
+        }
+    }
+
+    fn mission(done_at_s: f64) -> (ScriptedMission, FaultLog) {
+        let faults = Arc::new(Mutex::new(Vec::new()));
+        (
+            ScriptedMission {
+                faults: faults.clone(),
+                fault_at: None,
+                replanned: true,
+                scans: 0,
+                statuses: 0,
+                now_s: 0.0,
+                done_at_s,
+            },
+            faults,
+        )
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn laser_dropout_stops_the_robot_until_scans_return_and_a_replan() {
+        let mut r = rig(
+            "dropout",
+            (Duration::from_millis(1000), Duration::from_millis(1800)),
+        )
+        .await;
+        let (mut m, faults) = mission(3.0);
+        let mut never = std::pin::pin!(std::future::pending::<()>());
+        let outcome = pump(
+            &r.board,
+            &mut r.client,
+            &mut r.laser,
+            &mut m,
+            &r.store,
+            &mut r.telemetry,
+            &mut never,
+        )
+        .await
+        .unwrap();
+        assert_eq!(outcome, RunOutcome::Finished);
+        let faults = faults.lock().unwrap().clone();
+        assert_eq!(faults.len(), 1, "{faults:?}");
+        assert_eq!(faults[0].1, Fault::StaleScan);
+        // The stop comes within the stale timeout (+ one 100 ms scan period) of the last scan.
+        assert!(
+            (1.4..1.65).contains(&faults[0].0),
+            "fault at {} s",
+            faults[0].0
+        );
+        let log = r.log.lock().unwrap().clone();
+        let halt = log
+            .iter()
+            .position(|&(t, n, a)| {
+                n == 11 && a == Some(0) && t > r.t0 + Duration::from_millis(1300)
+            })
+            .expect("a VEL 0 at the dropout");
+        let resumed = log[halt..]
+            .iter()
+            .find(|&&(_, n, a)| n == 11 && a != Some(0))
+            .expect("driving resumed after the dropout");
+        assert!(
+            resumed.0 >= r.t0 + Duration::from_millis(1800),
+            "no motion before scans return"
+        );
+        assert!(m.scans >= 15 && m.statuses >= 20);
+        let saved = r.store.load().unwrap().unwrap().0;
+        assert!(
+            saved.mission_time_s >= 1.0,
+            "state saved during the mission"
+        );
+        std::fs::remove_dir_all(&r.dir).unwrap();
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn shutdown_signal_stops_the_robot_mid_mission() {
+        let mut r = rig("signal", (Duration::MAX, Duration::MAX)).await;
+        let (mut m, faults) = mission(100.0);
+        let mut signal = std::pin::pin!(tokio::time::sleep(Duration::from_millis(1200)));
+        let outcome = pump(
+            &r.board,
+            &mut r.client,
+            &mut r.laser,
+            &mut m,
+            &r.store,
+            &mut r.telemetry,
+            &mut signal,
+        )
+        .await
+        .unwrap();
+        assert_eq!(outcome, RunOutcome::Interrupted);
+        assert!(faults.lock().unwrap().is_empty());
+        assert_eq!(r.client.fault(), Some(Fault::Operator));
+        r.client.stop_and_close().await.unwrap();
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        let sent: Vec<(u8, Option<i16>)> = r
+            .log
+            .lock()
+            .unwrap()
+            .iter()
+            .map(|&(_, n, a)| (n, a))
+            .collect();
+        let n = sent.len();
+        assert_eq!(&sent[n - 2..], [(4, Some(0)), (2, Some(1))]);
+        let last_nonzero = sent
+            .iter()
+            .rposition(|&(c, a)| c == 11 && a == Some(100))
+            .unwrap();
+        let first_stop_after = sent[last_nonzero..]
+            .iter()
+            .position(|&c| c == (11, Some(0)));
+        assert!(first_stop_after.is_some());
+        std::fs::remove_dir_all(&r.dir).unwrap();
+    }
+}
