@@ -156,6 +156,47 @@ impl MapImage {
         }
     }
 
+    /// Restores a saved map into `grid` (for `--resume`): every cell gets the class its pixel
+    /// shows (occupied, free or unknown, at the grid's log-odds bounds). The grid must have the
+    /// image's size, resolution and origin.
+    pub fn apply_to_grid<const N: usize>(
+        &self,
+        grid: &mut OccupancyGrid<N>,
+    ) -> Result<(), PersistError> {
+        let g = *grid.geometry();
+        if g.width != self.width
+            || g.height != self.height
+            || (g.resolution_m - self.resolution_m).abs() > 1e-6
+            || (g.origin.x - self.origin_x_m).abs() > 1e-4
+            || (g.origin.y - self.origin_y_m).abs() > 1e-4
+        {
+            return Err(PersistError::Corrupt(format!(
+                "saved map is {}x{} cells at {} m from ({}, {}), the board's grid is {}x{} at {} m from ({}, {})",
+                self.width,
+                self.height,
+                self.resolution_m,
+                self.origin_x_m,
+                self.origin_y_m,
+                g.width,
+                g.height,
+                g.resolution_m,
+                g.origin.x,
+                g.origin.y
+            )));
+        }
+        for (i, &p) in self.pixels.iter().enumerate() {
+            let (image_row, col) = (i / self.width, i % self.width);
+            let row = self.height - 1 - image_row;
+            let class = match p {
+                PGM_OCCUPIED..=50 => CellClass::Occupied,
+                200..=210 => CellClass::Unknown,
+                _ => CellClass::Free,
+            };
+            grid.set_class(row * g.width + col, class, &mut ());
+        }
+        Ok(())
+    }
+
     /// Binary PGM (P5) bytes.
     pub fn to_pgm(&self) -> Vec<u8> {
         let mut out = format!("P5\n{} {}\n255\n", self.width, self.height).into_bytes();
@@ -555,6 +596,17 @@ mod tests {
         assert_eq!(m.pixels, [PGM_UNKNOWN, PGM_FREE, PGM_OCCUPIED, PGM_UNKNOWN]);
         let back = MapImage::from_pgm_yaml(&m.to_pgm(), &m.to_yaml("map.pgm")).unwrap();
         assert_eq!(back, m);
+        // Restoring into a fresh grid gives the same classes.
+        let mut restored = OccupancyGrid::<4>::new(g, LogOddsBounds::default()).unwrap();
+        back.apply_to_grid(&mut restored).unwrap();
+        for idx in 0..4 {
+            assert_eq!(restored.class(idx), grid.class(idx), "cell {idx}");
+        }
+        assert_eq!(restored.counts(), grid.counts());
+        // A grid of another size is refused.
+        let other = GridGeometry::new(1, 2, 0.5, Point2::new(0.0, 0.0)).unwrap();
+        let mut small = OccupancyGrid::<4>::new(other, LogOddsBounds::default()).unwrap();
+        assert!(back.apply_to_grid(&mut small).is_err());
     }
 
     #[test]

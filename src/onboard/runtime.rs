@@ -446,6 +446,7 @@ pub async fn pump(
             let (mut state, map) = mission.snapshot();
             state.version = STATE_VERSION;
             store.save(&state, map.as_ref())?;
+            telemetry.pose(t(now), state.pose)?;
             telemetry.coverage(t(now), state.coverage)?;
             telemetry.link_stats(t(now), &client.stats())?;
             telemetry.flush()?;
