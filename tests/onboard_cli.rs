@@ -44,7 +44,11 @@ fn every_problem_is_printed_with_its_path_and_exit_is_1() {
     let stdout = String::from_utf8(out.stdout).unwrap();
     let lines: Vec<&str> = stdout.lines().collect();
     assert_eq!(lines.len(), 2, "{stdout}");
-    assert!(lines.iter().any(|l| l.starts_with("$.mission.population: ")));
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.starts_with("$.mission.population: "))
+    );
     assert!(lines.iter().any(|l| l.starts_with("$.link.baud: ")));
     std::fs::remove_file(p).unwrap();
 }
@@ -81,7 +85,9 @@ fn ports_lists_or_says_none() {
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert!(
         stdout.trim() == "no serial ports found"
-            || stdout.lines().all(|l| l.starts_with("/dev/") || l.starts_with("COM")),
+            || stdout
+                .lines()
+                .all(|l| l.starts_with("/dev/") || l.starts_with("COM")),
         "{stdout}"
     );
 }
