@@ -289,6 +289,8 @@ pub async fn run_with(
         Some(mut mission) => {
             let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
             let mut laser_client = connect_laser(board, codec).await?;
+            // Mission time runs on across reconnections.
+            let epoch = Instant::now();
             let mut reconnects = 0u32;
             let outcome = loop {
                 let r = pump(
@@ -298,6 +300,7 @@ pub async fn run_with(
                     mission.as_mut(),
                     &store,
                     &mut telemetry,
+                    epoch,
                     &mut shutdown,
                 )
                 .await;
@@ -315,6 +318,13 @@ pub async fn run_with(
                 }
                 reconnects += 1;
                 let (state, map) = mission.snapshot();
+                tracing::warn!(
+                    robot = robot_lost,
+                    laser = laser_lost,
+                    "link lost; reconnecting"
+                );
+                telemetry.fault(state.mission_time_s, &Fault::Link.to_string())?;
+                mission.on_fault(state.mission_time_s, Fault::Link);
                 store.save(&state, map.as_ref())?;
                 telemetry.record(
                     state.mission_time_s,
@@ -325,6 +335,8 @@ pub async fn run_with(
                     if robot_lost {
                         let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
                         client = connect_robot(board, codec).await?;
+                        // Motion stays refused until the mission has re-planned.
+                        client.halt(Fault::Link).await?;
                     } else {
                         let _ = client.halt(Fault::Link).await;
                         let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
@@ -357,7 +369,7 @@ pub async fn run_with(
     Ok(outcome)
 }
 
-/// The mission pump: feeds the mission with status packets and scans, applies its commands,
+/// The mission pump (mission time counts from `epoch`): feeds the mission with status packets and scans, applies its commands,
 /// enforces the safety rules and saves the state every `save_every_s`.
 pub async fn pump(
     board: &BoardConfig,
@@ -366,10 +378,11 @@ pub async fn pump(
     mission: &mut dyn MissionDriver,
     store: &StateStore,
     telemetry: &mut Telemetry,
+    epoch: Instant,
     shutdown: &mut (impl std::future::Future<Output = ()> + Unpin),
 ) -> Result<RunOutcome, RuntimeError> {
     let start = Instant::now();
-    let t = |i: Instant| (i - start).as_secs_f64();
+    let t = |i: Instant| i.saturating_duration_since(epoch).as_secs_f64();
     let stale = Duration::from_secs_f32(board.safety.stale_timeout_s);
     let save_every = Duration::from_secs_f32(board.persistence.save_every_s);
     let tick = Duration::from_millis(20);
@@ -899,6 +912,7 @@ mod pump_tests {
             &mut m,
             &r.store,
             &mut r.telemetry,
+            Instant::now(),
             &mut never,
         )
         .await
@@ -949,6 +963,7 @@ mod pump_tests {
             &mut m,
             &r.store,
             &mut r.telemetry,
+            Instant::now(),
             &mut signal,
         )
         .await
@@ -976,5 +991,160 @@ mod pump_tests {
             .position(|&c| c == (11, Some(0)));
         assert!(first_stop_after.is_some());
         std::fs::remove_dir_all(&r.dir).unwrap();
+    }
+}
+
+#[cfg(test)]
+mod reconnect_tests {
+    use super::*;
+    use crate::onboard::laser::tests::{ByteCodec, streaming_laser};
+    use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+
+    /// A robot behind a TCP listener; the first connection is cut after `cut_after`.
+    async fn flaky_robot(cut_after: Duration) -> (String, CommandLog) {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        let log = CommandLog::default();
+        let log2 = log.clone();
+        tokio::spawn(async move {
+            let mut first = true;
+            while let Ok((mut sock, _)) = listener.accept().await {
+                let (a, mut b) = tokio::io::duplex(8192);
+                tokio::spawn(run_fake_robot(a, FakeRobotScript::default(), log2.clone()));
+                let bridge = tokio::spawn(async move {
+                    let _ = tokio::io::copy_bidirectional(&mut sock, &mut b).await;
+                });
+                if first {
+                    first = false;
+                    tokio::time::sleep(cut_after).await;
+                    bridge.abort();
+                }
+            }
+        });
+        (addr, log)
+    }
+
+    async fn laser_server() -> String {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        tokio::spawn(async move {
+            while let Ok((mut sock, _)) = listener.accept().await {
+                let (a, mut b) = tokio::io::duplex(8192);
+                tokio::spawn(streaming_laser(
+                    a,
+                    Duration::from_millis(50),
+                    (Duration::MAX, Duration::MAX),
+                ));
+                tokio::spawn(async move {
+                    let _ = tokio::io::copy_bidirectional(&mut sock, &mut b).await;
+                });
+            }
+        });
+        addr
+    }
+
+    /// Drives until `done_at_s`; re-plans 0.2 s after a fault.
+    struct Mission {
+        faults: Vec<(f64, Fault)>,
+        fault_at: Option<f64>,
+        now_s: f64,
+    }
+
+    impl MissionDriver for Mission {
+        fn on_status(&mut self, _: f64, _: &RobotStatus) {}
+        fn on_scan(&mut self, _: f64, _: &Scan) {}
+        fn on_fault(&mut self, t_s: f64, fault: Fault) {
+            self.faults.push((t_s, fault));
+            self.fault_at = Some(t_s);
+        }
+        fn replanned(&self) -> bool {
+            self.fault_at.is_none_or(|f| self.now_s - f > 0.2)
+        }
+        fn step(&mut self, t_s: f64) -> MissionCommand {
+            self.now_s = t_s;
+            let after_fault = self.fault_at.is_some_and(|f| t_s - f > 0.5);
+            if after_fault || t_s > 10.0 {
+                MissionCommand::Done
+            } else {
+                MissionCommand::Drive {
+                    speed_mm_s: 120,
+                    turn_deg_s: 0,
+                }
+            }
+        }
+        fn snapshot(&self) -> (MissionState, Option<MapImage>) {
+            let state = MissionState {
+                version: STATE_VERSION,
+                mission_time_s: self.now_s,
+                counters: crate::onboard::persist::Counters {
+                    faults: self.faults.len() as u64,
+                    ..Default::default()
+                },
+                ..MissionState::default()
+            };
+            (state, None)
+        }
+    }
+
+    #[tokio::test]
+    async fn a_cut_robot_link_is_reconnected_and_the_mission_finishes() {
+        let (robot, log) = flaky_robot(Duration::from_millis(600)).await;
+        let laser = laser_server().await;
+        let mut board = BoardConfig::default();
+        board.robot.subclass = crate::config::Name::new("p3dx-sh").unwrap();
+        board.link.tcp = crate::config::Address::new(&robot);
+        board.laser.address = crate::config::Address::new(&laser);
+        board.laser.beam_count = 3;
+        let dir = std::env::temp_dir().join(format!("papillon-reconnect-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let outcome = run_with(
+            RunOptions {
+                board,
+                log_dir: dir.clone(),
+                resume: false,
+            },
+            || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
+            || Some(Box::new(ByteCodec::default()) as Box<dyn LaserCodec>),
+            |_, _| {
+                Some(Box::new(Mission {
+                    faults: Vec::new(),
+                    fault_at: None,
+                    now_s: 0.0,
+                }) as Box<dyn MissionDriver>)
+            },
+            std::future::pending(),
+        )
+        .await
+        .unwrap();
+        assert_eq!(outcome, RunOutcome::Finished);
+        let (state, _) = StateStore::open(&dir).unwrap().load().unwrap().unwrap();
+        assert_eq!(state.counters.faults, 1, "one link fault");
+        assert!(
+            state.mission_time_s > 1.0,
+            "mission time runs on across the reconnection: {} s",
+            state.mission_time_s
+        );
+        let telemetry = std::fs::read_to_string(dir.join("telemetry.jsonl")).unwrap();
+        assert!(telemetry.contains("\"kind\":\"reconnect\""), "{telemetry}");
+        // Two handshakes: SYNC2 (bare command 2) appears twice.
+        let syncs = log
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|&&(_, n, a)| n == 2 && a.is_none())
+            .count();
+        assert_eq!(syncs, 2);
+        // After the second handshake, the first velocity command is a stop.
+        let entries = log.lock().unwrap().clone();
+        let second = entries
+            .iter()
+            .rposition(|&(_, n, a)| n == 2 && a.is_none())
+            .unwrap();
+        let first_vel = entries[second..]
+            .iter()
+            .find(|&&(_, n, _)| n == 11)
+            .unwrap();
+        assert_eq!(first_vel.2, Some(0));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
