@@ -298,8 +298,10 @@ pub async fn run_with(
                     &mut client,
                     &mut laser_client,
                     mission.as_mut(),
-                    &store,
-                    &mut telemetry,
+                    Records {
+                        store: &store,
+                        telemetry: &mut telemetry,
+                    },
                     epoch,
                     &mut shutdown,
                 )
@@ -369,6 +371,14 @@ pub async fn run_with(
     Ok(outcome)
 }
 
+/// Where the pump saves the mission state and writes telemetry.
+pub struct Records<'a> {
+    /// The state files.
+    pub store: &'a StateStore,
+    /// The telemetry log.
+    pub telemetry: &'a mut Telemetry,
+}
+
 /// The mission pump (mission time counts from `epoch`): feeds the mission with status packets and scans, applies its commands,
 /// enforces the safety rules and saves the state every `save_every_s`.
 pub async fn pump(
@@ -376,11 +386,11 @@ pub async fn pump(
     client: &mut ArcosClient,
     laser: &mut Lms1xxClient,
     mission: &mut dyn MissionDriver,
-    store: &StateStore,
-    telemetry: &mut Telemetry,
+    records: Records<'_>,
     epoch: Instant,
     shutdown: &mut (impl std::future::Future<Output = ()> + Unpin),
 ) -> Result<RunOutcome, RuntimeError> {
+    let Records { store, telemetry } = records;
     let start = Instant::now();
     let t = |i: Instant| i.saturating_duration_since(epoch).as_secs_f64();
     let stale = Duration::from_secs_f32(board.safety.stale_timeout_s);
@@ -910,8 +920,10 @@ mod pump_tests {
             &mut r.client,
             &mut r.laser,
             &mut m,
-            &r.store,
-            &mut r.telemetry,
+            Records {
+                store: &r.store,
+                telemetry: &mut r.telemetry,
+            },
             Instant::now(),
             &mut never,
         )
@@ -961,8 +973,10 @@ mod pump_tests {
             &mut r.client,
             &mut r.laser,
             &mut m,
-            &r.store,
-            &mut r.telemetry,
+            Records {
+                store: &r.store,
+                telemetry: &mut r.telemetry,
+            },
             Instant::now(),
             &mut signal,
         )
