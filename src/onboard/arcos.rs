@@ -8,6 +8,17 @@
 //! `FrameDecoder` onto these types field for field (the field names below follow that API),
 //! and [`super::runtime::arcos_codec`] returns it. Until then the runtime has no codec and says
 //! so; the session is tested with a test double (`super::testkit`).
+//!
+//! The adapter, as the wire API stands on its branch:
+//! - `encode`: `Sync(0|1|2)` → `Command::Pulse` / `Open(None)` / `Close(None)` (bare);
+//!   `Open` → `Open(Some(1))`, `Close` → `Close(Some(1))`, `Config` → `Config(Some(1))`; every
+//!   other variant maps to the `Command` of the same name; then `Command::emit`.
+//! - `decode`: loop `FrameDecoder::decode(&mut input)`, then `ServerPacket::parse(&frame)`:
+//!   `Sync(Sync0 | Sync1)` → [`Incoming::SyncEcho`], `Sync(Sync2 { .. })` →
+//!   [`Incoming::Identity`], `Status(p)` → [`Incoming::Status`] (same field names),
+//!   `Config(c)` → [`Incoming::Config`], `Reset { id }` → [`Incoming::Reset`], anything else →
+//!   [`Incoming::Other`]; a parse error counts in [`CodecStats::bad_payloads`].
+//! - `reset` → `FrameDecoder::reset`; `stats` → `FrameDecoder::stats`.
 
 use std::fmt;
 
