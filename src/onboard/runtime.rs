@@ -273,7 +273,24 @@ pub async fn run_with(
     let mission = make_mission(board, resumed.as_ref());
     let outcome = match mission {
         None => {
-            // INTEGRATION POINT 2: no mission in this build. Say so and stop safely.
+            // INTEGRATION POINT 2: no mission in this build. Check the laser start-up too
+            // when a codec exists, then say so and stop safely.
+            if let Some(codec) = laser() {
+                match connect_laser(board, codec).await {
+                    Ok(mut l) => {
+                        let first = l.next_scan(Instant::now() + Duration::from_secs(2)).await;
+                        match first {
+                            Ok(Some((_, scan))) => {
+                                tracing::info!(beams = scan.len(), "laser streaming")
+                            }
+                            Ok(None) => tracing::warn!("laser connected but sent no scan in 2 s"),
+                            Err(e) => tracing::warn!(error = %e, "laser failed after connecting"),
+                        }
+                        let _ = l.close().await;
+                    }
+                    Err(e) => tracing::warn!(error = %e, "laser start-up failed"),
+                }
+            }
             tracing::warn!("autonomous missions are not yet available in this build; stopping");
             telemetry.record(
                 0.0,
@@ -401,14 +418,19 @@ pub async fn pump(
     let mut next_save = start + save_every;
     loop {
         let now = Instant::now();
-        let event = tokio::select! {
-            ev = client.next_event(now + tick) => ev?,
-            _ = &mut *shutdown => {
-                client.halt(Fault::Operator).await?;
-                telemetry.fault(t(Instant::now()), "stopped by signal")?;
-                return Ok(RunOutcome::Interrupted);
-            }
+        // The signal is checked between events (at least every `tick`), never by cancelling
+        // a session call half-way through writing a command.
+        let signalled = tokio::select! {
+            biased;
+            _ = &mut *shutdown => true,
+            _ = std::future::ready(()) => false,
         };
+        if signalled {
+            client.halt(Fault::Operator).await?;
+            telemetry.fault(t(Instant::now()), "stopped by signal")?;
+            return Ok(RunOutcome::Interrupted);
+        }
+        let event = client.next_event(now + tick).await?;
         if let Some(super::robot::RobotEvent::Status { at, status }) = event {
             last_status = at;
             mission.on_status(t(at), &status);
