@@ -16,6 +16,7 @@
 #![cfg_attr(not(feature = "std"), no_std)]
 #![warn(missing_docs)]
 
+pub mod config;
 pub mod control;
 pub mod explore;
 pub mod frontier;

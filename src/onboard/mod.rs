@@ -1,1 +1,22 @@
-//! (in progress)
+//! The onboard runtime: links, the ARCOS and laser sessions, persistence and telemetry, and
+//! the start-up and shutdown sequences of the `papillon` binary.
+//!
+//! Everything here is std and tokio; the mission logic itself stays in the sans-IO core and is
+//! pumped by [`runtime`]. Layers, bottom up:
+//! - [`link`]: byte links (serial, TCP, in-memory) and reconnection with back-off;
+//! - [`arcos`]: what the ARCOS session needs from the wire codec;
+//! - [`robot`]: the ARCOS client session (handshake, CONFIG check, HOSTBAUD, keep-alive, safe
+//!   stop);
+//! - [`laser`]: the LMS1xx client session;
+//! - [`persist`]: atomic saving and loading of the mission state, telemetry;
+//! - [`runtime`]: `papillon run` and `papillon probe`.
+
+pub mod arcos;
+pub mod laser;
+pub mod link;
+pub mod persist;
+pub mod robot;
+pub mod runtime;
+
+#[cfg(test)]
+mod testkit;

@@ -1,0 +1,380 @@
+use super::*;
+
+extern crate std;
+use std::string::{String, ToString};
+use std::vec::Vec;
+
+const LMS1XX: &str = include_str!("../../boards/p3dx-lms1xx.json");
+const LMS200: &str = include_str!("../../boards/p3dx-lms200.json");
+const SIM: &str = include_str!("../../boards/sim.json");
+
+fn problems(c: &BoardConfig) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let n = c.validate(|path, problem| out.push((path.to_string(), problem.to_string())));
+    assert_eq!(n, out.len(), "the returned count matches the reports");
+    out
+}
+
+fn paths(c: &BoardConfig) -> Vec<String> {
+    problems(c).into_iter().map(|(p, _)| p).collect()
+}
+
+/// Checks that the only problem reported after `change` is at `path`.
+fn only_problem_at(path: &str, change: impl FnOnce(&mut BoardConfig)) {
+    let mut c = BoardConfig::default();
+    change(&mut c);
+    assert_eq!(paths(&c), [path], "after the change to {path}");
+}
+
+#[test]
+fn shipped_boards_parse_and_validate() {
+    for (file, text) in [
+        ("p3dx-lms1xx", LMS1XX),
+        ("p3dx-lms200", LMS200),
+        ("sim", SIM),
+    ] {
+        let c = BoardConfig::from_json(text.as_bytes())
+            .unwrap_or_else(|e| panic!("{file}.json does not parse: {e}"));
+        assert_eq!(problems(&c), [], "{file}.json has problems");
+    }
+}
+
+#[test]
+fn lms1xx_board_values() {
+    let c = BoardConfig::from_json(LMS1XX.as_bytes()).unwrap();
+    assert_eq!(c.link.port.as_str(), "/dev/ttyS0");
+    assert_eq!(c.link.tcp, None);
+    assert_eq!(c.laser_model(), Some(LaserModel::Lms1xx));
+    assert_eq!(c.laser.address.as_deref(), Some("192.168.0.1:2111"));
+    assert_eq!(c.laser.mount.x_m, 0.055);
+    assert_eq!(c.robot.max_speed_mm_s, 400.0);
+    assert_eq!(c.strategy(), Some(Strategy::Short));
+}
+
+#[test]
+fn lms200_board_values() {
+    let c = BoardConfig::from_json(LMS200.as_bytes()).unwrap();
+    assert_eq!(c.laser_model(), Some(LaserModel::Lms200));
+    assert_eq!(c.laser.port.as_deref(), Some("/dev/ttyS2"));
+    assert_eq!(c.laser.mount.x_m, 0.021);
+    assert_eq!(c.laser.address, None);
+}
+
+#[test]
+fn sim_board_values() {
+    let c = BoardConfig::from_json(SIM.as_bytes()).unwrap();
+    assert_eq!(c.link.port.as_str(), "/tmp/papillon-sim/robot0");
+    assert_eq!(c.laser.address.as_deref(), Some("127.0.0.1:2111"));
+}
+
+#[test]
+fn default_is_valid() {
+    assert_eq!(problems(&BoardConfig::default()), []);
+}
+
+#[test]
+fn laser_config_converts_degrees_and_mount() {
+    let c = BoardConfig::from_json(LMS1XX.as_bytes()).unwrap();
+    let l = c.laser_config();
+    let reference = LaserConfig::lms1xx();
+    assert_eq!(l.beam_count, 541);
+    assert!((l.first_angle_rad - reference.first_angle_rad).abs() < 1e-6);
+    assert!((l.step_rad - reference.step_rad).abs() < 1e-7);
+    assert!((l.last_angle_rad() - deg_to_rad(135.0)).abs() < 1e-4);
+    assert_eq!(l.mount.x, 0.055);
+    assert_eq!(l.max_range_m, 4.0);
+    assert_eq!(l.min_range_m, 0.30);
+}
+
+#[test]
+fn syntax_error_reports_line_column_and_offset() {
+    let text = "{\n  \"robot\": {\n    \"name\": \"x\",,\n";
+    let err = BoardConfig::from_json(text.as_bytes()).unwrap_err();
+    match err {
+        ConfigError::Syntax {
+            offset,
+            line,
+            column,
+            ..
+        } => {
+            assert_eq!(line, 3);
+            assert_eq!(column, 17);
+            assert_eq!(&text[offset..offset + 1], ",");
+        }
+        other => panic!("expected a syntax error, got {other:?}"),
+    }
+    let shown = BoardConfig::from_json(text.as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(shown.contains("line 3, column 17"), "{shown}");
+}
+
+#[test]
+fn syntax_errors_of_several_kinds_are_located() {
+    for (text, offset) in [
+        ("", 0),
+        ("{", 1),
+        ("{\"a\" 1}", 5),
+        ("{\"a\": 01}", 7),
+        ("{\"a\": tru}", 9),
+        ("{\"a\": \"x}", 9),
+        ("{\"a\": 1} x", 9),
+        ("[1, 2", 5),
+        ("{\"a\": 1.}", 8),
+    ] {
+        match BoardConfig::from_json(text.as_bytes()) {
+            Err(ConfigError::Syntax { offset: got, .. }) => {
+                assert_eq!(got, offset, "for {text:?}")
+            }
+            other => panic!("{text:?}: expected a syntax error, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn missing_and_unknown_keys_are_shape_errors_naming_the_key() {
+    let missing = LMS1XX.replace("\"population\": 20,", "");
+    assert_eq!(
+        BoardConfig::from_json(missing.as_bytes()),
+        Err(ConfigError::MissingKey {
+            path: "$.mission.population"
+        })
+    );
+    let unknown = LMS1XX.replace("\"population\": 20,", "\"populaton\": 20,");
+    match BoardConfig::from_json(unknown.as_bytes()) {
+        Err(ConfigError::UnknownKey { path, line, column }) => {
+            assert_eq!(path.as_str(), "$.mission.populaton");
+            let text_line = unknown.lines().nth(line - 1).unwrap();
+            assert_eq!(&text_line[column - 1..column + 10], "\"populaton\"");
+        }
+        other => panic!("expected an unknown key, got {other:?}"),
+    }
+    let nested = LMS1XX.replace("\"x_m\": 0.055", "\"x\": 0.055");
+    match BoardConfig::from_json(nested.as_bytes()) {
+        Err(ConfigError::UnknownKey { path, .. }) => assert_eq!(path.as_str(), "$.laser.mount.x"),
+        other => panic!("expected an unknown key, got {other:?}"),
+    }
+    let wrong_type = LMS1XX.replace("\"population\": 20,", "\"population\": \"20\",");
+    assert!(matches!(
+        BoardConfig::from_json(wrong_type.as_bytes()),
+        Err(ConfigError::Value { .. })
+    ));
+    let negative = LMS1XX.replace("\"population\": 20,", "\"population\": -20,");
+    assert!(matches!(
+        BoardConfig::from_json(negative.as_bytes()),
+        Err(ConfigError::Value { .. })
+    ));
+}
+
+#[test]
+fn too_long_string_is_a_shape_error() {
+    let long = "x".repeat(100);
+    let text = LMS1XX.replace("/dev/ttyS0", &long);
+    assert!(matches!(
+        BoardConfig::from_json(text.as_bytes()),
+        Err(ConfigError::Value { .. })
+    ));
+}
+
+#[test]
+fn random_bytes_never_panic() {
+    use rand_core::Rng;
+    let mut rng = crate::random::seeded(7);
+    for _ in 0..500 {
+        let mut bytes = LMS1XX.as_bytes().to_vec();
+        let flips = 1 + (rng.next_u32() % 4) as usize;
+        for _ in 0..flips {
+            let i = rng.next_u32() as usize % bytes.len();
+            bytes[i] = rng.next_u32() as u8;
+        }
+        if let Ok(c) = BoardConfig::from_json(&bytes) {
+            let _ = c.validate(|_, _| {});
+            let _ = c.laser_config();
+        }
+    }
+}
+
+#[test]
+fn robot_rules() {
+    only_problem_at("$.robot.name", |c| c.robot.name = Name::default());
+    only_problem_at("$.robot.subclass", |c| c.robot.subclass = name("box"));
+    only_problem_at("$.robot.radius_m", |c| c.robot.radius_m = 0.0);
+    only_problem_at("$.robot.max_speed_mm_s", |c| {
+        c.robot.max_speed_mm_s = 3000.0
+    });
+    only_problem_at("$.robot.max_turn_rate_deg_s", |c| {
+        c.robot.max_turn_rate_deg_s = -1.0
+    });
+    only_problem_at("$.robot.accel_mm_s2", |c| c.robot.accel_mm_s2 = 0.0);
+    only_problem_at("$.robot.decel_mm_s2", |c| c.robot.decel_mm_s2 = 40000.0);
+    only_problem_at("$.robot.rot_accel_deg_s2", |c| {
+        c.robot.rot_accel_deg_s2 = f32::NAN
+    });
+}
+
+#[test]
+fn subclass_is_case_insensitive() {
+    let mut c = BoardConfig::default();
+    for s in ["P3DX-SH", "p3dx", "P3DX-sh-LMS1XX", "p3dx-sh-lms500"] {
+        c.robot.subclass = name(s);
+        assert_eq!(problems(&c), [], "{s}");
+    }
+}
+
+#[test]
+fn link_rules() {
+    only_problem_at("$.link.port", |c| c.link.port = Address::default());
+    only_problem_at("$.link.baud", |c| c.link.baud = 4800);
+    only_problem_at("$.link.switch_to_baud", |c| c.link.switch_to_baud = 0);
+    only_problem_at("$.link.tcp", |c| c.link.tcp = Some(address("localhost")));
+    only_problem_at("$.link.tcp", |c| c.link.tcp = Some(address("host:70000")));
+    // A TCP link needs no serial port.
+    let mut c = BoardConfig::default();
+    c.link.port = Address::default();
+    c.link.tcp = Some(address("127.0.0.1:8101"));
+    assert_eq!(problems(&c), []);
+}
+
+#[test]
+fn laser_rules() {
+    only_problem_at("$.laser.model", |c| c.laser.model = name("lms500"));
+    only_problem_at("$.laser.address", |c| c.laser.address = None);
+    only_problem_at("$.laser.address", |c| c.laser.address = Some(address("x")));
+    only_problem_at("$.laser.port", |c| c.laser.model = name("lms200"));
+    only_problem_at("$.laser.baud", |c| {
+        c.laser.model = name("lms200");
+        c.laser.port = Some(address("/dev/ttyS2"));
+        c.laser.baud = Some(500000);
+    });
+    only_problem_at("$.laser.beam_count", |c| c.laser.beam_count = 1);
+    only_problem_at("$.laser.beam_count", |c| c.laser.beam_count = 2000);
+    only_problem_at("$.laser.first_angle_deg", |c| {
+        c.laser.first_angle_deg = 200.0
+    });
+    only_problem_at("$.laser.step_deg", |c| c.laser.step_deg = 0.0);
+    only_problem_at("$.laser.step_deg", |c| c.laser.step_deg = 1.0);
+    only_problem_at("$.laser.min_range_m", |c| c.laser.min_range_m = -0.1);
+    only_problem_at("$.laser.max_range_m", |c| c.laser.max_range_m = 0.0);
+    only_problem_at("$.laser.max_range_m", |c| c.laser.max_range_m = 0.2);
+    only_problem_at("$.laser.noise_fraction", |c| c.laser.noise_fraction = 1.0);
+    only_problem_at("$.laser.rate_hz", |c| c.laser.rate_hz = 0.0);
+    only_problem_at("$.laser.mount.x_m", |c| c.laser.mount.x_m = 2.0);
+    only_problem_at("$.laser.mount.y_m", |c| c.laser.mount.y_m = f32::INFINITY);
+    only_problem_at("$.laser.mount.theta_deg", |c| {
+        c.laser.mount.theta_deg = 270.0
+    });
+}
+
+#[test]
+fn grid_rules() {
+    only_problem_at("$.grid.width_m", |c| c.grid.width_m = 0.0);
+    only_problem_at("$.grid.height_m", |c| c.grid.height_m = -1.0);
+    only_problem_at("$.grid.resolution_m", |c| c.grid.resolution_m = 0.0);
+    only_problem_at("$.grid.resolution_m", |c| {
+        c.grid.resolution_m = 0.5;
+    });
+    only_problem_at("$.grid.origin_x_m", |c| c.grid.origin_x_m = f32::NAN);
+    // 50 m x 50 m at 10 cm = 250 000 cells > 150 000.
+    only_problem_at("$.grid", |c| {
+        c.grid.width_m = 50.0;
+        c.grid.height_m = 50.0;
+        c.grid.origin_x_m = -25.0;
+        c.grid.origin_y_m = -25.0;
+    });
+    // The start pose must be inside.
+    only_problem_at("$.grid", |c| c.grid.origin_x_m = 1.0);
+    // 30 m x 50 m at 10 cm is exactly the capacity.
+    let mut c = BoardConfig::default();
+    c.grid.width_m = 30.0;
+    c.grid.height_m = 50.0;
+    c.grid.origin_x_m = -15.0;
+    c.grid.origin_y_m = -25.0;
+    assert_eq!(problems(&c), []);
+}
+
+#[test]
+fn mission_rules() {
+    only_problem_at("$.mission.method", |c| c.mission.method = name("sgd"));
+    only_problem_at("$.mission.population", |c| c.mission.population = 1);
+    only_problem_at("$.mission.population", |c| {
+        c.mission.population = MAX_POPULATION + 1
+    });
+    only_problem_at("$.mission.generations", |c| c.mission.generations = 0);
+    only_problem_at("$.mission.strategy", |c| {
+        c.mission.strategy = name("medium")
+    });
+    only_problem_at("$.mission.targets", |c| c.mission.targets = 0);
+    only_problem_at("$.mission.battery_steps", |c| c.mission.battery_steps = 0.0);
+    only_problem_at("$.mission.reserve_steps", |c| {
+        c.mission.reserve_steps = -1.0
+    });
+    only_problem_at("$.mission.reserve_steps", |c| {
+        c.mission.reserve_steps = 400.0
+    });
+    only_problem_at("$.mission.coverage_target", |c| {
+        c.mission.coverage_target = 1.5
+    });
+    only_problem_at("$.mission.coverage_target", |c| {
+        c.mission.coverage_target = 0.0
+    });
+    let mut c = BoardConfig::default();
+    for m in KNOWN_METHODS {
+        c.mission.method = name(m);
+        assert_eq!(problems(&c), [], "{m}");
+    }
+    c.mission.population = 2;
+    assert_eq!(problems(&c), []);
+    c.mission.population = MAX_POPULATION;
+    assert_eq!(problems(&c), []);
+}
+
+#[test]
+fn pid_rules() {
+    only_problem_at("$.pid.heading_kp", |c| c.pid.heading_kp = 0.0);
+    only_problem_at("$.pid.distance_kp", |c| c.pid.distance_kp = -1.0);
+    only_problem_at("$.pid.heading_ki", |c| c.pid.heading_ki = -0.1);
+    only_problem_at("$.pid.heading_kd", |c| c.pid.heading_kd = f32::NAN);
+    only_problem_at("$.pid.distance_ki", |c| c.pid.distance_ki = -0.1);
+    only_problem_at("$.pid.distance_kd", |c| c.pid.distance_kd = -0.1);
+}
+
+#[test]
+fn safety_and_persistence_rules() {
+    only_problem_at("$.safety.obstacle_stop_m", |c| {
+        c.safety.obstacle_stop_m = 0.0
+    });
+    only_problem_at("$.safety.obstacle_stop_m", |c| {
+        c.laser.min_range_m = 0.5;
+        c.safety.obstacle_stop_m = 0.1;
+    });
+    only_problem_at("$.safety.stale_timeout_s", |c| {
+        c.safety.stale_timeout_s = 2.0
+    });
+    only_problem_at("$.safety.back_off_m", |c| c.safety.back_off_m = -0.1);
+    only_problem_at("$.persistence.save_every_s", |c| {
+        c.persistence.save_every_s = 0.0
+    });
+}
+
+#[test]
+fn every_problem_is_reported_at_once() {
+    let mut c = BoardConfig::default();
+    c.mission.population = 0;
+    c.mission.method = name("nope");
+    c.link.baud = 1;
+    let p = paths(&c);
+    assert_eq!(p.len(), 3);
+    assert!(p.contains(&"$.mission.population".to_string()));
+    assert!(p.contains(&"$.mission.method".to_string()));
+    assert!(p.contains(&"$.link.baud".to_string()));
+}
+
+#[test]
+fn host_port() {
+    assert!(is_host_port("127.0.0.1:2111"));
+    assert!(is_host_port("robot.local:8101"));
+    assert!(!is_host_port(":8101"));
+    assert!(!is_host_port("host:"));
+    assert!(!is_host_port("host:0"));
+    assert!(!is_host_port("host:+80"));
+}

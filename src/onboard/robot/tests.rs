@@ -1,0 +1,349 @@
+use super::*;
+use crate::onboard::link::DuplexLink;
+use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+
+fn spawn_robot(script: FakeRobotScript, baud: Option<u32>) -> (Box<dyn RobotLink>, CommandLog) {
+    let (link, peer) = DuplexLink::pair(4096, baud);
+    let log = CommandLog::default();
+    tokio::spawn(run_fake_robot(peer, script, log.clone()));
+    (Box::new(link), log)
+}
+
+fn numbers(log: &CommandLog) -> Vec<(u8, Option<i16>)> {
+    log.lock()
+        .unwrap()
+        .iter()
+        .map(|&(_, n, a)| (n, a))
+        .collect()
+}
+
+fn options(subclass: &str) -> SessionOptions {
+    SessionOptions {
+        expected_subclass: Some(subclass.to_string()),
+        ..SessionOptions::default()
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn handshake_open_config_then_start_sends_the_board_limits() {
+    let (link, log) = spawn_robot(FakeRobotScript::default(), None);
+    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("P3DX-SH"))
+        .await
+        .unwrap();
+    assert_eq!(client.identity().name, "fake");
+    assert_eq!(client.identity().class, "Pioneer");
+    assert_eq!(client.identity().subclass, "p3dx-sh");
+    assert_eq!(client.config().unwrap().watchdog_ms, 2000);
+    assert_eq!(client.baud_switch(), BaudSwitch::NotAttempted);
+    let limits = MotionLimits::from_board(&BoardConfig::default());
+    client.start(&limits).await.unwrap();
+    // Let the fake robot read everything.
+    let _ = client
+        .next_event(Instant::now() + Duration::from_millis(150))
+        .await
+        .unwrap();
+    assert_eq!(
+        numbers(&log),
+        [
+            (0, None),
+            (1, None),
+            (2, None),
+            (1, Some(1)),
+            (18, Some(1)),
+            (4, Some(1)),
+            (6, Some(400)),
+            (10, Some(60)),
+            (5, Some(300)),
+            (5, Some(-300)),
+            (23, Some(100)),
+            (23, Some(-100)),
+        ]
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn handshake_retries_after_silence() {
+    let script = FakeRobotScript {
+        silent_syncs: 2,
+        ..FakeRobotScript::default()
+    };
+    let (link, log) = spawn_robot(script, None);
+    let client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+        .await
+        .unwrap();
+    assert_eq!(client.identity().subclass, "p3dx-sh");
+    let sent = numbers(&log);
+    assert_eq!(
+        &sent[..5],
+        [(0, None), (0, None), (0, None), (1, None), (2, None)]
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn handshake_gives_up_when_the_robot_never_answers() {
+    let script = FakeRobotScript {
+        silent_syncs: u32::MAX,
+        ..FakeRobotScript::default()
+    };
+    let (link, log) = spawn_robot(script, None);
+    let opts = SessionOptions {
+        sync_attempts: 3,
+        ..options("p3dx-sh")
+    };
+    match ArcosClient::connect(link, Box::new(MiniArcos::default()), opts).await {
+        Err(SessionError::HandshakeFailed {
+            attempts: 3,
+            last_id: None,
+        }) => {}
+        Err(other) => panic!("unexpected error {other}"),
+        Ok(_) => panic!("connected to a silent robot"),
+    }
+    assert_eq!(numbers(&log), [(0, None), (0, None), (0, None)]);
+}
+
+#[tokio::test(start_paused = true)]
+async fn an_old_open_session_is_closed_first() {
+    let script = FakeRobotScript {
+        already_open: true,
+        ..FakeRobotScript::default()
+    };
+    let (link, log) = spawn_robot(script, None);
+    ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+        .await
+        .unwrap();
+    let sent = numbers(&log);
+    let close = sent.iter().position(|&c| c == (2, Some(1))).unwrap();
+    let sync2 = sent.iter().position(|&c| c == (2, None)).unwrap();
+    assert!(close < sync2, "CLOSE before the final SYNC2: {sent:?}");
+}
+
+#[tokio::test(start_paused = true)]
+async fn wrong_subclass_and_class_are_refused() {
+    let (link, _) = spawn_robot(FakeRobotScript::default(), None);
+    match ArcosClient::connect(
+        link,
+        Box::new(MiniArcos::default()),
+        options("p3dx-sh-lms1xx"),
+    )
+    .await
+    {
+        Err(SessionError::WrongSubclass { got, expected }) => {
+            assert_eq!(got, "p3dx-sh");
+            assert_eq!(expected, "p3dx-sh-lms1xx");
+        }
+        _ => panic!("expected a subclass error"),
+    }
+    let script = FakeRobotScript {
+        class: "PeopleBot".into(),
+        ..FakeRobotScript::default()
+    };
+    let (link, _) = spawn_robot(script, None);
+    assert!(matches!(
+        ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh")).await,
+        Err(SessionError::WrongClass { .. })
+    ));
+    let script = FakeRobotScript {
+        subclass: "box".into(),
+        ..FakeRobotScript::default()
+    };
+    let (link, _) = spawn_robot(script, None);
+    let opts = SessionOptions {
+        expected_subclass: None,
+        ..SessionOptions::default()
+    };
+    assert!(matches!(
+        ArcosClient::connect(link, Box::new(MiniArcos::default()), opts).await,
+        Err(SessionError::WrongSubclass { .. })
+    ));
+}
+
+#[tokio::test(start_paused = true)]
+async fn missing_config_is_an_error() {
+    let script = FakeRobotScript {
+        answers_config: false,
+        ..FakeRobotScript::default()
+    };
+    let (link, _) = spawn_robot(script, None);
+    assert!(matches!(
+        ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh")).await,
+        Err(SessionError::NoConfig)
+    ));
+}
+
+#[tokio::test(start_paused = true)]
+async fn hostbaud_switch_on_a_serial_link() {
+    let (link, peer) = DuplexLink::pair(4096, Some(9600));
+    let log = CommandLog::default();
+    tokio::spawn(run_fake_robot(
+        peer,
+        FakeRobotScript::default(),
+        log.clone(),
+    ));
+    let client = ArcosClient::connect(
+        Box::new(link),
+        Box::new(MiniArcos::default()),
+        options("p3dx-sh"),
+    )
+    .await
+    .unwrap();
+    assert_eq!(client.baud_switch(), BaudSwitch::Switched(38400));
+    let sent = numbers(&log);
+    let hb = sent.iter().position(|&c| c == (50, Some(2))).unwrap();
+    assert_eq!(sent[hb + 1], (0, None), "PULSE right after HOSTBAUD");
+}
+
+#[tokio::test(start_paused = true)]
+async fn hostbaud_reverts_when_nothing_comes_back() {
+    let script = FakeRobotScript {
+        baud_switch_works: false,
+        ..FakeRobotScript::default()
+    };
+    let (link, _) = spawn_robot(script, Some(9600));
+    let client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+        .await
+        .unwrap();
+    assert_eq!(client.baud_switch(), BaudSwitch::Reverted(38400));
+}
+
+#[tokio::test(start_paused = true)]
+async fn no_hostbaud_without_autobaud_or_on_tcp() {
+    let script = FakeRobotScript {
+        auto_baud: 1,
+        ..FakeRobotScript::default()
+    };
+    let (link, log) = spawn_robot(script, Some(9600));
+    let client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+        .await
+        .unwrap();
+    assert_eq!(client.baud_switch(), BaudSwitch::NotAttempted);
+    assert!(!numbers(&log).iter().any(|&(n, _)| n == 50));
+}
+
+#[tokio::test(start_paused = true)]
+async fn status_events_arrive_and_pulses_keep_the_link_alive() {
+    let (link, log) = spawn_robot(FakeRobotScript::default(), None);
+    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+        .await
+        .unwrap();
+    let start = Instant::now();
+    let mut statuses = 0;
+    while let Some(ev) = client
+        .next_event(start + Duration::from_millis(2000))
+        .await
+        .unwrap()
+    {
+        if let RobotEvent::Status { at, status } = ev {
+            assert!(at >= start);
+            assert_eq!(status.battery_dv, 130);
+            statuses += 1;
+        }
+    }
+    assert!(statuses >= 15, "{statuses} status packets in 2 s at 10 Hz");
+    let entries = log.lock().unwrap().clone();
+    let after: Vec<_> = entries.iter().filter(|e| e.0 > start).collect();
+    assert!(after.iter().all(|e| e.1 == 0), "only PULSE while idle");
+    assert!(
+        (3..=5).contains(&after.len()),
+        "{} pulses in 2 s",
+        after.len()
+    );
+    for w in after.windows(2) {
+        assert!(w[1].0 - w[0].0 >= Duration::from_millis(500));
+    }
+    assert!(client.stats().pulses_sent >= 3);
+}
+
+#[tokio::test(start_paused = true)]
+async fn after_a_fault_motion_is_refused_and_never_resent() {
+    let (link, log) = spawn_robot(FakeRobotScript::default(), None);
+    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+        .await
+        .unwrap();
+    client.drive(200, 10).await.unwrap();
+    client.halt(Fault::StaleScan).await.unwrap();
+    assert!(matches!(
+        client.drive(200, 10).await,
+        Err(SessionError::Faulted(Fault::StaleScan))
+    ));
+    let t = Instant::now();
+    while client
+        .next_event(t + Duration::from_millis(1600))
+        .await
+        .unwrap()
+        .is_some()
+    {}
+    let sent = numbers(&log);
+    let halt = sent.iter().rposition(|&c| c == (11, Some(0))).unwrap();
+    assert!(
+        sent[halt..]
+            .iter()
+            .all(|&(n, a)| !(n == 11 || n == 21) || a == Some(0)),
+        "no non-zero velocity after the halt: {sent:?}"
+    );
+    client.clear_fault();
+    client.drive(100, 0).await.unwrap();
+}
+
+#[tokio::test(start_paused = true)]
+async fn stop_and_close_disables_motors_and_closes() {
+    let (link, log) = spawn_robot(FakeRobotScript::default(), None);
+    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+        .await
+        .unwrap();
+    client
+        .start(&MotionLimits::from_board(&BoardConfig::default()))
+        .await
+        .unwrap();
+    client.drive(150, 0).await.unwrap();
+    client.stop_and_close().await.unwrap();
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    let sent = numbers(&log);
+    let n = sent.len();
+    assert_eq!(
+        &sent[n - 5..],
+        [
+            (11, Some(0)),
+            (21, Some(0)),
+            (29, None),
+            (4, Some(0)),
+            (2, Some(1))
+        ]
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn closed_link_is_reported_and_latches_a_fault() {
+    let (link, peer) = DuplexLink::pair(4096, None);
+    let log = CommandLog::default();
+    let robot = tokio::spawn(run_fake_robot(peer, FakeRobotScript::default(), log));
+    let mut client = ArcosClient::connect(
+        Box::new(link),
+        Box::new(MiniArcos::default()),
+        options("p3dx-sh"),
+    )
+    .await
+    .unwrap();
+    robot.abort();
+    let _ = robot.await;
+    let r = client
+        .next_event(Instant::now() + Duration::from_secs(1))
+        .await;
+    assert!(matches!(
+        r,
+        Err(SessionError::Closed) | Err(SessionError::Io(_))
+    ));
+    assert_eq!(client.fault(), Some(Fault::Link));
+}
+
+#[test]
+fn garbage_never_panics_the_test_codec() {
+    use rand_core::Rng;
+    let mut rng = crate::random::seeded(3);
+    let mut codec = MiniArcos::default();
+    let mut out = Vec::new();
+    for _ in 0..2000 {
+        let n = (rng.next_u32() % 64) as usize;
+        let bytes: Vec<u8> = (0..n).map(|_| rng.next_u32() as u8).collect();
+        codec.decode(&bytes, &mut out);
+    }
+}

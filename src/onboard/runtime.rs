@@ -1,0 +1,1186 @@
+//! `papillon run` and `papillon probe`: start-up, the mission pump, safety checks, persistence
+//! and a safe shutdown.
+//!
+//! Integration points (marked `INTEGRATION POINT` below):
+//! 1. [`arcos_codec`] and [`laser_codec`] return the wire codecs once `crate::wire` is merged
+//!    (adapters implementing [`ArcosCodec`] and [`LaserCodec`]); today they return `None` and
+//!    the binary says that this build cannot talk to a robot yet.
+//! 2. [`mission_driver`] returns the core mission state machine wrapped in a
+//!    [`MissionDriver`]; today it returns `None` and `papillon run` connects, starts up,
+//!    reports that autonomous missions are not yet available, and shuts down safely.
+//! 3. [`pump`] already does what the mission needs around it: status and scan timestamps,
+//!    stale-data and e-stop checks that stop the robot at once and latch the fault until the
+//!    mission re-plans, periodic atomic saves, telemetry, and a stop on SIGINT/SIGTERM.
+
+use std::io;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use tokio::time::Instant;
+
+use super::arcos::{ArcosCodec, RobotStatus};
+use super::laser::{LaserCodec, Lms1xxClient};
+use super::link::{Backoff, TcpLink, connect_with_backoff, open_robot_link};
+use super::persist::{MapImage, MissionState, PersistError, STATE_VERSION, StateStore, Telemetry};
+use super::robot::{ArcosClient, Fault, MotionLimits, SessionError, SessionOptions};
+use crate::config::{BoardConfig, LaserModel};
+use crate::sensor::Scan;
+
+/// INTEGRATION POINT 1: the ARCOS codec of `crate::wire::arcos` (not merged yet).
+pub fn arcos_codec() -> Option<Box<dyn ArcosCodec>> {
+    None
+}
+
+/// INTEGRATION POINT 1: the CoLa-A codec of `crate::wire::lms1xx` (not merged yet).
+pub fn laser_codec() -> Option<Box<dyn LaserCodec>> {
+    None
+}
+
+/// INTEGRATION POINT 2: the mission state machine for a board, resumed from `resume` if given.
+pub fn mission_driver(
+    _board: &BoardConfig,
+    _resume: Option<&(MissionState, Option<MapImage>)>,
+) -> Option<Box<dyn MissionDriver>> {
+    None
+}
+
+/// What the mission asks the robot to do after a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum MissionCommand {
+    /// Drive at `speed_mm_s` \[mm/s\] and `turn_deg_s` \[deg/s, counter-clockwise\].
+    Drive {
+        /// Translational velocity \[mm/s\].
+        speed_mm_s: i16,
+        /// Rotational velocity \[deg/s\].
+        turn_deg_s: i16,
+    },
+    /// Stand still (thinking, or waiting for scans).
+    Hold,
+    /// The mission is complete.
+    Done,
+}
+
+/// The mission state machine as the runtime sees it (sans-IO: it is given times and data).
+pub trait MissionDriver: Send {
+    /// A status packet arrived at mission time `t_s` \[s\].
+    fn on_status(&mut self, t_s: f64, status: &RobotStatus);
+    /// A scan arrived at mission time `t_s` \[s\].
+    fn on_scan(&mut self, t_s: f64, scan: &Scan);
+    /// The runtime stopped the robot for `fault`; the mission must re-plan before moving.
+    fn on_fault(&mut self, t_s: f64, fault: Fault);
+    /// Whether the mission has re-planned since its last fault (the runtime then clears the
+    /// latch and lets motion through again).
+    fn replanned(&self) -> bool;
+    /// One control step at mission time `t_s` \[s\].
+    fn step(&mut self, t_s: f64) -> MissionCommand;
+    /// The state to save.
+    fn snapshot(&self) -> (MissionState, Option<MapImage>);
+}
+
+/// Errors of `papillon run` / `probe`.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum RuntimeError {
+    /// This build has no codec for the robot or the laser.
+    NoCodec(&'static str),
+    /// The link could not be opened.
+    Link(io::Error),
+    /// The ARCOS session failed.
+    Session(SessionError),
+    /// The laser session failed.
+    Laser(super::laser::LaserError),
+    /// Saving or loading the mission state failed.
+    Persist(PersistError),
+    /// `--resume` found no saved mission.
+    NothingToResume(PathBuf),
+}
+
+impl std::fmt::Display for RuntimeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RuntimeError::NoCodec(what) => write!(
+                f,
+                "this build has no {what} codec yet (the wire module is not integrated); nothing was sent"
+            ),
+            RuntimeError::Link(e) => write!(f, "{e}"),
+            RuntimeError::Session(e) => write!(f, "{e}"),
+            RuntimeError::Laser(e) => write!(f, "{e}"),
+            RuntimeError::Persist(e) => write!(f, "{e}"),
+            RuntimeError::NothingToResume(dir) => {
+                write!(f, "--resume: no saved mission in {}", dir.display())
+            }
+        }
+    }
+}
+
+impl std::error::Error for RuntimeError {}
+
+impl From<SessionError> for RuntimeError {
+    fn from(e: SessionError) -> Self {
+        RuntimeError::Session(e)
+    }
+}
+
+impl From<PersistError> for RuntimeError {
+    fn from(e: PersistError) -> Self {
+        RuntimeError::Persist(e)
+    }
+}
+
+impl From<io::Error> for RuntimeError {
+    fn from(e: io::Error) -> Self {
+        RuntimeError::Link(e)
+    }
+}
+
+/// Options of `papillon run` (command-line flags already applied over the board).
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// The board (with `--port`, `--tcp`, `--laser` applied).
+    pub board: BoardConfig,
+    /// Log directory.
+    pub log_dir: PathBuf,
+    /// Continue the mission saved in `log_dir`.
+    pub resume: bool,
+}
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum RunOutcome {
+    /// The mission completed.
+    Finished,
+    /// Stopped by SIGINT/SIGTERM; state saved.
+    Interrupted,
+    /// This build has no mission yet: connected, started up, stopped safely.
+    MissionUnavailable,
+}
+
+/// Resolves on SIGINT or SIGTERM.
+pub async fn shutdown_signal() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{SignalKind, signal};
+        match signal(SignalKind::terminate()) {
+            Ok(mut term) => {
+                tokio::select! {
+                    _ = tokio::signal::ctrl_c() => {}
+                    _ = term.recv() => {}
+                }
+            }
+            Err(_) => {
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+    }
+}
+
+/// Opens the robot link with back-off and runs the ARCOS start-up (handshake, CONFIG check,
+/// HOSTBAUD, ENABLE, limits).
+pub async fn connect_robot(
+    board: &BoardConfig,
+    codec: Box<dyn ArcosCodec>,
+) -> Result<ArcosClient, RuntimeError> {
+    let tcp = board.link.tcp.as_ref().map(|a| a.as_str().to_string());
+    let port = board.link.port.as_str().to_string();
+    let baud = board.link.baud;
+    let link = connect_with_backoff(
+        Backoff::default(),
+        || open_robot_link(tcp.as_deref(), &port, baud),
+        |attempt, e| tracing::warn!(attempt, error = %e, "robot link not available, retrying"),
+    )
+    .await?;
+    tracing::info!(link = %link.describe(), "robot link open");
+    let mut client = ArcosClient::connect(link, codec, SessionOptions::from_board(board)).await?;
+    let id = client.identity().clone();
+    tracing::info!(name = %id.name, class = %id.class, subclass = %id.subclass, baud = ?client.baud_switch(), "connected");
+    client.start(&MotionLimits::from_board(board)).await?;
+    Ok(client)
+}
+
+/// Connects the laser the board names.
+pub async fn connect_laser(
+    board: &BoardConfig,
+    codec: Box<dyn LaserCodec>,
+) -> Result<Lms1xxClient, RuntimeError> {
+    match board.laser_model() {
+        Some(LaserModel::Lms1xx) => {
+            let addr = board
+                .laser
+                .address
+                .as_ref()
+                .map(|a| a.as_str().to_string())
+                .unwrap_or_default();
+            let link = connect_with_backoff(
+                Backoff::default(),
+                || TcpLink::connect(&addr),
+                |attempt, e| tracing::warn!(attempt, error = %e, "laser not available, retrying"),
+            )
+            .await?;
+            Lms1xxClient::connect(Box::new(link), codec, board.laser_config())
+                .await
+                .map_err(RuntimeError::Laser)
+        }
+        // INTEGRATION POINT 1: the LMS200 session (serial link at 9600 baud, then the
+        // board's speed) awaits `crate::wire::lms200`.
+        _ => Err(RuntimeError::NoCodec("LMS200")),
+    }
+}
+
+/// Link losses `run` recovers from (reconnecting with back-off each time) before giving up.
+pub const MAX_RECONNECTS: u32 = 20;
+
+/// `papillon run`, with the codec factories and the mission given (the binary passes
+/// [`arcos_codec`], [`laser_codec`] and [`mission_driver`]). A lost robot or laser link is
+/// reconnected with back-off (the robot was stopped at once, and its firmware watchdog stops
+/// it too), then the mission resumes after a fresh re-plan.
+pub async fn run_with(
+    options: RunOptions,
+    arcos: impl Fn() -> Option<Box<dyn ArcosCodec>>,
+    laser: impl Fn() -> Option<Box<dyn LaserCodec>>,
+    make_mission: impl FnOnce(
+        &BoardConfig,
+        Option<&(MissionState, Option<MapImage>)>,
+    ) -> Option<Box<dyn MissionDriver>>,
+    shutdown: impl std::future::Future<Output = ()>,
+) -> Result<RunOutcome, RuntimeError> {
+    let board = &options.board;
+    let store = StateStore::open(&options.log_dir)?;
+    let mut telemetry = Telemetry::open(&options.log_dir)?;
+    let resumed = if options.resume {
+        match store.load()? {
+            Some(saved) => {
+                tracing::info!(
+                    coverage = saved.0.coverage,
+                    time_s = saved.0.mission_time_s,
+                    "resuming saved mission"
+                );
+                Some(saved)
+            }
+            None => return Err(RuntimeError::NothingToResume(options.log_dir.clone())),
+        }
+    } else {
+        None
+    };
+    let mut shutdown = std::pin::pin!(shutdown);
+    let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
+    let mut client = connect_robot(board, codec).await?;
+    let mission = make_mission(board, resumed.as_ref());
+    let outcome = match mission {
+        None => {
+            // INTEGRATION POINT 2: no mission in this build. Check the laser start-up too
+            // when a codec exists, then say so and stop safely.
+            if let Some(codec) = laser() {
+                match connect_laser(board, codec).await {
+                    Ok(mut l) => {
+                        let first = l.next_scan(Instant::now() + Duration::from_secs(2)).await;
+                        match first {
+                            Ok(Some((_, scan))) => {
+                                tracing::info!(beams = scan.len(), "laser streaming")
+                            }
+                            Ok(None) => tracing::warn!("laser connected but sent no scan in 2 s"),
+                            Err(e) => tracing::warn!(error = %e, "laser failed after connecting"),
+                        }
+                        let _ = l.close().await;
+                    }
+                    Err(e) => tracing::warn!(error = %e, "laser start-up failed"),
+                }
+            }
+            tracing::warn!("autonomous missions are not yet available in this build; stopping");
+            telemetry.record(
+                0.0,
+                "note",
+                serde_json::json!({"note": "mission not available; start-up checked, robot stopped"}),
+            )?;
+            if let Some((state, map)) = &resumed {
+                // Nothing ran: keep the saved mission exactly as it was.
+                store.save(state, map.as_ref())?;
+            }
+            Ok(RunOutcome::MissionUnavailable)
+        }
+        Some(mut mission) => {
+            let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
+            let mut laser_client = connect_laser(board, codec).await?;
+            // Mission time runs on across reconnections.
+            let epoch = Instant::now();
+            let mut reconnects = 0u32;
+            let outcome = loop {
+                let r = pump(
+                    board,
+                    &mut client,
+                    &mut laser_client,
+                    mission.as_mut(),
+                    Records {
+                        store: &store,
+                        telemetry: &mut telemetry,
+                    },
+                    epoch,
+                    &mut shutdown,
+                )
+                .await;
+                let robot_lost = matches!(
+                    r,
+                    Err(RuntimeError::Session(
+                        SessionError::Closed
+                            | SessionError::Io(_)
+                            | SessionError::MicrocontrollerReset { .. }
+                    ))
+                );
+                let laser_lost = matches!(r, Err(RuntimeError::Laser(_)));
+                if !(robot_lost || laser_lost) || reconnects >= MAX_RECONNECTS {
+                    break r;
+                }
+                reconnects += 1;
+                let (state, map) = mission.snapshot();
+                tracing::warn!(
+                    robot = robot_lost,
+                    laser = laser_lost,
+                    "link lost; reconnecting"
+                );
+                telemetry.fault(state.mission_time_s, &Fault::Link.to_string())?;
+                mission.on_fault(state.mission_time_s, Fault::Link);
+                store.save(&state, map.as_ref())?;
+                telemetry.record(
+                    state.mission_time_s,
+                    "reconnect",
+                    serde_json::json!({"robot": robot_lost, "laser": laser_lost, "count": reconnects}),
+                )?;
+                let reconnect = async {
+                    if robot_lost {
+                        let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
+                        client = connect_robot(board, codec).await?;
+                        // Motion stays refused until the mission has re-planned.
+                        client.halt(Fault::Link).await?;
+                    } else {
+                        let _ = client.halt(Fault::Link).await;
+                        let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
+                        laser_client = connect_laser(board, codec).await?;
+                    }
+                    Ok::<(), RuntimeError>(())
+                };
+                tokio::select! {
+                    r = reconnect => r?,
+                    _ = &mut shutdown => break Ok(RunOutcome::Interrupted),
+                }
+            };
+            let _ = laser_client.close().await;
+            let (state, map) = mission.snapshot();
+            store.save(&state, map.as_ref())?;
+            if let Some(map) = map {
+                map.write_png(&options.log_dir.join("map.png"))?;
+            }
+            outcome
+        }
+    };
+    let stats = client.stop_and_close().await;
+    if let Ok(stats) = &stats {
+        telemetry.link_stats(0.0, stats)?;
+        tracing::info!(%stats.codec, "robot stopped, motors disabled, session closed");
+    }
+    telemetry.flush()?;
+    let outcome = outcome?;
+    stats?;
+    Ok(outcome)
+}
+
+/// Where the pump saves the mission state and writes telemetry.
+pub struct Records<'a> {
+    /// The state files.
+    pub store: &'a StateStore,
+    /// The telemetry log.
+    pub telemetry: &'a mut Telemetry,
+}
+
+/// The mission pump (mission time counts from `epoch`): feeds the mission with status packets and scans, applies its commands,
+/// enforces the safety rules and saves the state every `save_every_s`.
+pub async fn pump(
+    board: &BoardConfig,
+    client: &mut ArcosClient,
+    laser: &mut Lms1xxClient,
+    mission: &mut dyn MissionDriver,
+    records: Records<'_>,
+    epoch: Instant,
+    shutdown: &mut (impl std::future::Future<Output = ()> + Unpin),
+) -> Result<RunOutcome, RuntimeError> {
+    let Records { store, telemetry } = records;
+    let start = Instant::now();
+    let t = |i: Instant| i.saturating_duration_since(epoch).as_secs_f64();
+    let stale = Duration::from_secs_f32(board.safety.stale_timeout_s);
+    let save_every = Duration::from_secs_f32(board.persistence.save_every_s);
+    let tick = Duration::from_millis(20);
+    let mut last_status = start;
+    let mut last_scan = start;
+    let mut next_save = start + save_every;
+    loop {
+        let now = Instant::now();
+        // The signal is checked between events (at least every `tick`), never by cancelling
+        // a session call half-way through writing a command.
+        let signalled = tokio::select! {
+            biased;
+            _ = &mut *shutdown => true,
+            _ = std::future::ready(()) => false,
+        };
+        if signalled {
+            client.halt(Fault::Operator).await?;
+            telemetry.fault(t(Instant::now()), "stopped by signal")?;
+            return Ok(RunOutcome::Interrupted);
+        }
+        let event = client.next_event(now + tick).await?;
+        if let Some(super::robot::RobotEvent::Status { at, status }) = event {
+            last_status = at;
+            mission.on_status(t(at), &status);
+            let fault = if status.estop() {
+                Some(Fault::EStop)
+            } else if status.stalled() || status.bumped() {
+                Some(Fault::Contact)
+            } else {
+                None
+            };
+            if let Some(f) = fault {
+                stop_for(client, mission, telemetry, t(at), f).await?;
+            }
+        }
+        match laser
+            .next_scan(Instant::now() + Duration::from_millis(1))
+            .await
+        {
+            Ok(Some((at, scan))) => {
+                last_scan = at;
+                mission.on_scan(t(at), &scan);
+            }
+            Ok(None) => {}
+            Err(e) => {
+                tracing::warn!(error = %e, "laser link lost");
+                stop_for(
+                    client,
+                    mission,
+                    telemetry,
+                    t(Instant::now()),
+                    Fault::StaleScan,
+                )
+                .await?;
+                return Err(RuntimeError::Laser(e));
+            }
+        }
+        let now = Instant::now();
+        if now - last_status > stale {
+            stop_for(client, mission, telemetry, t(now), Fault::StaleStatus).await?;
+        } else if now - last_scan > stale {
+            stop_for(client, mission, telemetry, t(now), Fault::StaleScan).await?;
+        } else if client.fault().is_some() && mission.replanned() {
+            client.clear_fault();
+        }
+        match mission.step(t(now)) {
+            MissionCommand::Done => return Ok(RunOutcome::Finished),
+            MissionCommand::Hold => {}
+            MissionCommand::Drive {
+                speed_mm_s,
+                turn_deg_s,
+            } => match client.drive(speed_mm_s, turn_deg_s).await {
+                Ok(()) | Err(SessionError::Faulted(_)) => {}
+                Err(e) => return Err(e.into()),
+            },
+        }
+        if now >= next_save {
+            next_save = now + save_every;
+            let (mut state, map) = mission.snapshot();
+            state.version = STATE_VERSION;
+            store.save(&state, map.as_ref())?;
+            telemetry.pose(t(now), state.pose)?;
+            telemetry.coverage(t(now), state.coverage)?;
+            telemetry.link_stats(t(now), &client.stats())?;
+            telemetry.flush()?;
+        }
+    }
+}
+
+async fn stop_for(
+    client: &mut ArcosClient,
+    mission: &mut dyn MissionDriver,
+    telemetry: &mut Telemetry,
+    t_s: f64,
+    fault: Fault,
+) -> Result<(), RuntimeError> {
+    if client.fault().is_none() {
+        tracing::warn!(%fault, "stopping the robot");
+        telemetry.fault(t_s, &fault.to_string())?;
+        mission.on_fault(t_s, fault);
+    }
+    client.halt(fault).await?;
+    Ok(())
+}
+
+/// Options of `papillon probe`.
+#[derive(Clone, Debug)]
+pub struct ProbeOptions {
+    /// Serial device (ignored when `tcp` is set).
+    pub port: String,
+    /// TCP address instead of a serial port.
+    pub tcp: Option<String>,
+    /// Drive a small square at low speed and report the odometry.
+    pub drive: bool,
+}
+
+/// `papillon probe`: connects, prints the robot's identity, CONFIG highlights, battery and
+/// pose, optionally drives a 0.5 m square at 100 mm/s, then disconnects cleanly. Lines are
+/// written to `out`.
+pub async fn probe_with(
+    options: &ProbeOptions,
+    codec: Option<Box<dyn ArcosCodec>>,
+    out: &mut impl io::Write,
+) -> Result<(), RuntimeError> {
+    let codec = codec.ok_or(RuntimeError::NoCodec("ARCOS"))?;
+    let link = open_robot_link(options.tcp.as_deref(), &options.port, 9600).await?;
+    writeln!(out, "link: {}", link.describe())?;
+    let session = SessionOptions {
+        expected_subclass: None,
+        ..SessionOptions::default()
+    };
+    let mut client = ArcosClient::connect(link, codec, session).await?;
+    let id = client.identity().clone();
+    writeln!(
+        out,
+        "robot: name {:?}, class {:?}, subclass {:?}",
+        id.name, id.class, id.subclass
+    )?;
+    if let Some(c) = client.config() {
+        writeln!(
+            out,
+            "config: firmware {:?}, serial {:?}, top speeds {} mm/s / {} deg/s, current max {} mm/s / {} deg/s, watchdog {} ms, SIP cycle {} ms, host baud code {}, autobaud {}",
+            c.firmware,
+            c.serial,
+            c.trans_vel_top_mm_s,
+            c.rot_vel_top_deg_s,
+            c.trans_vel_max_mm_s,
+            c.rot_vel_max_deg_s,
+            c.watchdog_ms,
+            c.sip_cycle_ms,
+            c.host_baud_code,
+            c.auto_baud
+        )?;
+    }
+    writeln!(out, "baud: {:?}", client.baud_switch())?;
+    let status = next_status(&mut client, Duration::from_secs(2)).await?;
+    match status {
+        Some(s) => writeln!(
+            out,
+            "status: battery {:.1} V, pose counters x {} mm, y {} mm, th {} units, motors {}, e-stop {}",
+            s.battery_v(),
+            s.x_pos,
+            s.y_pos,
+            s.th_pos,
+            if s.motors_enabled() {
+                "enabled"
+            } else {
+                "disabled"
+            },
+            if s.estop() { "PRESSED" } else { "released" }
+        )?,
+        None => writeln!(out, "status: no status packet within 2 s")?,
+    }
+    if options.drive {
+        client
+            .start(&MotionLimits {
+                max_speed_mm_s: 150,
+                max_turn_rate_deg_s: 30,
+                accel_mm_s2: 200,
+                decel_mm_s2: 200,
+                rot_accel_deg_s2: 60,
+            })
+            .await?;
+        for side in 0..4 {
+            drive_for(&mut client, 100, 0, Duration::from_secs(5)).await?;
+            drive_for(&mut client, 0, 30, Duration::from_secs(3)).await?;
+            if let Some(s) = next_status(&mut client, Duration::from_secs(1)).await? {
+                writeln!(
+                    out,
+                    "square side {}: x {} mm, y {} mm, th {} units",
+                    side + 1,
+                    s.x_pos,
+                    s.y_pos,
+                    s.th_pos
+                )?;
+            }
+        }
+    }
+    let stats = client.stop_and_close().await?;
+    writeln!(out, "link: {}", stats.codec)?;
+    writeln!(out, "disconnected: motors disabled, session closed")?;
+    Ok(())
+}
+
+async fn next_status(
+    client: &mut ArcosClient,
+    wait: Duration,
+) -> Result<Option<RobotStatus>, RuntimeError> {
+    let deadline = Instant::now() + wait;
+    while let Some(ev) = client.next_event(deadline).await? {
+        if let super::robot::RobotEvent::Status { status, .. } = ev {
+            return Ok(Some(status));
+        }
+    }
+    Ok(None)
+}
+
+/// Drives at a constant command for `duration`, re-sending it every 200 ms (fresh, not stale:
+/// the loop is alive), then stops.
+async fn drive_for(
+    client: &mut ArcosClient,
+    speed_mm_s: i16,
+    turn_deg_s: i16,
+    duration: Duration,
+) -> Result<(), RuntimeError> {
+    let end = Instant::now() + duration;
+    while Instant::now() < end {
+        client.drive(speed_mm_s, turn_deg_s).await?;
+        let _ = client
+            .next_event((Instant::now() + Duration::from_millis(200)).min(end))
+            .await?;
+    }
+    client.drive(0, 0).await?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+
+    /// A fake robot behind a loopback TCP listener.
+    async fn tcp_robot(script: FakeRobotScript) -> (String, CommandLog) {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        let log = CommandLog::default();
+        let log2 = log.clone();
+        tokio::spawn(async move {
+            let (sock, _) = listener.accept().await.unwrap();
+            let (a, mut b) = tokio::io::duplex(4096);
+            tokio::spawn(run_fake_robot(a, script, log2));
+            let mut sock = sock;
+            let _ = tokio::io::copy_bidirectional(&mut sock, &mut b).await;
+        });
+        (addr, log)
+    }
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("papillon-runtime-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        d
+    }
+
+    #[tokio::test]
+    async fn run_without_a_mission_starts_up_then_stops_safely() {
+        let (addr, log) = tcp_robot(FakeRobotScript::default()).await;
+        let mut board = BoardConfig::default();
+        board.robot.subclass = crate::config::Name::new("p3dx-sh").unwrap();
+        board.link.tcp = crate::config::Address::new(&addr);
+        let dir = temp_dir("nomission");
+        let outcome = run_with(
+            RunOptions {
+                board,
+                log_dir: dir.clone(),
+                resume: false,
+            },
+            || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
+            laser_codec,
+            mission_driver,
+            std::future::pending(),
+        )
+        .await
+        .unwrap();
+        assert_eq!(outcome, RunOutcome::MissionUnavailable);
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        let sent: Vec<(u8, Option<i16>)> = log
+            .lock()
+            .unwrap()
+            .iter()
+            .map(|&(_, n, a)| (n, a))
+            .collect();
+        assert!(
+            sent.contains(&(4, Some(1))),
+            "motors were enabled at start-up"
+        );
+        let n = sent.len();
+        assert_eq!(
+            &sent[n - 2..],
+            [(4, Some(0)), (2, Some(1))],
+            "ENABLE 0 then CLOSE last"
+        );
+        assert!(
+            !sent
+                .iter()
+                .any(|&(c, a)| (c == 11 || c == 21) && a != Some(0))
+        );
+        let telemetry = std::fs::read_to_string(dir.join("telemetry.jsonl")).unwrap();
+        assert!(telemetry.contains("mission not available"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[tokio::test]
+    async fn resume_without_saved_state_is_refused_before_connecting() {
+        let dir = temp_dir("noresume");
+        let err = run_with(
+            RunOptions {
+                board: BoardConfig::default(),
+                log_dir: dir.clone(),
+                resume: true,
+            },
+            || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
+            laser_codec,
+            mission_driver,
+            std::future::pending(),
+        )
+        .await
+        .unwrap_err();
+        assert!(matches!(err, RuntimeError::NothingToResume(_)));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[tokio::test]
+    async fn without_a_codec_nothing_is_sent() {
+        let dir = temp_dir("nocodec");
+        let err = run_with(
+            RunOptions {
+                board: BoardConfig::default(),
+                log_dir: dir.clone(),
+                resume: false,
+            },
+            arcos_codec,
+            laser_codec,
+            mission_driver,
+            std::future::pending(),
+        )
+        .await
+        .unwrap_err();
+        assert!(matches!(err, RuntimeError::NoCodec("ARCOS")));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[tokio::test]
+    async fn probe_prints_identity_config_and_status() {
+        let (addr, log) = tcp_robot(FakeRobotScript::default()).await;
+        let mut out = Vec::new();
+        probe_with(
+            &ProbeOptions {
+                port: String::new(),
+                tcp: Some(addr),
+                drive: false,
+            },
+            Some(Box::new(MiniArcos::default())),
+            &mut out,
+        )
+        .await
+        .unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.contains("subclass \"p3dx-sh\""), "{text}");
+        assert!(text.contains("watchdog 2000 ms"), "{text}");
+        assert!(text.contains("battery 13.0 V"), "{text}");
+        assert!(text.contains("disconnected"), "{text}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        let last = log.lock().unwrap().last().map(|&(_, n, a)| (n, a));
+        assert_eq!(last, Some((2, Some(1))));
+    }
+}
+
+#[cfg(test)]
+mod pump_tests {
+    use super::*;
+    use crate::onboard::laser::tests::{ByteCodec, streaming_laser};
+    use crate::onboard::link::DuplexLink;
+    use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+    use std::sync::{Arc, Mutex};
+
+    /// Faults a mission saw, with their mission times \[s\].
+    type FaultLog = Arc<Mutex<Vec<(f64, Fault)>>>;
+
+    /// Drives straight; re-plans 0.3 s after a fault; done at `done_at_s`.
+    struct ScriptedMission {
+        faults: FaultLog,
+        fault_at: Option<f64>,
+        replanned: bool,
+        scans: u64,
+        statuses: u64,
+        now_s: f64,
+        done_at_s: f64,
+    }
+
+    impl MissionDriver for ScriptedMission {
+        fn on_status(&mut self, _t_s: f64, _status: &RobotStatus) {
+            self.statuses += 1;
+        }
+        fn on_scan(&mut self, _t_s: f64, scan: &Scan) {
+            assert_eq!(scan.len(), 3);
+            self.scans += 1;
+        }
+        fn on_fault(&mut self, t_s: f64, fault: Fault) {
+            self.faults.lock().unwrap().push((t_s, fault));
+            self.fault_at = Some(t_s);
+            self.replanned = false;
+        }
+        fn replanned(&self) -> bool {
+            self.replanned
+        }
+        fn step(&mut self, t_s: f64) -> MissionCommand {
+            self.now_s = t_s;
+            if let Some(f) = self.fault_at
+                && t_s - f > 0.3
+            {
+                self.replanned = true;
+            }
+            if t_s >= self.done_at_s {
+                MissionCommand::Done
+            } else {
+                MissionCommand::Drive {
+                    speed_mm_s: 100,
+                    turn_deg_s: 0,
+                }
+            }
+        }
+        fn snapshot(&self) -> (MissionState, Option<MapImage>) {
+            (
+                MissionState {
+                    version: STATE_VERSION,
+                    mission_time_s: self.now_s,
+                    counters: crate::onboard::persist::Counters {
+                        scans: self.scans,
+                        ..Default::default()
+                    },
+                    ..MissionState::default()
+                },
+                None,
+            )
+        }
+    }
+
+    struct Rig {
+        client: ArcosClient,
+        laser: Lms1xxClient,
+        log: CommandLog,
+        board: BoardConfig,
+        store: StateStore,
+        telemetry: Telemetry,
+        dir: PathBuf,
+        t0: Instant,
+    }
+
+    async fn rig(name: &str, dropout: (Duration, Duration)) -> Rig {
+        let (link, peer) = DuplexLink::pair(8192, None);
+        let log = CommandLog::default();
+        tokio::spawn(run_fake_robot(
+            peer,
+            FakeRobotScript::default(),
+            log.clone(),
+        ));
+        let mut board = BoardConfig::default();
+        board.safety.stale_timeout_s = 0.5;
+        board.persistence.save_every_s = 1.0;
+        let client = ArcosClient::connect(
+            Box::new(link),
+            Box::new(MiniArcos::default()),
+            SessionOptions::default(),
+        )
+        .await
+        .unwrap();
+        let (llink, lpeer) = DuplexLink::pair(8192, None);
+        tokio::spawn(streaming_laser(lpeer, Duration::from_millis(100), dropout));
+        let mut laser_config = board.laser_config();
+        laser_config.beam_count = 3;
+        let laser = Lms1xxClient::connect(
+            Box::new(llink),
+            Box::new(ByteCodec::default()),
+            laser_config,
+        )
+        .await
+        .unwrap();
+        let dir = std::env::temp_dir().join(format!("papillon-pump-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        Rig {
+            client,
+            laser,
+            log,
+            board,
+            store: StateStore::open(&dir).unwrap(),
+            telemetry: Telemetry::open(&dir).unwrap(),
+            dir,
+            t0: Instant::now(),
+        }
+    }
+
+    fn mission(done_at_s: f64) -> (ScriptedMission, FaultLog) {
+        let faults = Arc::new(Mutex::new(Vec::new()));
+        (
+            ScriptedMission {
+                faults: faults.clone(),
+                fault_at: None,
+                replanned: true,
+                scans: 0,
+                statuses: 0,
+                now_s: 0.0,
+                done_at_s,
+            },
+            faults,
+        )
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn laser_dropout_stops_the_robot_until_scans_return_and_a_replan() {
+        let mut r = rig(
+            "dropout",
+            (Duration::from_millis(1000), Duration::from_millis(1800)),
+        )
+        .await;
+        let (mut m, faults) = mission(3.0);
+        let mut never = std::pin::pin!(std::future::pending::<()>());
+        let outcome = pump(
+            &r.board,
+            &mut r.client,
+            &mut r.laser,
+            &mut m,
+            Records {
+                store: &r.store,
+                telemetry: &mut r.telemetry,
+            },
+            Instant::now(),
+            &mut never,
+        )
+        .await
+        .unwrap();
+        assert_eq!(outcome, RunOutcome::Finished);
+        let faults = faults.lock().unwrap().clone();
+        assert_eq!(faults.len(), 1, "{faults:?}");
+        assert_eq!(faults[0].1, Fault::StaleScan);
+        // The stop comes within the stale timeout (+ one 100 ms scan period) of the last scan.
+        assert!(
+            (1.4..1.65).contains(&faults[0].0),
+            "fault at {} s",
+            faults[0].0
+        );
+        let log = r.log.lock().unwrap().clone();
+        let halt = log
+            .iter()
+            .position(|&(t, n, a)| {
+                n == 11 && a == Some(0) && t > r.t0 + Duration::from_millis(1300)
+            })
+            .expect("a VEL 0 at the dropout");
+        let resumed = log[halt..]
+            .iter()
+            .find(|&&(_, n, a)| n == 11 && a != Some(0))
+            .expect("driving resumed after the dropout");
+        assert!(
+            resumed.0 >= r.t0 + Duration::from_millis(1800),
+            "no motion before scans return"
+        );
+        assert!(m.scans >= 15 && m.statuses >= 20);
+        let saved = r.store.load().unwrap().unwrap().0;
+        assert!(
+            saved.mission_time_s >= 1.0,
+            "state saved during the mission"
+        );
+        std::fs::remove_dir_all(&r.dir).unwrap();
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn shutdown_signal_stops_the_robot_mid_mission() {
+        let mut r = rig("signal", (Duration::MAX, Duration::MAX)).await;
+        let (mut m, faults) = mission(100.0);
+        let mut signal = std::pin::pin!(tokio::time::sleep(Duration::from_millis(1200)));
+        let outcome = pump(
+            &r.board,
+            &mut r.client,
+            &mut r.laser,
+            &mut m,
+            Records {
+                store: &r.store,
+                telemetry: &mut r.telemetry,
+            },
+            Instant::now(),
+            &mut signal,
+        )
+        .await
+        .unwrap();
+        assert_eq!(outcome, RunOutcome::Interrupted);
+        assert!(faults.lock().unwrap().is_empty());
+        assert_eq!(r.client.fault(), Some(Fault::Operator));
+        r.client.stop_and_close().await.unwrap();
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        let sent: Vec<(u8, Option<i16>)> = r
+            .log
+            .lock()
+            .unwrap()
+            .iter()
+            .map(|&(_, n, a)| (n, a))
+            .collect();
+        let n = sent.len();
+        assert_eq!(&sent[n - 2..], [(4, Some(0)), (2, Some(1))]);
+        let last_nonzero = sent
+            .iter()
+            .rposition(|&(c, a)| c == 11 && a == Some(100))
+            .unwrap();
+        let first_stop_after = sent[last_nonzero..]
+            .iter()
+            .position(|&c| c == (11, Some(0)));
+        assert!(first_stop_after.is_some());
+        std::fs::remove_dir_all(&r.dir).unwrap();
+    }
+}
+
+#[cfg(test)]
+mod reconnect_tests {
+    use super::*;
+    use crate::onboard::laser::tests::{ByteCodec, streaming_laser};
+    use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+
+    /// A robot behind a TCP listener; the first connection is cut after `cut_after`.
+    async fn flaky_robot(cut_after: Duration) -> (String, CommandLog) {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        let log = CommandLog::default();
+        let log2 = log.clone();
+        tokio::spawn(async move {
+            let mut first = true;
+            while let Ok((mut sock, _)) = listener.accept().await {
+                let (a, mut b) = tokio::io::duplex(8192);
+                tokio::spawn(run_fake_robot(a, FakeRobotScript::default(), log2.clone()));
+                let bridge = tokio::spawn(async move {
+                    let _ = tokio::io::copy_bidirectional(&mut sock, &mut b).await;
+                });
+                if first {
+                    first = false;
+                    tokio::time::sleep(cut_after).await;
+                    bridge.abort();
+                }
+            }
+        });
+        (addr, log)
+    }
+
+    async fn laser_server() -> String {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        tokio::spawn(async move {
+            while let Ok((mut sock, _)) = listener.accept().await {
+                let (a, mut b) = tokio::io::duplex(8192);
+                tokio::spawn(streaming_laser(
+                    a,
+                    Duration::from_millis(50),
+                    (Duration::MAX, Duration::MAX),
+                ));
+                tokio::spawn(async move {
+                    let _ = tokio::io::copy_bidirectional(&mut sock, &mut b).await;
+                });
+            }
+        });
+        addr
+    }
+
+    /// Drives until `done_at_s`; re-plans 0.2 s after a fault.
+    struct Mission {
+        faults: Vec<(f64, Fault)>,
+        fault_at: Option<f64>,
+        now_s: f64,
+    }
+
+    impl MissionDriver for Mission {
+        fn on_status(&mut self, _: f64, _: &RobotStatus) {}
+        fn on_scan(&mut self, _: f64, _: &Scan) {}
+        fn on_fault(&mut self, t_s: f64, fault: Fault) {
+            self.faults.push((t_s, fault));
+            self.fault_at = Some(t_s);
+        }
+        fn replanned(&self) -> bool {
+            self.fault_at.is_none_or(|f| self.now_s - f > 0.2)
+        }
+        fn step(&mut self, t_s: f64) -> MissionCommand {
+            self.now_s = t_s;
+            let after_fault = self.fault_at.is_some_and(|f| t_s - f > 0.5);
+            if after_fault || t_s > 10.0 {
+                MissionCommand::Done
+            } else {
+                MissionCommand::Drive {
+                    speed_mm_s: 120,
+                    turn_deg_s: 0,
+                }
+            }
+        }
+        fn snapshot(&self) -> (MissionState, Option<MapImage>) {
+            let state = MissionState {
+                version: STATE_VERSION,
+                mission_time_s: self.now_s,
+                counters: crate::onboard::persist::Counters {
+                    faults: self.faults.len() as u64,
+                    ..Default::default()
+                },
+                ..MissionState::default()
+            };
+            (state, None)
+        }
+    }
+
+    #[tokio::test]
+    async fn a_cut_robot_link_is_reconnected_and_the_mission_finishes() {
+        let (robot, log) = flaky_robot(Duration::from_millis(600)).await;
+        let laser = laser_server().await;
+        let mut board = BoardConfig::default();
+        board.robot.subclass = crate::config::Name::new("p3dx-sh").unwrap();
+        board.link.tcp = crate::config::Address::new(&robot);
+        board.laser.address = crate::config::Address::new(&laser);
+        board.laser.beam_count = 3;
+        let dir = std::env::temp_dir().join(format!("papillon-reconnect-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let outcome = run_with(
+            RunOptions {
+                board,
+                log_dir: dir.clone(),
+                resume: false,
+            },
+            || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
+            || Some(Box::new(ByteCodec::default()) as Box<dyn LaserCodec>),
+            |_, _| {
+                Some(Box::new(Mission {
+                    faults: Vec::new(),
+                    fault_at: None,
+                    now_s: 0.0,
+                }) as Box<dyn MissionDriver>)
+            },
+            std::future::pending(),
+        )
+        .await
+        .unwrap();
+        assert_eq!(outcome, RunOutcome::Finished);
+        let (state, _) = StateStore::open(&dir).unwrap().load().unwrap().unwrap();
+        assert_eq!(state.counters.faults, 1, "one link fault");
+        assert!(
+            state.mission_time_s > 1.0,
+            "mission time runs on across the reconnection: {} s",
+            state.mission_time_s
+        );
+        let telemetry = std::fs::read_to_string(dir.join("telemetry.jsonl")).unwrap();
+        assert!(telemetry.contains("\"kind\":\"reconnect\""), "{telemetry}");
+        // Two handshakes: SYNC2 (bare command 2) appears twice.
+        let syncs = log
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|&&(_, n, a)| n == 2 && a.is_none())
+            .count();
+        assert_eq!(syncs, 2);
+        // After the second handshake, the first velocity command is a stop.
+        let entries = log.lock().unwrap().clone();
+        let second = entries
+            .iter()
+            .rposition(|&(_, n, a)| n == 2 && a.is_none())
+            .unwrap();
+        let first_vel = entries[second..]
+            .iter()
+            .find(|&&(_, n, _)| n == 11)
+            .unwrap();
+        assert_eq!(first_vel.2, Some(0));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
