@@ -8,40 +8,40 @@ use core::f32::consts::{PI, TAU};
 
 use crate::math;
 
-/// A point [m].
+/// A point \[m\].
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Point2 {
-    /// East [m].
+    /// East \[m\].
     pub x: f32,
-    /// North [m].
+    /// North \[m\].
     pub y: f32,
 }
 
 impl Point2 {
-    /// The point `(x, y)` [m].
+    /// The point `(x, y)` \[m\].
     pub const fn new(x: f32, y: f32) -> Self {
         Self { x, y }
     }
 
-    /// Euclidean distance to `other` [m].
+    /// Euclidean distance to `other` \[m\].
     pub fn distance(self, other: Point2) -> f32 {
         math::hypot(other.x - self.x, other.y - self.y)
     }
 
-    /// Bearing from `self` toward `other` [rad], counter-clockwise from +x.
+    /// Bearing from `self` toward `other` \[rad\], counter-clockwise from +x.
     pub fn bearing_to(self, other: Point2) -> f32 {
         math::atan2(other.y - self.y, other.x - self.x)
     }
 }
 
-/// A planar pose: position [m] and heading [rad].
+/// A planar pose: position \[m\] and heading \[rad\].
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Pose2 {
-    /// East [m].
+    /// East \[m\].
     pub x: f32,
-    /// North [m].
+    /// North \[m\].
     pub y: f32,
-    /// Heading [rad], counter-clockwise from +x, kept in (-pi, pi].
+    /// Heading \[rad\], counter-clockwise from +x, kept in (-pi, pi].
     pub theta: f32,
 }
 
@@ -80,7 +80,7 @@ impl Pose2 {
     }
 }
 
-/// Wraps an angle into (-pi, pi] [rad].
+/// Wraps an angle into (-pi, pi] \[rad\].
 pub fn normalize_angle(a: f32) -> f32 {
     if a.is_nan() {
         return a;

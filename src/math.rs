@@ -10,19 +10,19 @@ pub fn sqrt(x: f32) -> f32 {
     libm::sqrtf(x)
 }
 
-/// Sine of `x` [rad].
+/// Sine of `x` \[rad\].
 #[inline]
 pub fn sin(x: f32) -> f32 {
     libm::sinf(x)
 }
 
-/// Cosine of `x` [rad].
+/// Cosine of `x` \[rad\].
 #[inline]
 pub fn cos(x: f32) -> f32 {
     libm::cosf(x)
 }
 
-/// Four-quadrant arctangent of `y / x` [rad], in (-pi, pi].
+/// Four-quadrant arctangent of `y / x` \[rad\], in (-pi, pi].
 #[inline]
 pub fn atan2(y: f32, x: f32) -> f32 {
     libm::atan2f(y, x)

@@ -2,8 +2,8 @@
 #![warn(missing_docs)]
 
 pub mod cli;
-pub mod movingai;
 pub mod dynamic;
 pub mod laser;
+pub mod movingai;
 pub mod physics;
 pub mod world;

@@ -77,7 +77,7 @@ pub struct Outcome {
     pub max: f64,
     /// Mean evaluations per run.
     pub evals: f64,
-    /// Mean wall time per run [ms].
+    /// Mean wall time per run \[ms\].
     pub mean_ms: f64,
 }
 
