@@ -4,6 +4,7 @@
 pub mod cli;
 pub mod movingai;
 pub mod dynamic;
+pub mod emulator;
 pub mod laser;
 pub mod physics;
 pub mod world;
