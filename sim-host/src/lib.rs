@@ -2,9 +2,9 @@
 #![warn(missing_docs)]
 
 pub mod cli;
-pub mod movingai;
 pub mod dynamic;
 pub mod emulator;
 pub mod laser;
+pub mod movingai;
 pub mod physics;
 pub mod world;

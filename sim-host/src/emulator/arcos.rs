@@ -448,7 +448,11 @@ pub fn sonar_ranges_mm(world: &World, pose: Pose2) -> [u16; 8] {
     let mut out = [SONAR_MAX_MM; 8];
     let max_m = SONAR_MAX_MM as f32 / 1000.0;
     for (o, (x_mm, y_mm, th_deg)) in out.iter_mut().zip(FRONT_SONAR) {
-        let p = pose.compose(Pose2::new(x_mm / 1000.0, y_mm / 1000.0, th_deg.to_radians()));
+        let p = pose.compose(Pose2::new(
+            x_mm / 1000.0,
+            y_mm / 1000.0,
+            th_deg.to_radians(),
+        ));
         let origin = Point2::new(p.x, p.y);
         if let Some(r) = cast_ray(world, origin, p.theta, max_m) {
             *o = (r * 1000.0).round().clamp(0.0, SONAR_MAX_MM as f32) as u16;

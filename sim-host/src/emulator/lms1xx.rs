@@ -99,8 +99,10 @@ impl Lms1xxEmulator {
             match request {
                 Request::SetScanConfig { config, .. } => self.scan_config = config,
                 Request::SubscribeScanData(on) => {
+                    // The first scan follows one period after the acknowledgement, so the
+                    // reply arrives alone (the clearpath driver reads it with one short read).
                     self.subscribed = on;
-                    self.next_scan_s = now_s;
+                    self.next_scan_s = now_s + self.scan_period_s();
                 }
                 Request::PollScanData => {
                     let s = scan(laser_config(self.scan_config));
@@ -115,6 +117,11 @@ impl Lms1xxEmulator {
         }
     }
 
+    /// Time between streamed scans \[s\].
+    pub fn scan_period_s(&self) -> f64 {
+        100.0 / self.scan_config.frequency_centi_hz.max(1) as f64
+    }
+
     /// Whether a streamed scan is due at `now_s` \[s\].
     pub fn scan_due(&self, now_s: f64) -> bool {
         self.subscribed && now_s + 1e-9 >= self.next_scan_s
@@ -125,7 +132,7 @@ impl Lms1xxEmulator {
         if !self.scan_due(now_s) {
             return;
         }
-        let period = 100.0 / self.scan_config.frequency_centi_hz.max(1) as f64;
+        let period = self.scan_period_s();
         self.next_scan_s += period;
         if self.next_scan_s <= now_s {
             self.next_scan_s = now_s + period;
