@@ -154,11 +154,7 @@ impl ArcosEmulator {
     /// `out`. Junk before a packet header and packets with bad checksums are skipped.
     pub fn receive(&mut self, now_s: f64, bytes: &[u8], body: &mut RobotBody, out: &mut Vec<u8>) {
         let mut input = bytes;
-        loop {
-            let parsed = match self.decoder.decode(&mut input) {
-                Some(frame) => Command::parse(&frame),
-                None => break,
-            };
+        while let Some(parsed) = self.decoder.decode(&mut input).map(|f| Command::parse(&f)) {
             // A well-framed packet with an argument the firmware does not accept is ignored,
             // but it still proves the client is alive.
             self.feed_watchdog(now_s, body);

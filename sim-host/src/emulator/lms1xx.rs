@@ -86,11 +86,7 @@ impl Lms1xxEmulator {
         out: &mut Vec<u8>,
     ) {
         let mut input = bytes;
-        loop {
-            let parsed = match self.decoder.decode(&mut input) {
-                Some(payload) => Request::parse(payload),
-                None => break,
-            };
+        while let Some(parsed) = self.decoder.decode(&mut input).map(Request::parse) {
             let Ok(request) = parsed else {
                 emit_reply(out, &Reply::Error { code: 1 });
                 continue;
