@@ -576,3 +576,73 @@ fn lms1xx_session_streams_scans_matching_the_world_only_after_subscribing() {
         );
     }
 }
+
+#[test]
+fn driving_into_a_wall_sets_the_front_bumper_and_stall_flags() {
+    let mut b = Bench::new();
+    // Facing south, 0.5 m from the wall face: contact after about 0.25 m.
+    b.body.teleport(papillon::geometry::Pose2::new(
+        1.0,
+        1.0,
+        -core::f32::consts::FRAC_PI_2,
+    ));
+    b.connect();
+    b.send(Command::Enable(true));
+    let before = statuses(&b.run(0.3, Some(Command::Pulse)))
+        .last()
+        .map(|s| s.stall_bumpers)
+        .unwrap();
+    assert_eq!(before, 0);
+    b.send(Command::Vel(200));
+    let packets = b.run(3.0, Some(Command::Vel(200)));
+    let last = *statuses(&packets).last().unwrap();
+    assert_ne!(last.bumpers_b(), 0, "front bumper (ring B) {last:?}");
+    assert!(last.stalled());
+    assert_eq!(last.bumpers_a(), 0, "rear bumper");
+}
+
+#[test]
+fn with_one_percent_byte_corruption_the_client_keeps_receiving_valid_status_packets() {
+    let mut rng = papillon::random::seeded(42);
+    let mut b = Bench::new();
+    b.connect();
+    b.send(Command::Enable(true));
+    b.send(Command::Vel(200));
+    let mut client = FrameDecoder::new();
+    let mut clean = FrameDecoder::new();
+    let (mut valid, mut sent) = (0, 0);
+    let mut corrupted = 0;
+    for step in 0..300 {
+        b.now_s += 0.01;
+        b.body.advance(0.01, &b.world, &[]);
+        let mut out = Vec::new();
+        b.emu.tick(b.now_s, &b.world, &mut b.body, &mut out);
+        if step % 50 == 0 {
+            b.emu
+                .receive(b.now_s, &bytes_of(Command::Pulse), &mut b.body, &mut out);
+        }
+        sent += statuses(&decode_all(&mut clean, &out)).len();
+        for byte in out.iter_mut() {
+            if papillon::random::chance(&mut rng, 0.01) {
+                *byte ^= 1 << papillon::random::below(&mut rng, 8);
+                corrupted += 1;
+            }
+        }
+        let mut input = &out[..];
+        while let Some(frame) = client.decode(&mut input) {
+            if matches!(frame.id(), sip::ID_STOPPED | sip::ID_MOVING) {
+                let s =
+                    StatusPacket::parse_frame(&frame).expect("a frame with a good checksum parses");
+                assert!(s.motors_enabled());
+                valid += 1;
+            }
+        }
+    }
+    assert!(corrupted > 10, "{corrupted} bytes corrupted");
+    // One every 100 ms for 3 s (from the first tick on).
+    assert!((30..=31).contains(&sent), "{sent} status packets sent");
+    // A SIP is about 60 bytes: about half survive 1 % corruption untouched.
+    assert!(valid >= 10, "{valid} of {sent} status packets valid");
+    assert!(valid < sent, "corruption had no effect");
+    assert!(client.stats().bad_checksum > 0);
+}
