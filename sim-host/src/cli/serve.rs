@@ -187,9 +187,15 @@ fn serve_arcos_tcp(sim: &Sim, mut stream: TcpStream) {
     }
 }
 
-/// Runs an ARCOS session over `io` (reads time out or would block when idle) until EOF.
+/// Runs an ARCOS session over `io` (reads time out or would block when idle) until EOF; a
+/// dropped link stops the robot and disables its motors.
 fn serve_arcos(sim: &Sim, io: &mut (impl Read + Write)) {
     let mut emu = ArcosEmulator::new(ROBOT_NAME);
+    arcos_session(sim, io, &mut emu);
+    emu.disconnect(&mut sim.body());
+}
+
+fn arcos_session(sim: &Sim, io: &mut (impl Read + Write), emu: &mut ArcosEmulator) {
     let mut buf = [0u8; 1024];
     let mut out = Vec::new();
     while !STOP.load(Ordering::SeqCst) {

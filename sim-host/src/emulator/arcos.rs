@@ -150,6 +150,11 @@ impl ArcosEmulator {
         self.max_turn_deg_s
     }
 
+    /// Ends the session as when the link drops: the robot stops and its motors are disabled.
+    pub fn disconnect(&mut self, body: &mut RobotBody) {
+        self.close(body);
+    }
+
     /// Feeds bytes received from the client at time `now_s` \[s\]; replies are appended to
     /// `out`. Junk before a packet header and packets with bad checksums are skipped.
     pub fn receive(&mut self, now_s: f64, bytes: &[u8], body: &mut RobotBody, out: &mut Vec<u8>) {
@@ -370,7 +375,6 @@ impl ArcosEmulator {
             // Everything else (SAY, BATTERYINFO, PID values, ...) is accepted and ignored.
             _ => {}
         }
-        let _ = now_s;
     }
 
     fn handshake(&mut self, now_s: f64, command: Command, body: &mut RobotBody, out: &mut Vec<u8>) {
