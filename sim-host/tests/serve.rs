@@ -646,3 +646,63 @@ fn with_one_percent_byte_corruption_the_client_keeps_receiving_valid_status_pack
     assert!(valid < sent, "corruption had no effect");
     assert!(client.stats().bad_checksum > 0);
 }
+
+#[test]
+fn fault_specs_parse_and_bad_ones_are_refused() {
+    use papillon_sim::cli::serve::{FaultSpecError, Faults};
+    let f: Faults = "corrupt=0.01, drop=0.002".parse().unwrap();
+    assert_eq!(f.corrupt, 0.01);
+    assert_eq!(f.drop, 0.002);
+    assert_eq!("".parse::<Faults>().unwrap(), Faults::default());
+    assert!(matches!(
+        "corrupt=2".parse::<Faults>(),
+        Err(FaultSpecError::BadProbability { .. })
+    ));
+    assert!(matches!(
+        "latency=5".parse::<Faults>(),
+        Err(FaultSpecError::UnknownItem { .. })
+    ));
+}
+
+#[test]
+fn tcp_client_with_one_percent_corruption_connects_and_keeps_receiving_status_packets() {
+    let server = Server::start(&["--tcp", "127.0.0.1:0", "--faults", "corrupt=0.01"]);
+    let mut stream = TcpStream::connect(server.endpoint("arcos tcp")).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .unwrap();
+    let mut dec = FrameDecoder::new();
+    // A client retries the handshake when a reply is lost to corruption.
+    let mut synced = false;
+    'attempts: for _ in 0..20 {
+        for n in 0..3u8 {
+            let cmd = [Command::SYNC0, Command::SYNC1, Command::SYNC2][n as usize].clone();
+            stream.write_all(&bytes_of(cmd)).unwrap();
+            let got = read_until(
+                &mut stream,
+                &mut dec,
+                Duration::from_millis(300),
+                |p| matches!(p, Packet::Sync(s) if s.id() == n),
+            );
+            if !got {
+                continue 'attempts;
+            }
+        }
+        synced = true;
+        break;
+    }
+    assert!(synced, "handshake never completed");
+    stream.write_all(&bytes_of(Command::Open(Some(1)))).unwrap();
+    let mut valid = 0;
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(2) {
+        stream.write_all(&bytes_of(Command::Pulse)).unwrap();
+        read_until(&mut stream, &mut dec, Duration::from_millis(250), |p| {
+            valid += usize::from(matches!(p, Packet::Status(_)));
+            false
+        });
+    }
+    // About 20 sent; a 60-byte SIP survives 1 % corruption about half the time.
+    assert!(valid >= 5, "{valid} valid status packets in 2 s");
+    assert!(dec.stats().bad_checksum > 0, "no corruption seen");
+}

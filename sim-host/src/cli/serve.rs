@@ -16,6 +16,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use papillon::random::{self, ProjectRng};
 use papillon::sensor::{LaserConfig, Scan};
 
 use crate::emulator::arcos::ArcosEmulator;
@@ -46,9 +47,101 @@ pub struct Args {
     /// Serve the LMS1xx laser (CoLa-A) on this TCP address.
     #[arg(long, default_value = "127.0.0.1:2111")]
     pub laser: String,
-    /// Seed of the simulation's random choices (wheel slip).
+    /// Seed of the simulation's random choices (wheel slip, faults).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Byte faults on the ARCOS link, server to client: `corrupt=P,drop=P` (probabilities per
+    /// byte, e.g. `corrupt=0.01`).
+    #[arg(long, default_value = "")]
+    pub faults: Faults,
+}
+
+/// Byte faults injected on the ARCOS link (server to client), drawn from a seeded generator.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Faults {
+    /// Probability that a byte has one bit flipped.
+    pub corrupt: f32,
+    /// Probability that a byte is lost.
+    pub drop: f32,
+}
+
+/// A `--faults` specification that cannot be read.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum FaultSpecError {
+    /// An item that is not `name=value`, or a name other than `corrupt` and `drop`.
+    UnknownItem {
+        /// The item seen.
+        item: String,
+    },
+    /// A value that is not a probability in [0, 1].
+    BadProbability {
+        /// The item seen.
+        item: String,
+    },
+}
+
+impl std::fmt::Display for FaultSpecError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FaultSpecError::UnknownItem { item } => {
+                write!(f, "unknown fault {item:?}: expected corrupt=P or drop=P")
+            }
+            FaultSpecError::BadProbability { item } => {
+                write!(f, "in {item:?}: expected a probability between 0 and 1")
+            }
+        }
+    }
+}
+
+impl std::error::Error for FaultSpecError {}
+
+impl std::str::FromStr for Faults {
+    type Err = FaultSpecError;
+
+    fn from_str(spec: &str) -> Result<Self, Self::Err> {
+        let mut faults = Faults::default();
+        for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
+            let unknown = || FaultSpecError::UnknownItem {
+                item: item.to_string(),
+            };
+            let (name, value) = item.split_once('=').ok_or_else(unknown)?;
+            let field = match name.trim() {
+                "corrupt" => &mut faults.corrupt,
+                "drop" => &mut faults.drop,
+                _ => return Err(unknown()),
+            };
+            *field = value
+                .trim()
+                .parse()
+                .ok()
+                .filter(|p: &f32| (0.0..=1.0).contains(p))
+                .ok_or_else(|| FaultSpecError::BadProbability {
+                    item: item.to_string(),
+                })?;
+        }
+        Ok(faults)
+    }
+}
+
+impl Faults {
+    /// Whether any fault is configured.
+    pub fn any(&self) -> bool {
+        self.corrupt > 0.0 || self.drop > 0.0
+    }
+
+    /// Drops and corrupts bytes of `data` in place.
+    pub fn apply(&self, rng: &mut ProjectRng, data: &mut Vec<u8>) {
+        if !self.any() {
+            return;
+        }
+        data.retain(|_| !random::chance(rng, self.drop));
+        for byte in data.iter_mut() {
+            if random::chance(rng, self.corrupt) {
+                *byte ^= 1 << random::below(rng, 8);
+            }
+        }
+    }
 }
 
 /// The world and the robot, shared by the endpoint threads.
@@ -57,6 +150,8 @@ struct Sim {
     body: Mutex<RobotBody>,
     start: Instant,
     seed: u64,
+    faults: Faults,
+    links: std::sync::atomic::AtomicU64,
 }
 
 impl Sim {
@@ -109,6 +204,8 @@ fn serve(args: Args) -> Result<(), String> {
         body: Mutex::new(body),
         start: Instant::now(),
         seed: args.seed,
+        faults: args.faults,
+        links: std::sync::atomic::AtomicU64::new(0),
     });
     install_signal_handlers();
 
@@ -191,11 +288,18 @@ fn serve_arcos_tcp(sim: &Sim, mut stream: TcpStream) {
 /// dropped link stops the robot and disables its motors.
 fn serve_arcos(sim: &Sim, io: &mut (impl Read + Write)) {
     let mut emu = ArcosEmulator::new(ROBOT_NAME);
-    arcos_session(sim, io, &mut emu);
+    let link = sim.links.fetch_add(1, Ordering::SeqCst);
+    let mut rng = random::seeded(sim.seed ^ (link + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    arcos_session(sim, io, &mut emu, &mut rng);
     emu.disconnect(&mut sim.body());
 }
 
-fn arcos_session(sim: &Sim, io: &mut (impl Read + Write), emu: &mut ArcosEmulator) {
+fn arcos_session(
+    sim: &Sim,
+    io: &mut (impl Read + Write),
+    emu: &mut ArcosEmulator,
+    rng: &mut ProjectRng,
+) {
     let mut buf = [0u8; 1024];
     let mut out = Vec::new();
     while !STOP.load(Ordering::SeqCst) {
@@ -214,6 +318,7 @@ fn arcos_session(sim: &Sim, io: &mut (impl Read + Write), emu: &mut ArcosEmulato
             emu.receive(now, &buf[..n], &mut body, &mut out);
             emu.tick(now, &sim.world, &mut body, &mut out);
         }
+        sim.faults.apply(rng, &mut out);
         if !out.is_empty() {
             if write_some(io, &out).is_err() {
                 return;
