@@ -251,7 +251,7 @@ fn serve(args: Args) -> Result<(), String> {
     if let Some(link) = link_to_remove {
         let _ = std::fs::remove_file(&link);
     }
-    println!("stopped");
+    let _ = writeln!(io::stdout(), "stopped");
     Ok(())
 }
 
