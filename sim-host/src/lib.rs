@@ -3,6 +3,7 @@
 
 pub mod cli;
 pub mod dynamic;
+pub mod emulator;
 pub mod laser;
 pub mod movingai;
 pub mod physics;

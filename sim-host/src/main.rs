@@ -20,6 +20,8 @@ enum Command {
     Optimize(cli::optimize::Args),
     /// Solve a Moving AI path-finding benchmark with Papillon's A*.
     Plan(cli::plan::Args),
+    /// Serve an emulated P3-DX microcontroller and LMS1xx laser over a simulated world.
+    Serve(cli::serve::Args),
 }
 
 fn main() -> ExitCode {
@@ -27,5 +29,6 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Optimize(args) => cli::optimize::run(args),
         Command::Plan(args) => cli::plan::run(args),
+        Command::Serve(args) => cli::serve::run(args),
     }
 }

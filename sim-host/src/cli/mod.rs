@@ -2,3 +2,4 @@
 
 pub mod optimize;
 pub mod plan;
+pub mod serve;

@@ -1,0 +1,8 @@
+//! Emulated robot hardware: the P3-DX microcontroller (ARCOS) and the SICK LMS1xx (CoLa-A).
+//!
+//! Both emulators are sans-IO: they take the bytes a client sent and the current time, and
+//! append the bytes to send back to a caller's buffer. The caller owns the sockets, the pty
+//! and the clock (see `cli::serve`).
+
+pub mod arcos;
+pub mod lms1xx;

@@ -1,0 +1,708 @@
+//! `papillon-sim serve`: the ARCOS emulator in simulated time (handshake, motors, watchdog),
+//! and the served endpoints over a real pty and loopback TCP, driven by clients built on the
+//! core codecs.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::os::fd::AsRawFd;
+use std::path::PathBuf;
+use std::process::{Child, Command as Process, Stdio};
+use std::time::{Duration, Instant};
+
+use papillon::wire::arcos::{
+    Command, ConfigPacket, EncoderPacket, FrameDecoder, StatusPacket, SyncReply, config, encoder,
+    sip,
+};
+use papillon::wire::lms1xx::command::check_reply;
+use papillon::wire::lms1xx::{
+    ColaDecoder, Dialect, Reply, Request, ScanConfig, ScanDataConfig, ScanTelegram,
+};
+use papillon_sim::cli::serve::MAP_RESOLUTION_M;
+use papillon_sim::emulator::arcos::{ArcosEmulator, Link, WATCHDOG_S};
+use papillon_sim::emulator::lms1xx::laser_config;
+use papillon_sim::laser::LaserSim;
+use papillon_sim::physics::{BodyConfig, RobotBody};
+use papillon_sim::world::World;
+
+/// A server packet decoded from the emulator's output.
+#[derive(Debug)]
+enum Packet {
+    Sync(SyncReply),
+    Status(StatusPacket),
+    Config(Box<ConfigPacket>),
+    Encoder(EncoderPacket),
+}
+
+fn decode_all(dec: &mut FrameDecoder, bytes: &[u8]) -> Vec<Packet> {
+    let mut input = bytes;
+    let mut out = Vec::new();
+    while let Some(frame) = dec.decode(&mut input) {
+        let p = match frame.id() {
+            0..=2 => Packet::Sync(SyncReply::parse_frame(&frame).expect("sync reply")),
+            sip::ID_STOPPED | sip::ID_MOVING => {
+                Packet::Status(StatusPacket::parse_frame(&frame).expect("status packet"))
+            }
+            config::ID => Packet::Config(Box::new(
+                ConfigPacket::parse_frame(&frame).expect("config packet"),
+            )),
+            encoder::ID => Packet::Encoder(EncoderPacket::parse_frame(&frame).expect("encoder")),
+            other => panic!("unexpected packet id {other:#x}"),
+        };
+        out.push(p);
+    }
+    out
+}
+
+fn bytes_of(cmd: Command) -> Vec<u8> {
+    let mut buf = [0u8; 64];
+    let n = cmd.emit(&mut buf).expect("emit command");
+    buf[..n].to_vec()
+}
+
+/// The emulator, its robot and a clock advanced in 10 ms steps.
+struct Bench {
+    world: World,
+    body: RobotBody,
+    emu: ArcosEmulator,
+    now_s: f64,
+    dec: FrameDecoder,
+}
+
+impl Bench {
+    fn new() -> Self {
+        let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
+        let body = RobotBody::new(BodyConfig::default(), world.start(), 7);
+        Self {
+            world,
+            body,
+            emu: ArcosEmulator::new("bench"),
+            now_s: 0.0,
+            dec: FrameDecoder::new(),
+        }
+    }
+
+    fn send_bytes(&mut self, bytes: &[u8]) -> Vec<Packet> {
+        let mut out = Vec::new();
+        self.emu
+            .receive(self.now_s, bytes, &mut self.body, &mut out);
+        decode_all(&mut self.dec, &out)
+    }
+
+    fn send(&mut self, cmd: Command) -> Vec<Packet> {
+        self.send_bytes(&bytes_of(cmd))
+    }
+
+    /// Runs for `dt_s`, re-sending `keep_alive` every 0.5 s if given; returns the packets.
+    fn run(&mut self, dt_s: f64, keep_alive: Option<Command>) -> Vec<Packet> {
+        let mut packets = Vec::new();
+        let end = self.now_s + dt_s;
+        let mut next_keep = self.now_s + 0.5;
+        while self.now_s < end - 1e-9 {
+            self.now_s += 0.01;
+            self.body.advance(0.01, &self.world, &[]);
+            if let Some(c) = &keep_alive
+                && self.now_s >= next_keep
+            {
+                next_keep += 0.5;
+                packets.extend(self.send(c.clone()));
+            }
+            let mut out = Vec::new();
+            self.emu
+                .tick(self.now_s, &self.world, &mut self.body, &mut out);
+            packets.extend(decode_all(&mut self.dec, &out));
+        }
+        packets
+    }
+
+    fn connect(&mut self) {
+        // ARIA's radio-modem junk first, then SYNC0/1/2 as bare packets.
+        let mut first = b"WMS2\r".to_vec();
+        first.extend(bytes_of(Command::SYNC0));
+        let replies = self.send_bytes(&first);
+        assert!(matches!(
+            replies.as_slice(),
+            [Packet::Sync(SyncReply::Sync0)]
+        ));
+        let replies = self.send(Command::SYNC1);
+        assert!(matches!(
+            replies.as_slice(),
+            [Packet::Sync(SyncReply::Sync1)]
+        ));
+        let replies = self.send(Command::SYNC2);
+        match replies.as_slice() {
+            [
+                Packet::Sync(SyncReply::Sync2 {
+                    name,
+                    class,
+                    subclass,
+                }),
+            ] => {
+                assert_eq!(name.as_str(), "bench");
+                assert_eq!(class.as_str(), "Pioneer");
+                assert_eq!(subclass.as_str(), "p3dx-sh");
+            }
+            other => panic!("expected SYNC2 reply, got {other:?}"),
+        }
+        assert!(self.send(Command::Open(Some(1))).is_empty());
+        assert_eq!(self.emu.link(), Link::Open);
+    }
+}
+
+fn statuses(packets: &[Packet]) -> Vec<&StatusPacket> {
+    packets
+        .iter()
+        .filter_map(|p| match p {
+            Packet::Status(s) => Some(s),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn handshake_then_motors_stay_off_until_enable() {
+    let mut b = Bench::new();
+    b.connect();
+    b.send(Command::Vel(300));
+    let packets = b.run(1.0, Some(Command::Vel(300)));
+    let sips = statuses(&packets);
+    // 100 ms cadence: 10 or 11 status packets in one second.
+    assert!((10..=11).contains(&sips.len()), "{} SIPs", sips.len());
+    assert!(sips.iter().all(|s| !s.motors_enabled()));
+    assert_eq!(b.body.speed_mm_s(), 0.0);
+    assert!(sips.iter().all(|s| s.sonar.len() == 8));
+
+    b.send(Command::Enable(true));
+    b.send(Command::Vel(300));
+    let packets = b.run(2.0, Some(Command::Vel(300)));
+    let last = *statuses(&packets).last().unwrap();
+    assert!(last.motors_enabled());
+    assert!(last.moving);
+    assert!((last.left_vel_mm_s - 300).abs() <= 5, "{last:?}");
+    assert!(last.x_pos > 300, "x {}", last.x_pos);
+}
+
+#[test]
+fn watchdog_halts_after_two_silent_seconds_and_releases_on_next_command() {
+    let mut b = Bench::new();
+    b.connect();
+    b.send(Command::Enable(true));
+    b.send(Command::Vel(300));
+    b.run(2.0, Some(Command::Vel(300)));
+    assert!((b.body.speed_mm_s() - 300.0).abs() < 1.0);
+
+    // Silent for just under the watchdog period: still driving.
+    b.run(WATCHDOG_S - 0.1, None);
+    assert!(!b.emu.watchdog_halted());
+    assert!((b.body.speed_mm_s() - 300.0).abs() < 1.0);
+
+    // Past it: the watchdog fires and the robot comes to a stop (300 mm/s² decel: 1 s).
+    b.run(0.2, None);
+    assert!(b.emu.watchdog_halted());
+    assert_eq!(b.emu.watchdog_trips(), 1);
+    let packets = b.run(1.5, None);
+    assert_eq!(b.body.speed_mm_s(), 0.0);
+    let last = *statuses(&packets).last().unwrap();
+    assert!(!last.moving);
+    let x_halted = b.body.true_pose().x;
+    b.run(0.5, None);
+    assert_eq!(b.body.true_pose().x, x_halted);
+
+    // Any command (a PULSE here) resumes the last commanded motion.
+    b.send(Command::Pulse);
+    assert!(!b.emu.watchdog_halted());
+    b.run(1.5, Some(Command::Pulse));
+    assert!((b.body.speed_mm_s() - 300.0).abs() < 1.0);
+    assert!(b.body.true_pose().x > x_halted + 0.2);
+}
+
+#[test]
+fn bare_packets_after_open_are_pulse_open_close_and_limits_apply() {
+    let mut b = Bench::new();
+    b.connect();
+    b.send(Command::Enable(true));
+    // A bare 0 after OPEN is a PULSE, not a new handshake: no reply.
+    assert!(b.send(Command::SYNC0).is_empty());
+    assert_eq!(b.emu.link(), Link::Open);
+    b.send(Command::SetV(200));
+    b.send(Command::Vel(500));
+    b.run(3.0, Some(Command::Pulse));
+    assert!((b.body.speed_mm_s() - 200.0).abs() < 1.0);
+    b.send(Command::HostBaud(2));
+    assert_eq!(b.emu.host_baud(), 2);
+
+    let replies = b.send(Command::Config(Some(1)));
+    match replies.as_slice() {
+        [Packet::Config(c)] => {
+            assert_eq!(c.robot_type.as_str(), "Pioneer");
+            assert_eq!(c.subtype.as_str(), "p3dx-sh");
+            assert_eq!(c.watchdog_ms, 2000);
+            assert_eq!(c.trans_vel_max, 200);
+        }
+        other => panic!("expected CONFIG, got {other:?}"),
+    }
+
+    b.send(Command::Encoder(1));
+    let packets = b.run(0.35, Some(Command::Pulse));
+    let encoders: Vec<_> = packets
+        .iter()
+        .filter_map(|p| match p {
+            Packet::Encoder(e) => Some(*e),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(encoders.len(), 1);
+    assert!(encoders[0].left_ticks > 0 && encoders[0].right_ticks > 0);
+
+    b.send(Command::EStop);
+    let packets = b.run(0.3, Some(Command::Pulse));
+    let last = *statuses(&packets).last().unwrap();
+    assert!(last.estop());
+    assert_eq!(b.body.speed_mm_s(), 0.0);
+
+    // A bare 2 closes: status packets stop.
+    assert!(b.send(Command::SYNC2).is_empty());
+    assert_eq!(b.emu.link(), Link::Idle);
+    assert!(statuses(&b.run(0.5, None)).is_empty());
+}
+
+// ---------------------------------------------------------------- the served endpoints
+
+/// A `papillon-sim serve` process, killed (SIGTERM) on drop.
+struct Server {
+    child: Child,
+    lines: Vec<String>,
+    _stdout: BufReader<std::process::ChildStdout>,
+}
+
+impl Server {
+    fn start(extra: &[&str]) -> Self {
+        let mut child = Process::new(env!("CARGO_BIN_EXE_papillon-sim"))
+            .arg("serve")
+            .args(["--map", "empty", "--laser", "127.0.0.1:0"])
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start papillon-sim serve");
+        let mut stdout = BufReader::new(child.stdout.take().unwrap());
+        let mut lines = Vec::new();
+        loop {
+            let mut line = String::new();
+            assert!(stdout.read_line(&mut line).unwrap() > 0, "server exited");
+            let done = line.starts_with("laser ");
+            lines.push(line.trim().to_string());
+            if done {
+                break;
+            }
+        }
+        Self {
+            child,
+            lines,
+            _stdout: stdout,
+        }
+    }
+
+    fn endpoint(&self, prefix: &str) -> String {
+        let line = self
+            .lines
+            .iter()
+            .find(|l| l.starts_with(prefix))
+            .unwrap_or_else(|| panic!("no {prefix:?} line in {:?}", self.lines));
+        line[prefix.len()..].trim().to_string()
+    }
+
+    fn terminate(&mut self) -> std::process::ExitStatus {
+        // SAFETY: sends SIGTERM to our own child process.
+        unsafe { libc::kill(self.child.id() as i32, libc::SIGTERM) };
+        let deadline = Instant::now() + Duration::from_secs(5);
+        loop {
+            if let Some(status) = self.child.try_wait().unwrap() {
+                return status;
+            }
+            assert!(Instant::now() < deadline, "server did not stop on SIGTERM");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Reads packets from `io` (reads time out or would block) until `want` accepts them all,
+/// or the deadline passes.
+fn read_until(
+    io: &mut impl Read,
+    dec: &mut FrameDecoder,
+    timeout: Duration,
+    mut want: impl FnMut(&Packet) -> bool,
+) -> bool {
+    let deadline = Instant::now() + timeout;
+    let mut buf = [0u8; 512];
+    while Instant::now() < deadline {
+        match io.read(&mut buf) {
+            Ok(0) => return false,
+            Ok(n) => {
+                for p in decode_all(dec, &buf[..n]) {
+                    if want(&p) {
+                        return true;
+                    }
+                }
+            }
+            Err(_) => std::thread::sleep(Duration::from_millis(5)),
+        }
+    }
+    false
+}
+
+/// Handshake, OPEN, ENABLE, then drive and turn; returns the first and last status packets.
+fn drive_session(io: &mut (impl Read + Write)) -> (StatusPacket, StatusPacket) {
+    let mut dec = FrameDecoder::new();
+    for (n, cmd) in [Command::SYNC0, Command::SYNC1, Command::SYNC2]
+        .into_iter()
+        .enumerate()
+    {
+        io.write_all(&bytes_of(cmd)).unwrap();
+        let got = read_until(
+            io,
+            &mut dec,
+            Duration::from_secs(2),
+            |p| matches!(p, Packet::Sync(s) if s.id() as usize == n),
+        );
+        assert!(got, "no reply to SYNC{n}");
+    }
+    io.write_all(&bytes_of(Command::Open(Some(1)))).unwrap();
+    let mut first = None;
+    assert!(read_until(io, &mut dec, Duration::from_secs(2), |p| {
+        if let Packet::Status(s) = p {
+            first = Some(s.clone());
+            true
+        } else {
+            false
+        }
+    }));
+    let first = first.unwrap();
+    assert!(!first.motors_enabled());
+    io.write_all(&bytes_of(Command::Enable(true))).unwrap();
+    let mut last = None;
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_millis(1500) {
+        io.write_all(&bytes_of(Command::Vel(200))).unwrap();
+        io.write_all(&bytes_of(Command::RVel(20))).unwrap();
+        read_until(io, &mut dec, Duration::from_millis(200), |p| {
+            if let Packet::Status(s) = p {
+                last = Some(s.clone());
+            }
+            false
+        });
+    }
+    io.write_all(&bytes_of(Command::Stop)).unwrap();
+    io.write_all(&bytes_of(Command::Close(Some(1)))).unwrap();
+    (first, last.expect("status packets while driving"))
+}
+
+fn assert_moved(first: &StatusPacket, last: &StatusPacket) {
+    assert!(last.motors_enabled());
+    assert!(
+        last.x_pos.wrapping_sub(first.x_pos) as i16 > 50,
+        "{first:?} -> {last:?}"
+    );
+    assert!(last.th_pos - first.th_pos > 50, "{first:?} -> {last:?}");
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("papillon-serve-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn tcp_client_connects_enables_and_drives() {
+    let server = Server::start(&["--tcp", "127.0.0.1:0"]);
+    let addr = server.endpoint("arcos tcp");
+    let mut stream = TcpStream::connect(&addr).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .unwrap();
+    let (first, last) = drive_session(&mut stream);
+    assert_moved(&first, &last);
+}
+
+#[test]
+fn pty_client_connects_enables_and_drives_and_shutdown_removes_the_link() {
+    let dir = temp_dir("pty");
+    let link = dir.join("robot");
+    let mut server = Server::start(&["--pty", link.to_str().unwrap()]);
+    assert!(
+        server
+            .endpoint("arcos pty")
+            .starts_with(link.to_str().unwrap())
+    );
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    let mut port = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(&link)
+        .unwrap();
+    // SAFETY: fcntl on a descriptor we own.
+    unsafe {
+        let fd = port.as_raw_fd();
+        let flags = libc::fcntl(fd, libc::F_GETFL);
+        libc::fcntl(fd, libc::F_SETFL, flags | libc::O_NONBLOCK);
+    }
+    let (first, last) = drive_session(&mut port);
+    assert_moved(&first, &last);
+    drop(port);
+    let status = server.terminate();
+    assert!(status.success(), "{status:?}");
+    assert!(
+        std::fs::symlink_metadata(&link).is_err(),
+        "symlink left behind"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ---------------------------------------------------------------- laser
+
+/// Sends `req`, checks the reply, and returns the bytes read after it.
+fn send_request(stream: &mut TcpStream, dec: &mut ColaDecoder, req: Request) -> Vec<u8> {
+    let mut buf = [0u8; 256];
+    let n = req.emit(&mut buf).unwrap();
+    stream.write_all(&buf[..n]).unwrap();
+    let deadline = Instant::now() + Duration::from_secs(2);
+    let mut rx = [0u8; 512];
+    while Instant::now() < deadline {
+        if let Ok(n) = stream.read(&mut rx) {
+            let mut input = &rx[..n];
+            if let Some(payload) = dec.decode(&mut input) {
+                let reply = Reply::parse(payload).expect("reply parses");
+                check_reply(&req, &reply).expect("successful reply");
+                return input.to_vec();
+            }
+        }
+    }
+    panic!("no reply to {req:?}");
+}
+
+#[test]
+fn lms1xx_session_streams_scans_matching_the_world_only_after_subscribing() {
+    let server = Server::start(&[]);
+    let addr = server.endpoint("laser lms1xx tcp");
+    let mut stream = TcpStream::connect(&addr).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .unwrap();
+    let mut dec = Box::new(ColaDecoder::<16384>::new());
+    // The clearpath driver's sequence.
+    for req in [
+        Request::SetAccessMode {
+            level: 3,
+            password_hash: 0xF472_4744,
+            dialect: Dialect::Clearpath,
+        },
+        Request::ReadScanConfig,
+        Request::ReadOutputRange,
+        Request::SetScanDataConfig(ScanDataConfig::clearpath(false)),
+        Request::StartMeasurement,
+        Request::ReadStatus,
+        Request::Run,
+    ] {
+        let rest = send_request(&mut stream, &mut dec, req);
+        assert!(rest.is_empty(), "bytes after the reply to {req:?}");
+    }
+    // Nothing streams before the subscription.
+    std::thread::sleep(Duration::from_millis(200));
+    let mut rx = vec![0u8; 65536];
+    match stream.read(&mut rx) {
+        Ok(n) => panic!("{n} bytes (or EOF) before sEN LMDscandata 1"),
+        Err(e) => assert!(
+            matches!(
+                e.kind(),
+                std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+            ),
+            "{e}"
+        ),
+    }
+    let mut pending = send_request(&mut stream, &mut dec, Request::SubscribeScanData(true));
+
+    let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
+    let expected =
+        LaserSim::new(laser_config(ScanConfig::DEFAULT_50HZ), 1).scan(&world, world.start(), &[]);
+    let mut scans = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(3);
+    while scans.len() < 5 && Instant::now() < deadline {
+        if let Ok(n) = stream.read(&mut rx) {
+            pending.extend_from_slice(&rx[..n]);
+        }
+        {
+            let mut input = &pending[..];
+            while let Some(payload) = dec.decode(&mut input) {
+                scans.push(ScanTelegram::parse(payload).expect("scan telegram"));
+            }
+        }
+        pending.clear();
+    }
+    assert_eq!(scans.len(), 5, "scans received");
+    for t in &scans {
+        assert!(!t.polled);
+        let ch = t.distance_channel().expect("DIST1");
+        assert_eq!(ch.values.len(), 541);
+        assert_eq!(ch.start_angle_deg_e4, -450_000);
+        assert_eq!(ch.step_deg_e4, 5000);
+        assert_eq!(t.scan_frequency_centi_hz, 5000);
+        let mut compared = 0;
+        for (got, beam) in ch.values.iter().zip(expected.beams()) {
+            let want = beam.range_m.map_or(0, |r| (r * 1000.0).round() as u16);
+            assert!(got.abs_diff(want) <= 1, "got {got} mm, want {want} mm");
+            compared += usize::from(want > 0);
+        }
+        // From (1, 1) facing east, the walls west and south are close; the far ones lie
+        // beyond 20 m for some beams.
+        assert!(compared > 300, "{compared} beams with a return");
+        // Beam 90 points south (-90°) at the wall face 0.5 m away.
+        assert!(
+            (450..=550).contains(&ch.values[90]),
+            "south range {}",
+            ch.values[90]
+        );
+    }
+}
+
+#[test]
+fn driving_into_a_wall_sets_the_front_bumper_and_stall_flags() {
+    let mut b = Bench::new();
+    // Facing south, 0.5 m from the wall face: contact after about 0.25 m.
+    b.body.teleport(papillon::geometry::Pose2::new(
+        1.0,
+        1.0,
+        -core::f32::consts::FRAC_PI_2,
+    ));
+    b.connect();
+    b.send(Command::Enable(true));
+    let before = statuses(&b.run(0.3, Some(Command::Pulse)))
+        .last()
+        .map(|s| s.stall_bumpers)
+        .unwrap();
+    assert_eq!(before, 0);
+    b.send(Command::Vel(200));
+    let packets = b.run(3.0, Some(Command::Vel(200)));
+    let last = *statuses(&packets).last().unwrap();
+    assert_ne!(last.bumpers_b(), 0, "front bumper (ring B) {last:?}");
+    assert!(last.stalled());
+    assert_eq!(last.bumpers_a(), 0, "rear bumper");
+}
+
+#[test]
+fn with_one_percent_byte_corruption_the_client_keeps_receiving_valid_status_packets() {
+    let mut rng = papillon::random::seeded(42);
+    let mut b = Bench::new();
+    b.connect();
+    b.send(Command::Enable(true));
+    b.send(Command::Vel(200));
+    let mut client = FrameDecoder::new();
+    let mut clean = FrameDecoder::new();
+    let (mut valid, mut sent) = (0, 0);
+    let mut corrupted = 0;
+    for step in 0..300 {
+        b.now_s += 0.01;
+        b.body.advance(0.01, &b.world, &[]);
+        let mut out = Vec::new();
+        b.emu.tick(b.now_s, &b.world, &mut b.body, &mut out);
+        if step % 50 == 0 {
+            b.emu
+                .receive(b.now_s, &bytes_of(Command::Pulse), &mut b.body, &mut out);
+        }
+        sent += statuses(&decode_all(&mut clean, &out)).len();
+        for byte in out.iter_mut() {
+            if papillon::random::chance(&mut rng, 0.01) {
+                *byte ^= 1 << papillon::random::below(&mut rng, 8);
+                corrupted += 1;
+            }
+        }
+        let mut input = &out[..];
+        while let Some(frame) = client.decode(&mut input) {
+            if matches!(frame.id(), sip::ID_STOPPED | sip::ID_MOVING) {
+                let s =
+                    StatusPacket::parse_frame(&frame).expect("a frame with a good checksum parses");
+                assert!(s.motors_enabled());
+                valid += 1;
+            }
+        }
+    }
+    assert!(corrupted > 10, "{corrupted} bytes corrupted");
+    // One every 100 ms for 3 s (from the first tick on).
+    assert!((30..=31).contains(&sent), "{sent} status packets sent");
+    // A SIP is about 60 bytes: about half survive 1 % corruption untouched.
+    assert!(valid >= 10, "{valid} of {sent} status packets valid");
+    assert!(valid < sent, "corruption had no effect");
+    assert!(client.stats().bad_checksum > 0);
+}
+
+#[test]
+fn fault_specs_parse_and_bad_ones_are_refused() {
+    use papillon_sim::cli::serve::{FaultSpecError, Faults};
+    let f: Faults = "corrupt=0.01, drop=0.002".parse().unwrap();
+    assert_eq!(f.corrupt, 0.01);
+    assert_eq!(f.drop, 0.002);
+    assert_eq!("".parse::<Faults>().unwrap(), Faults::default());
+    assert!(matches!(
+        "corrupt=2".parse::<Faults>(),
+        Err(FaultSpecError::BadProbability { .. })
+    ));
+    assert!(matches!(
+        "latency=5".parse::<Faults>(),
+        Err(FaultSpecError::UnknownItem { .. })
+    ));
+}
+
+#[test]
+fn tcp_client_with_one_percent_corruption_connects_and_keeps_receiving_status_packets() {
+    let server = Server::start(&["--tcp", "127.0.0.1:0", "--faults", "corrupt=0.01"]);
+    let mut stream = TcpStream::connect(server.endpoint("arcos tcp")).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .unwrap();
+    let mut dec = FrameDecoder::new();
+    // A client retries the handshake when a reply is lost to corruption.
+    let mut synced = false;
+    'attempts: for _ in 0..20 {
+        for n in 0..3u8 {
+            let cmd = [Command::SYNC0, Command::SYNC1, Command::SYNC2][n as usize].clone();
+            stream.write_all(&bytes_of(cmd)).unwrap();
+            let got = read_until(
+                &mut stream,
+                &mut dec,
+                Duration::from_millis(300),
+                |p| matches!(p, Packet::Sync(s) if s.id() == n),
+            );
+            if !got {
+                continue 'attempts;
+            }
+        }
+        synced = true;
+        break;
+    }
+    assert!(synced, "handshake never completed");
+    stream.write_all(&bytes_of(Command::Open(Some(1)))).unwrap();
+    let mut valid = 0;
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(2) {
+        stream.write_all(&bytes_of(Command::Pulse)).unwrap();
+        read_until(&mut stream, &mut dec, Duration::from_millis(250), |p| {
+            valid += usize::from(matches!(p, Packet::Status(_)));
+            false
+        });
+    }
+    // About 20 sent; a 60-byte SIP survives 1 % corruption about half the time.
+    assert!(valid >= 5, "{valid} valid status packets in 2 s");
+    assert!(dec.stats().bad_checksum > 0, "no corruption seen");
+}
