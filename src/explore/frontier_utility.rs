@@ -6,7 +6,8 @@
 //! - the distance is the **path** distance from the decision's distance field, not the
 //!   straight-line distance, and a frontier no path reaches is never chosen, so the robot does
 //!   not try forever to reach it;
-//! - a frontier the robot failed to reach can be blacklisted ([`FrontierUtility::blacklist`]);
+//! - a place the robot failed to reach can be blacklisted ([`FrontierUtility::blacklist`]):
+//!   frontier cells near it are skipped (the rest of the frontier stays selectable);
 //!   the entry lapses as soon as the number of known cells around it changes (the map there
 //!   was updated, so the frontier may have become reachable), so the robot does not give up
 //!   with unknown space left.
@@ -165,18 +166,19 @@ impl<const N: usize, const C: usize, const F: usize> TargetSelector<N>
             evaluations += 1;
             let mut near: Option<(Cell, f32)> = None;
             for &i in ws.cells_of(fr) {
-                if let Some((c, d)) =
+                let Some((c, d)) =
                     reach_frontier_cell(req.grid, self.objective.field(), i as usize)
-                    && near.is_none_or(|(_, b)| d < b)
+                else {
+                    continue;
+                };
+                reachable = true;
+                if near.is_none_or(|(_, b)| d < b)
+                    && !self.is_blacklisted(req.grid.geometry().cell_center(c))
                 {
                     near = Some((c, d));
                 }
             }
             let Some((cell, d)) = near else { continue };
-            reachable = true;
-            if self.is_blacklisted(req.grid.geometry().cell_center(cell)) {
-                continue;
-            }
             let cost = self.potential_scale * d - self.gain_scale * fr.size_cells as f32 * res;
             if best.is_none_or(|(_, b)| cost < b) {
                 best = Some((cell, cost));

@@ -71,6 +71,8 @@ pub struct Decision {
 }
 
 /// The outcome of a decision.
+// The core has no allocator, so the decision is held inline rather than boxed.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum Outcome {
     /// Go there.

@@ -289,6 +289,10 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
             }
             prev = cell;
         }
+        // The path starts at the robot's own position, not at the centre of its cell.
+        if self.waypoint_len > 0 {
+            self.waypoints[0] = self.start.position();
+        }
         let mut heading = self.start.theta;
         let mut length = 0.0f32;
         let mut rotation = 0.0f32;
@@ -414,7 +418,7 @@ impl<const N: usize> Problem for BoundObjective<'_, '_, '_, N> {
         let g = self.req.grid.geometry();
         // Half a millimetre inside, so the upper bound still falls in the last cell.
         let margin = 5e-4;
-        if gene % 2 == 0 {
+        if gene.is_multiple_of(2) {
             (g.origin.x, g.origin.x + g.width_m() - margin)
         } else {
             (g.origin.y, g.origin.y + g.height_m() - margin)
