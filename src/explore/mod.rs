@@ -1,1 +1,243 @@
-//! (in progress)
+//! Exploration decisions: where the robot goes next.
+//!
+//! - [`objective`]: the thesis's energy-constrained objective (Bendahmane 2023): the number of
+//!   Unknown cells predicted to become known along the planned path through k targets, with the
+//!   path's energy in steps checked against the battery.
+//! - [`optimized`]: targets chosen by any population optimizer of [`crate::optim`] (xBOA in the
+//!   thesis) on that objective.
+//! - [`nearest_frontier`]: Yamauchi (1997): the frontier with the shortest path distance.
+//! - [`frontier_utility`]: explore_lite's rule (frontier size minus a distance cost), with path
+//!   distance and a blacklist of frontiers the robot failed to reach.
+//!
+//! Every selector implements [`TargetSelector`] and fills the same [`Decision`]; the caller
+//! measures the compute time (the core reads no clock).
+
+pub mod frontier_utility;
+pub mod nearest_frontier;
+pub mod objective;
+pub mod optimized;
+
+#[cfg(all(test, feature = "std"))]
+mod tests;
+
+pub use frontier_utility::FrontierUtility;
+pub use nearest_frontier::NearestFrontier;
+pub use objective::{CandidateStatus, Evaluation, ExploreObjective};
+pub use optimized::Optimized;
+
+use crate::control::follower::MAX_WAYPOINTS;
+use crate::geometry::{Point2, Pose2};
+use crate::grid::{Cell, CellClass, OccupancyGrid};
+use crate::planner::{DistanceField, PlanError, Traversability};
+use crate::sensor::LaserConfig;
+
+/// Most targets in one decision (k).
+pub const MAX_TARGETS: usize = 8;
+/// Capacity of a decision's best-fitness history (one entry per generation, initial included).
+pub const MAX_DECISION_HISTORY: usize = 64;
+
+/// What a selector is given for one decision.
+#[derive(Clone, Copy, Debug)]
+pub struct DecisionRequest<'a, const N: usize> {
+    /// The current map.
+    pub grid: &'a OccupancyGrid<N>,
+    /// The traversability layer kept in step with `grid` (same geometry).
+    pub trav: &'a Traversability<N>,
+    /// Robot pose, map frame \[m, rad\].
+    pub pose: Pose2,
+    /// Energy left \[steps\] (1 m of travel or 45° of rotation each).
+    pub battery_steps: f32,
+    /// The laser whose geometry predicts what the robot will see.
+    pub laser: &'a LaserConfig,
+}
+
+/// A chosen plan.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Decision {
+    /// Targets, visited in order, map frame \[m\] (cell centres).
+    pub targets: heapless::Vec<Point2, MAX_TARGETS>,
+    /// Waypoints of the planned path from the robot through the targets, map frame \[m\].
+    pub waypoints: heapless::Vec<Point2, MAX_WAYPOINTS>,
+    /// Length of the planned path \[m\].
+    pub path_length_m: f32,
+    /// Unknown cells predicted to become known along the path \[cells\].
+    pub predicted_gain_cells: u32,
+    /// Energy of the path, rotations included \[steps\].
+    pub energy_steps: f32,
+    /// Objective evaluations used to decide.
+    pub evaluations: u32,
+    /// Best fitness per generation (initial population first); empty for the frontier rules.
+    pub history: heapless::Vec<f32, MAX_DECISION_HISTORY>,
+}
+
+/// The outcome of a decision.
+// The core has no allocator, so the decision is held inline rather than boxed.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug, PartialEq)]
+pub enum Outcome {
+    /// Go there.
+    Go(Decision),
+    /// Mission done: no Unknown cell is reachable any more (no frontier cell can be reached).
+    Done,
+}
+
+/// Exploration settings shared by the selectors.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExploreConfig {
+    /// Targets per decision, k (1 = the thesis's short-term strategy; at most [`MAX_TARGETS`]).
+    pub targets: usize,
+    /// Energy kept in reserve: a plan costing more than `battery - reserve` is infeasible
+    /// \[steps\].
+    pub reserve_steps: f32,
+    /// Optional cost weight lambda: score = gain - lambda * steps (clamped at 0) \[cells/step\].
+    /// `None` (default): the thesis's pure gain.
+    pub cost_weight: Option<f32>,
+    /// Score by gain per step instead of gain (default off).
+    pub gain_per_step: bool,
+    /// Spacing of the predicted scans along the path \[m\] (default 0.5).
+    pub viewpoint_spacing_m: f32,
+    /// Population size of the optimizer (default 5).
+    pub population: usize,
+    /// Generations of the optimizer (default 30).
+    pub max_generations: u32,
+}
+
+impl Default for ExploreConfig {
+    fn default() -> Self {
+        Self {
+            targets: 1,
+            reserve_steps: 0.0,
+            cost_weight: None,
+            gain_per_step: false,
+            viewpoint_spacing_m: 0.5,
+            population: 5,
+            max_generations: 30,
+        }
+    }
+}
+
+/// Why no decision could be made.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum DecideError {
+    /// The robot's own cell is outside the map or blocked.
+    Start(PlanError),
+    /// `targets` is 0 or above [`MAX_TARGETS`].
+    BadTargetCount {
+        /// The configured k.
+        got: usize,
+    },
+    /// The grid and the traversability layer have different geometries, or the grid is
+    /// larger than the working memory.
+    Mismatch {
+        /// Cells in the grid.
+        grid_cells: usize,
+        /// Cells the working memory holds.
+        capacity: usize,
+    },
+    /// The optimizer refused its settings.
+    Optimizer(crate::optim::OptimError),
+    /// Unknown space is reachable but no candidate was feasible (battery too low).
+    NoFeasibleTarget {
+        /// Energy left \[steps\].
+        battery_steps: f32,
+    },
+    /// A frontier search ran out of room.
+    Frontier(crate::frontier::FrontierError),
+    /// Every reachable frontier is blacklisted (the robot failed to reach each of them and the
+    /// map around them has not changed since).
+    AllBlacklisted {
+        /// Blacklist entries.
+        entries: usize,
+    },
+    /// The blacklist is full.
+    BlacklistFull {
+        /// Its capacity.
+        capacity: usize,
+    },
+}
+
+impl core::fmt::Display for DecideError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            DecideError::Start(e) => write!(f, "cannot plan from the robot's cell: {e}"),
+            DecideError::BadTargetCount { got } => {
+                write!(
+                    f,
+                    "targets per decision must be 1..={MAX_TARGETS}, got {got}"
+                )
+            }
+            DecideError::Mismatch {
+                grid_cells,
+                capacity,
+            } => write!(
+                f,
+                "grid of {grid_cells} cells does not match the traversability layer or the \
+                 working memory of {capacity} cells"
+            ),
+            DecideError::Optimizer(e) => write!(f, "optimizer: {e}"),
+            DecideError::NoFeasibleTarget { battery_steps } => write!(
+                f,
+                "no feasible target with {battery_steps} steps of battery left"
+            ),
+            DecideError::Frontier(e) => write!(f, "frontier search: {e}"),
+            DecideError::AllBlacklisted { entries } => write!(
+                f,
+                "every reachable frontier is blacklisted ({entries} entries, map unchanged)"
+            ),
+            DecideError::BlacklistFull { capacity } => {
+                write!(f, "frontier blacklist full ({capacity} entries)")
+            }
+        }
+    }
+}
+
+impl core::error::Error for DecideError {}
+
+/// Chooses where the robot goes next.
+pub trait TargetSelector<const N: usize> {
+    /// One decision from the map and the robot's state; every random choice comes from `rng`.
+    fn decide<R: rand_core::Rng>(
+        &mut self,
+        req: &DecisionRequest<'_, N>,
+        rng: &mut R,
+    ) -> Result<Outcome, DecideError>;
+}
+
+/// The cell the robot can drive to in order to look at frontier cell `index`: the cell itself
+/// if reachable, else its nearest reachable 4-neighbour (Free cells next to it); with the
+/// path distance \[m\].
+pub(crate) fn reach_frontier_cell<const N: usize>(
+    grid: &OccupancyGrid<N>,
+    field: &DistanceField<N>,
+    index: usize,
+) -> Option<(Cell, f32)> {
+    let c = grid.geometry().cell(index);
+    if let Some(d) = field.distance_to(c) {
+        return Some((c, d));
+    }
+    let mut best: Option<(Cell, f32)> = None;
+    for (dc, dr) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+        let n = Cell::new(c.col + dc, c.row + dr);
+        if grid.class_of(n) != Some(CellClass::Free) {
+            continue;
+        }
+        if let Some(d) = field.distance_to(n)
+            && best.is_none_or(|(_, b)| d < b)
+        {
+            best = Some((n, d));
+        }
+    }
+    best
+}
+
+/// Whether any frontier cell (Unknown with a Free 4-neighbour) can be reached from the
+/// distance field's source: if not, exploration is done.
+pub(crate) fn any_reachable_frontier<const N: usize>(
+    grid: &OccupancyGrid<N>,
+    field: &DistanceField<N>,
+) -> bool {
+    (0..grid.cell_count()).any(|i| {
+        crate::frontier::is_frontier_cell(grid, i) && reach_frontier_cell(grid, field, i).is_some()
+    })
+}

@@ -1,0 +1,465 @@
+//! The energy-constrained exploration objective (Bendahmane, PhD thesis, USTO Oran 2023,
+//! chapter on energy-aware exploration with xBOA).
+//!
+//! A candidate is k target points in the map bounds, visited in order from the robot's pose.
+//! Its **gain** is the number of currently Unknown cells predicted to become known while the
+//! robot drives the planned path: simulated scans are taken at the start pose, every
+//! [`ExploreConfig::viewpoint_spacing_m`] along each straight segment and at each waypoint,
+//! heading along the segment; each beam of the laser is traced over the grid up to the usable
+//! range, stops at the first Occupied cell, and crosses Unknown cells (what lies there is not
+//! known, so the prediction is optimistic). Cells are counted once per candidate (generation
+//! stamps, so nothing is cleared between evaluations).
+//!
+//! **Energy** is counted in steps (1 m of travel or 45° of rotation, [`crate::units::steps`]):
+//! the length of the waypoint polyline plus the turn from the robot's heading onto the first
+//! segment and at every waypoint. A candidate over `battery - reserve`, or with a target
+//! outside the grid, on a blocked (Occupied, inflated) or unreachable cell, scores the worst
+//! fitness, [`WORST_FITNESS`].
+//!
+//! **Speed**: one distance field from the robot's cell per decision ([`ExploreObjective::prepare`])
+//! serves every candidate's first leg; later legs use A*. All working memory is owned by the
+//! objective or borrowed from the caller: an evaluation allocates nothing.
+//!
+//! **Scaling**: the optimizers minimise `-(score / unknown_cells)`, in `[-1, 0]`, where
+//! `unknown_cells` is the number of Unknown cells in the grid (the largest possible gain);
+//! large fitness magnitudes upset the butterfly methods' fragrance `c·|F|^a`.
+
+use core::ops::ControlFlow;
+
+use crate::geometry::{Point2, Pose2, normalize_angle};
+use crate::grid::{Cell, CellClass, OccupancyGrid};
+use crate::math;
+use crate::optim::Problem;
+use crate::planner::{AStar, DistanceField, prune_to_waypoints};
+use crate::raycast;
+use crate::sensor::LaserConfig;
+use crate::units;
+
+use super::{DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS};
+use crate::control::follower::MAX_WAYPOINTS;
+
+/// Fitness of an infeasible or blocked candidate: worse than any feasible one (those lie in
+/// `[-1, 0]`).
+pub const WORST_FITNESS: f32 = 1.0;
+/// Most cells in one leg of a planned path.
+pub const MAX_LEG_CELLS: usize = 4096;
+/// Most predicted scans along one candidate's path.
+pub const MAX_VIEWPOINTS: usize = 1024;
+
+/// Whether a candidate can be driven.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CandidateStatus {
+    /// Reachable and within the battery.
+    Feasible,
+    /// A target lies outside the grid.
+    OutOfBounds,
+    /// A target lies on an Occupied or inflated cell.
+    Blocked,
+    /// No path reaches a target.
+    Unreachable,
+    /// The path costs more than the battery minus the reserve.
+    OverBudget,
+    /// The path does not fit the waypoint, leg or viewpoint capacities.
+    TooLong,
+}
+
+/// A candidate's evaluation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Evaluation {
+    /// Feasibility.
+    pub status: CandidateStatus,
+    /// Unknown cells predicted to become known \[cells\] (0 unless feasible).
+    pub gain_cells: u32,
+    /// Energy of the path \[steps\] (as far as it was planned).
+    pub energy_steps: f32,
+    /// Length of the waypoint polyline \[m\].
+    pub path_length_m: f32,
+    /// Fitness for the optimizers (minimised): [`WORST_FITNESS`] unless feasible, else in
+    /// `[-1, 0]`.
+    pub fitness: f32,
+}
+
+/// The objective's working memory and the state of the current decision.
+pub struct ExploreObjective<'m, const N: usize> {
+    field: &'m mut DistanceField<N>,
+    astar: &'m mut AStar<N>,
+    stamps: &'m mut [u32],
+    generation: u32,
+    leg: [Cell; MAX_LEG_CELLS],
+    waypoints: [Point2; MAX_WAYPOINTS],
+    waypoint_len: usize,
+    viewpoints: [Pose2; MAX_VIEWPOINTS],
+    viewpoint_len: usize,
+    targets: [Point2; MAX_TARGETS],
+    target_len: usize,
+    start: Pose2,
+    start_cell: Cell,
+    unknown_cells: u32,
+    budget_steps: f32,
+    config: ExploreConfig,
+}
+
+impl<const N: usize> core::fmt::Debug for ExploreObjective<'_, N> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ExploreObjective")
+            .field("start", &self.start)
+            .field("unknown_cells", &self.unknown_cells)
+            .field("budget_steps", &self.budget_steps)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'m, const N: usize> ExploreObjective<'m, N> {
+    /// An objective over the caller's planner memory and a visited-cell stamp slice of at
+    /// least the grid's cell count (on a host: `DistanceField::new_boxed()`,
+    /// `AStar::new_boxed()` and `vec![0; N]`).
+    pub fn new(
+        field: &'m mut DistanceField<N>,
+        astar: &'m mut AStar<N>,
+        stamps: &'m mut [u32],
+    ) -> Self {
+        stamps.fill(0);
+        Self {
+            field,
+            astar,
+            stamps,
+            generation: 0,
+            leg: [Cell::new(0, 0); MAX_LEG_CELLS],
+            waypoints: [Point2::new(0.0, 0.0); MAX_WAYPOINTS],
+            waypoint_len: 0,
+            viewpoints: [Pose2::default(); MAX_VIEWPOINTS],
+            viewpoint_len: 0,
+            targets: [Point2::new(0.0, 0.0); MAX_TARGETS],
+            target_len: 0,
+            start: Pose2::default(),
+            start_cell: Cell::new(0, 0),
+            unknown_cells: 0,
+            budget_steps: 0.0,
+            config: ExploreConfig::default(),
+        }
+    }
+
+    /// Starts a decision: sweeps the distance field from the robot's cell and records the
+    /// budget. Must be called before [`Self::evaluate_targets`] whenever the map or the pose
+    /// changed.
+    pub fn prepare(
+        &mut self,
+        req: &DecisionRequest<'_, N>,
+        config: &ExploreConfig,
+    ) -> Result<(), DecideError> {
+        let cells = req.grid.cell_count();
+        if cells > self.stamps.len() || req.trav.geometry() != req.grid.geometry() {
+            return Err(DecideError::Mismatch {
+                grid_cells: cells,
+                capacity: self.stamps.len(),
+            });
+        }
+        if config.targets == 0 || config.targets > MAX_TARGETS {
+            return Err(DecideError::BadTargetCount {
+                got: config.targets,
+            });
+        }
+        let geom = req.grid.geometry();
+        let start_cell = geom.cell_at_unchecked(req.pose.position());
+        self.field
+            .compute(req.trav, start_cell)
+            .map_err(DecideError::Start)?;
+        self.start = req.pose;
+        self.start_cell = start_cell;
+        self.unknown_cells = (cells - req.grid.counts().known()) as u32;
+        self.budget_steps = req.battery_steps - config.reserve_steps;
+        self.config = *config;
+        Ok(())
+    }
+
+    /// The distance field from the robot's cell (valid after [`Self::prepare`]).
+    pub fn field(&self) -> &DistanceField<N> {
+        self.field
+    }
+
+    /// Unknown cells in the grid at [`Self::prepare`]: the largest possible gain.
+    pub fn unknown_cells(&self) -> u32 {
+        self.unknown_cells
+    }
+
+    /// Waypoints of the last evaluated candidate, map frame \[m\].
+    pub fn waypoints(&self) -> &[Point2] {
+        &self.waypoints[..self.waypoint_len]
+    }
+
+    /// Poses of the predicted scans of the last evaluated candidate (robot frame poses in the
+    /// map frame).
+    pub fn viewpoints(&self) -> &[Pose2] {
+        &self.viewpoints[..self.viewpoint_len]
+    }
+
+    /// Targets of the last evaluated candidate, snapped to their cell centres \[m\].
+    pub fn targets(&self) -> &[Point2] {
+        &self.targets[..self.target_len]
+    }
+
+    /// Evaluates the candidate visiting `targets` in order (map frame \[m\]).
+    pub fn evaluate_targets(
+        &mut self,
+        req: &DecisionRequest<'_, N>,
+        targets: &[Point2],
+    ) -> Evaluation {
+        self.waypoint_len = 0;
+        self.viewpoint_len = 0;
+        self.target_len = 0;
+        let mut eval = Evaluation {
+            status: CandidateStatus::Feasible,
+            gain_cells: 0,
+            energy_steps: 0.0,
+            path_length_m: 0.0,
+            fitness: WORST_FITNESS,
+        };
+        if let Err(status) = self.plan(req, targets, &mut eval) {
+            eval.status = status;
+            return eval;
+        }
+        if eval.energy_steps > self.budget_steps {
+            eval.status = CandidateStatus::OverBudget;
+            return eval;
+        }
+        if let Err(status) = self.sample_viewpoints() {
+            eval.status = status;
+            return eval;
+        }
+        eval.gain_cells = self.predict_gain(req.grid, req.laser);
+        eval.fitness = self.fitness_of(eval.gain_cells, eval.energy_steps);
+        eval
+    }
+
+    /// The scaled fitness of a feasible plan.
+    fn fitness_of(&self, gain: u32, steps: f32) -> f32 {
+        let gain = gain as f32;
+        let mut score = match self.config.cost_weight {
+            Some(lambda) => (gain - lambda * steps).max(0.0),
+            None => gain,
+        };
+        if self.config.gain_per_step {
+            // Gain per step, scaled by the largest gain so that it stays within [0, 1] for
+            // plans of at least one step.
+            score /= steps.max(1.0);
+        }
+        let max = (self.unknown_cells as f32).max(1.0);
+        -(score / max).min(1.0)
+    }
+
+    /// Plans the legs, fills targets and waypoints, computes length and energy.
+    fn plan(
+        &mut self,
+        req: &DecisionRequest<'_, N>,
+        targets: &[Point2],
+        eval: &mut Evaluation,
+    ) -> Result<(), CandidateStatus> {
+        let geom = *req.grid.geometry();
+        let mut prev = self.start_cell;
+        for (k, &t) in targets.iter().enumerate() {
+            let cell = geom.cell_at(t).ok_or(CandidateStatus::OutOfBounds)?;
+            if !req.trav.is_passable(cell) {
+                return Err(CandidateStatus::Blocked);
+            }
+            if k < MAX_TARGETS {
+                self.targets[k] = geom.cell_center(cell);
+                self.target_len = k + 1;
+            }
+            let planned = if k == 0 {
+                self.field.path_to(cell, &mut self.leg)
+            } else {
+                self.astar.find_path(req.trav, prev, cell, &mut self.leg)
+            };
+            let planned = planned.map_err(|e| match e {
+                crate::planner::PlanError::CapacityExceeded { .. } => CandidateStatus::TooLong,
+                _ => CandidateStatus::Unreachable,
+            })?;
+            let out = &mut self.waypoints[self.waypoint_len..];
+            let n = prune_to_waypoints(req.trav, &self.leg[..planned.len], out)
+                .map_err(|_| CandidateStatus::TooLong)?;
+            // Later legs start where the previous one ended: drop the repeated waypoint.
+            if self.waypoint_len > 0 && n > 0 {
+                self.waypoints.copy_within(
+                    self.waypoint_len + 1..self.waypoint_len + n,
+                    self.waypoint_len,
+                );
+                self.waypoint_len += n - 1;
+            } else {
+                self.waypoint_len += n;
+            }
+            prev = cell;
+        }
+        // The path starts at the robot's own position, not at the centre of its cell.
+        if self.waypoint_len > 0 {
+            self.waypoints[0] = self.start.position();
+        }
+        let mut heading = self.start.theta;
+        let mut length = 0.0f32;
+        let mut rotation = 0.0f32;
+        let mut from = self.start.position();
+        for &w in &self.waypoints[..self.waypoint_len] {
+            let d = from.distance(w);
+            if d > 1e-6 {
+                let bearing = from.bearing_to(w);
+                rotation += normalize_angle(bearing - heading).abs();
+                heading = bearing;
+                length += d;
+                from = w;
+            }
+        }
+        eval.path_length_m = length;
+        eval.energy_steps = units::steps(length, rotation);
+        Ok(())
+    }
+
+    /// Predicted scan poses along the waypoint polyline.
+    fn sample_viewpoints(&mut self) -> Result<(), CandidateStatus> {
+        let spacing = self.config.viewpoint_spacing_m.max(0.05);
+        let push = |vp: &mut [Pose2; MAX_VIEWPOINTS], len: &mut usize, p: Pose2| {
+            if *len == MAX_VIEWPOINTS {
+                return Err(CandidateStatus::TooLong);
+            }
+            vp[*len] = p;
+            *len += 1;
+            Ok(())
+        };
+        let mut len = 0usize;
+        push(&mut self.viewpoints, &mut len, self.start)?;
+        let mut from = self.start.position();
+        for &w in &self.waypoints[..self.waypoint_len] {
+            let d = from.distance(w);
+            if d <= 1e-6 {
+                continue;
+            }
+            let heading = from.bearing_to(w);
+            let n = math::ceil(d / spacing) as usize;
+            for s in 1..=n {
+                let f = (s as f32 / n as f32).min(1.0);
+                let p = Pose2::new(
+                    from.x + (w.x - from.x) * f,
+                    from.y + (w.y - from.y) * f,
+                    heading,
+                );
+                push(&mut self.viewpoints, &mut len, p)?;
+            }
+            from = w;
+        }
+        self.viewpoint_len = len;
+        Ok(())
+    }
+
+    /// Unknown cells seen from the viewpoints, each counted once.
+    fn predict_gain(&mut self, grid: &OccupancyGrid<N>, laser: &LaserConfig) -> u32 {
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.stamps.fill(0);
+            self.generation = 1;
+        }
+        let stamp = self.generation;
+        let geom = *grid.geometry();
+        let stamps = &mut *self.stamps;
+        let mut gain = 0u32;
+        for vp in &self.viewpoints[..self.viewpoint_len] {
+            let pose = vp.compose(laser.mount);
+            let origin = pose.position();
+            for b in 0..laser.beam_count as usize {
+                let angle = pose.theta + laser.beam_angle(b);
+                let end = Point2::new(
+                    origin.x + math::cos(angle) * laser.max_range_m,
+                    origin.y + math::sin(angle) * laser.max_range_m,
+                );
+                raycast::traverse(&geom, origin, end, |_, i| match grid.class(i) {
+                    CellClass::Occupied => ControlFlow::Break(()),
+                    CellClass::Free => ControlFlow::Continue(()),
+                    CellClass::Unknown => {
+                        if stamps[i] != stamp {
+                            stamps[i] = stamp;
+                            gain += 1;
+                        }
+                        ControlFlow::Continue(())
+                    }
+                });
+            }
+        }
+        gain
+    }
+
+    /// This objective bound to one decision's request, as an optimizer [`Problem`] over
+    /// `2 * config.targets` genes (x0, y0, x1, y1, ...).
+    pub fn problem<'s, 'r>(
+        &'s mut self,
+        req: &'s DecisionRequest<'r, N>,
+    ) -> BoundObjective<'s, 'm, 'r, N> {
+        BoundObjective {
+            objective: self,
+            req,
+        }
+    }
+}
+
+/// An [`ExploreObjective`] bound to a request: the optimizer's view.
+pub struct BoundObjective<'s, 'm, 'r, const N: usize> {
+    objective: &'s mut ExploreObjective<'m, N>,
+    req: &'s DecisionRequest<'r, N>,
+}
+
+impl<const N: usize> core::fmt::Debug for BoundObjective<'_, '_, '_, N> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.objective.fmt(f)
+    }
+}
+
+impl<const N: usize> Problem for BoundObjective<'_, '_, '_, N> {
+    fn dim(&self) -> usize {
+        2 * self.objective.config.targets
+    }
+
+    fn bounds(&self, gene: usize) -> (f32, f32) {
+        let g = self.req.grid.geometry();
+        // Half a millimetre inside, so the upper bound still falls in the last cell.
+        let margin = 5e-4;
+        if gene.is_multiple_of(2) {
+            (g.origin.x, g.origin.x + g.width_m() - margin)
+        } else {
+            (g.origin.y, g.origin.y + g.height_m() - margin)
+        }
+    }
+
+    fn evaluate(&mut self, genes: &[f32]) -> f32 {
+        let mut pts = [Point2::new(0.0, 0.0); MAX_TARGETS];
+        let k = (genes.len() / 2).min(MAX_TARGETS);
+        for (i, p) in pts[..k].iter_mut().enumerate() {
+            *p = Point2::new(genes[2 * i], genes[2 * i + 1]);
+        }
+        self.objective.evaluate_targets(self.req, &pts[..k]).fitness
+    }
+}
+
+impl<const N: usize> ExploreObjective<'_, N> {
+    /// The [`super::Decision`] for the last evaluated candidate, if it was feasible.
+    pub(crate) fn decision(
+        &self,
+        eval: &Evaluation,
+        evaluations: u32,
+        history: &[f32],
+    ) -> Option<super::Decision> {
+        if eval.status != CandidateStatus::Feasible {
+            return None;
+        }
+        let mut d = super::Decision {
+            targets: heapless::Vec::new(),
+            waypoints: heapless::Vec::new(),
+            path_length_m: eval.path_length_m,
+            predicted_gain_cells: eval.gain_cells,
+            energy_steps: eval.energy_steps,
+            evaluations,
+            history: heapless::Vec::new(),
+        };
+        // Capacities match the objective's buffers, so these cannot fail.
+        d.targets.extend_from_slice(self.targets()).ok()?;
+        d.waypoints.extend_from_slice(self.waypoints()).ok()?;
+        let h = &history[..history.len().min(super::MAX_DECISION_HISTORY)];
+        d.history.extend_from_slice(h).ok()?;
+        Some(d)
+    }
+}

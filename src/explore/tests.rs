@@ -1,0 +1,453 @@
+//! Tests of the exploration objective and the target selectors on small hand-made maps.
+
+use super::objective::{CandidateStatus, WORST_FITNESS};
+use super::*;
+use crate::frontier::FrontierWorkspace;
+use crate::grid::{GridGeometry, LogOddsBounds};
+use crate::math;
+use crate::optim::{Method, Problem};
+use crate::planner::{AStar, TraversabilityConfig};
+use crate::random::{range_f32, seeded};
+use crate::sensor::{Beam, Scan, SensorModel, integrate_scan};
+
+const W: usize = 60;
+const H: usize = 40;
+const CELLS: usize = W * H;
+type Grid = OccupancyGrid<CELLS>;
+type Trav = Traversability<CELLS>;
+
+/// The true world: outer walls, a pillar at cols 30..=33 rows 8..=14, and a closed box
+/// (ring at cols 44..=58, rows 24..=38) whose inside no path reaches.
+fn truth_occupied(c: Cell) -> bool {
+    let border = c.col == 0 || c.row == 0 || c.col == W as i32 - 1 || c.row == H as i32 - 1;
+    let pillar = (30..=33).contains(&c.col) && (8..=14).contains(&c.row);
+    let ring_outer = (44..=58).contains(&c.col) && (24..=38).contains(&c.row);
+    let ring_inner = (45..=57).contains(&c.col) && (25..=37).contains(&c.row);
+    border || pillar || (ring_outer && !ring_inner)
+}
+
+fn geometry() -> GridGeometry {
+    GridGeometry::new(W, H, 0.1, Point2::new(0.0, 0.0)).unwrap()
+}
+
+/// The robot's map: every truly occupied cell known Occupied, the west part (x < 2 m) known
+/// Free, everything else Unknown (and truly free).
+fn fixture_grid() -> Grid {
+    let g = geometry();
+    let mut grid = Grid::new(g, LogOddsBounds::default()).unwrap();
+    for i in 0..g.cell_count() {
+        let c = g.cell(i);
+        if truth_occupied(c) {
+            grid.set_class(i, CellClass::Occupied, &mut ());
+        } else if c.col < 20 {
+            grid.set_class(i, CellClass::Free, &mut ());
+        }
+    }
+    grid
+}
+
+fn trav_of(grid: &Grid) -> Trav {
+    let mut t = Trav::new(*grid.geometry(), TraversabilityConfig::default()).unwrap();
+    t.rebuild_from(grid).unwrap();
+    t
+}
+
+/// A noise-free scan from `pose` in the true world: each beam marches in 1 mm steps to the
+/// first truly occupied cell.
+fn true_scan(pose: Pose2, laser: &LaserConfig) -> Scan {
+    let g = geometry();
+    let mut scan = Scan::new();
+    for b in 0..laser.beam_count as usize {
+        let a = laser.beam_angle(b);
+        let world = pose.theta + a;
+        let (dx, dy) = (math::cos(world), math::sin(world));
+        let mut r = 0.0f32;
+        let mut hit = None;
+        while r <= laser.max_range_m {
+            let p = Point2::new(pose.x + dx * r, pose.y + dy * r);
+            match g.cell_at(p) {
+                Some(c) if truth_occupied(c) => {
+                    hit = Some(r + 0.0005);
+                    break;
+                }
+                Some(_) => {}
+                None => break,
+            }
+            r += 0.001;
+        }
+        scan.push(Beam {
+            angle_rad: a,
+            range_m: hit,
+        })
+        .unwrap();
+    }
+    scan
+}
+
+struct Memory {
+    field: Box<DistanceField<CELLS>>,
+    astar: Box<AStar<CELLS>>,
+    stamps: Vec<u32>,
+}
+
+impl Memory {
+    fn new() -> Self {
+        Self {
+            field: DistanceField::new_boxed(),
+            astar: AStar::new_boxed(),
+            stamps: vec![0; CELLS],
+        }
+    }
+
+    fn objective(&mut self) -> ExploreObjective<'_, CELLS> {
+        ExploreObjective::new(&mut self.field, &mut self.astar, &mut self.stamps)
+    }
+}
+
+fn laser() -> LaserConfig {
+    LaserConfig {
+        noise_fraction: 0.0,
+        ..LaserConfig::thesis()
+    }
+}
+
+fn request<'a>(
+    grid: &'a Grid,
+    trav: &'a Trav,
+    laser: &'a LaserConfig,
+) -> DecisionRequest<'a, CELLS> {
+    DecisionRequest {
+        grid,
+        trav,
+        pose: Pose2::new(1.0, 2.0, 0.0),
+        battery_steps: 100.0,
+        laser,
+    }
+}
+
+/// Unknown cells that become known when the scans from `viewpoints` are integrated.
+fn actual_gain(grid: &Grid, viewpoints: &[Pose2], laser: &LaserConfig) -> u32 {
+    let mut after = grid.clone();
+    for &vp in viewpoints {
+        let scan = true_scan(vp.compose(laser.mount), laser);
+        integrate_scan(
+            &mut after,
+            &scan,
+            vp,
+            laser,
+            &SensorModel::default(),
+            &mut (),
+        )
+        .unwrap();
+    }
+    (0..grid.cell_count())
+        .filter(|&i| grid.class(i) == CellClass::Unknown && after.class(i).is_known())
+        .count() as u32
+}
+
+#[test]
+fn predicted_gain_matches_the_gain_of_simulated_scans_within_5_percent() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::new();
+    let mut obj = mem.objective();
+    let plans: [&[Point2]; 4] = [
+        &[Point2::new(4.0, 1.0)],
+        &[Point2::new(2.5, 3.0)],
+        &[Point2::new(3.5, 3.0), Point2::new(5.5, 1.0)],
+        &[
+            Point2::new(2.3, 0.6),
+            Point2::new(4.2, 2.0),
+            Point2::new(3.0, 3.4),
+        ],
+    ];
+    for (n, targets) in plans.iter().enumerate() {
+        let config = ExploreConfig {
+            targets: targets.len(),
+            ..ExploreConfig::default()
+        };
+        obj.prepare(&req, &config).unwrap();
+        let eval = obj.evaluate_targets(&req, targets);
+        assert_eq!(eval.status, CandidateStatus::Feasible, "plan {n}");
+        assert!(eval.gain_cells > 100, "plan {n}: gain {}", eval.gain_cells);
+        let actual = actual_gain(&grid, obj.viewpoints(), &laser);
+        let err = (eval.gain_cells as f32 - actual as f32).abs() / actual as f32;
+        assert!(
+            err <= 0.05,
+            "plan {n}: predicted {} actual {actual}",
+            eval.gain_cells
+        );
+        assert!(eval.fitness < 0.0 && eval.fitness >= -1.0);
+    }
+}
+
+#[test]
+fn the_path_visits_the_targets_in_order_and_costs_its_length_plus_turns() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::new();
+    let mut obj = mem.objective();
+    let config = ExploreConfig {
+        targets: 1,
+        ..ExploreConfig::default()
+    };
+    obj.prepare(&req, &config).unwrap();
+    // Straight ahead along +x: no turn, energy = length.
+    let eval = obj.evaluate_targets(&req, &[Point2::new(4.05, 2.05)]);
+    assert_eq!(eval.status, CandidateStatus::Feasible);
+    assert!((eval.path_length_m - 3.05).abs() < 0.1, "{eval:?}");
+    assert!(
+        (eval.energy_steps - eval.path_length_m).abs() < 0.1,
+        "{eval:?}"
+    );
+    // Behind the robot: a half turn (4 steps) on top of the length.
+    let back = obj.evaluate_targets(&req, &[Point2::new(0.45, 2.05)]);
+    assert_eq!(back.status, CandidateStatus::Feasible);
+    assert!(
+        (back.energy_steps - back.path_length_m - 4.0).abs() < 0.2,
+        "{back:?}"
+    );
+    let wp = obj.waypoints();
+    assert!(wp.last().unwrap().distance(Point2::new(0.45, 2.05)) < 1e-4);
+}
+
+#[test]
+fn infeasible_or_blocked_candidates_always_score_worst() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let mut mem = Memory::new();
+    let mut obj = mem.objective();
+    let mut rng = seeded(11);
+    let mut seen = [0usize; 6];
+    for case in 0..300 {
+        let k = 1 + case % 3;
+        let mut req = request(&grid, &trav, &laser);
+        req.battery_steps = range_f32(&mut rng, 0.0, 20.0);
+        let config = ExploreConfig {
+            targets: k,
+            reserve_steps: 1.0,
+            ..ExploreConfig::default()
+        };
+        obj.prepare(&req, &config).unwrap();
+        let mut problem = obj.problem(&req);
+        let mut genes = [0.0f32; 2 * MAX_TARGETS];
+        for (g, x) in genes[..2 * k].iter_mut().enumerate() {
+            let (lo, hi) = problem.bounds(g);
+            *x = range_f32(&mut rng, lo - 0.5, hi + 0.5);
+        }
+        // Every fourth case puts a target inside the closed box.
+        if case % 4 == 0 {
+            genes[0] = range_f32(&mut rng, 4.8, 5.5);
+            genes[1] = range_f32(&mut rng, 2.8, 3.5);
+        }
+        let fitness = problem.evaluate(&genes[..2 * k]);
+        let pts: Vec<Point2> = (0..k)
+            .map(|i| Point2::new(genes[2 * i], genes[2 * i + 1]))
+            .collect();
+        let eval = obj.evaluate_targets(&req, &pts);
+        assert_eq!(eval.fitness, fitness);
+        seen[eval.status as usize] += 1;
+        if case % 4 == 0 {
+            assert_ne!(eval.status, CandidateStatus::Feasible);
+        }
+        match eval.status {
+            CandidateStatus::Feasible => {
+                assert!(eval.energy_steps <= req.battery_steps - 1.0);
+                assert!((-1.0..=0.0).contains(&fitness));
+                assert!(fitness < WORST_FITNESS);
+            }
+            _ => assert_eq!(fitness, WORST_FITNESS, "{eval:?}"),
+        }
+    }
+    // The draw exercised feasible, out-of-bounds, blocked, unreachable and over-budget cases.
+    for (status, n) in seen.iter().enumerate().take(5) {
+        assert!(*n > 0, "status {status} never drawn: {seen:?}");
+    }
+}
+
+fn run_selector<S: TargetSelector<CELLS>>(
+    sel: &mut S,
+    req: &DecisionRequest<'_, CELLS>,
+    seed: u64,
+) -> Outcome {
+    sel.decide(req, &mut seeded(seed)).unwrap()
+}
+
+#[test]
+fn each_selector_is_deterministic_per_seed_and_plans_a_feasible_path() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::new();
+    let mut obj = mem.objective();
+    let mut ws = FrontierWorkspace::<1024, 64>::new_boxed();
+    let mut outcomes = Vec::new();
+    for k in [1usize, 2] {
+        let config = ExploreConfig {
+            targets: k,
+            population: 8,
+            max_generations: 10,
+            ..ExploreConfig::default()
+        };
+        let mut sel = Optimized::new(Method::Xboa, config, &mut obj);
+        let a = run_selector(&mut sel, &req, 5);
+        let b = run_selector(&mut sel, &req, 5);
+        assert_eq!(a, b);
+        let Outcome::Go(d) = &a else { panic!("{a:?}") };
+        assert_eq!(d.targets.len(), k);
+        assert_eq!(d.history.len(), 11);
+        assert!(d.history.windows(2).all(|w| w[1] <= w[0]));
+        assert!(d.evaluations > 8, "{}", d.evaluations);
+        outcomes.push(a);
+    }
+    {
+        let mut sel = NearestFrontier::new(ExploreConfig::default(), &mut obj, &mut ws);
+        let a = run_selector(&mut sel, &req, 1);
+        assert_eq!(a, run_selector(&mut sel, &req, 2));
+        let Outcome::Go(d) = &a else { panic!("{a:?}") };
+        // The nearest frontier is the edge of the known part, 1 m east of the robot.
+        assert!((d.targets[0].x - 2.05).abs() < 0.15, "{d:?}");
+        outcomes.push(a);
+    }
+    {
+        let mut sel = FrontierUtility::new(ExploreConfig::default(), &mut obj, &mut ws);
+        let a = run_selector(&mut sel, &req, 1);
+        assert_eq!(a, run_selector(&mut sel, &req, 2));
+        outcomes.push(a);
+    }
+    for o in &outcomes {
+        let Outcome::Go(d) = o else { panic!("{o:?}") };
+        assert!(d.predicted_gain_cells > 0);
+        assert!(d.energy_steps <= req.battery_steps);
+        assert!(d.waypoints.first().unwrap().distance(req.pose.position()) < 0.1);
+        assert!(
+            d.waypoints
+                .last()
+                .unwrap()
+                .distance(*d.targets.last().unwrap())
+                < 1e-4
+        );
+    }
+}
+
+#[test]
+fn the_optimized_selector_beats_the_median_random_candidate() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::new();
+    let mut obj = mem.objective();
+    let config = ExploreConfig {
+        population: 10,
+        max_generations: 20,
+        ..ExploreConfig::default()
+    };
+    let Outcome::Go(best) = Optimized::new(Method::Xboa, config, &mut obj)
+        .decide(&req, &mut seeded(3))
+        .unwrap()
+    else {
+        panic!()
+    };
+    obj.prepare(&req, &config).unwrap();
+    let mut rng = seeded(4);
+    let mut gains = Vec::new();
+    while gains.len() < 51 {
+        let p = Point2::new(range_f32(&mut rng, 0.0, 6.0), range_f32(&mut rng, 0.0, 4.0));
+        let e = obj.evaluate_targets(&req, &[p]);
+        if e.status == CandidateStatus::Feasible {
+            gains.push(e.gain_cells);
+        }
+    }
+    gains.sort_unstable();
+    assert!(
+        best.predicted_gain_cells > gains[25],
+        "{} vs {gains:?}",
+        best.predicted_gain_cells
+    );
+}
+
+#[test]
+fn every_selector_says_done_when_nothing_reachable_is_unknown() {
+    // Everything known except the inside of the closed box.
+    let g = geometry();
+    let mut grid = Grid::new(g, LogOddsBounds::default()).unwrap();
+    for i in 0..g.cell_count() {
+        let c = g.cell(i);
+        let inside = (45..=57).contains(&c.col) && (25..=37).contains(&c.row);
+        if truth_occupied(c) {
+            grid.set_class(i, CellClass::Occupied, &mut ());
+        } else if !inside {
+            grid.set_class(i, CellClass::Free, &mut ());
+        }
+    }
+    assert!(grid.counts().known() < g.cell_count());
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::new();
+    let mut obj = mem.objective();
+    let mut ws = FrontierWorkspace::<1024, 64>::new_boxed();
+    let config = ExploreConfig::default();
+    assert_eq!(
+        run_selector(&mut Optimized::new(Method::Xboa, config, &mut obj), &req, 1),
+        Outcome::Done
+    );
+    assert_eq!(
+        run_selector(
+            &mut NearestFrontier::new(config, &mut obj, &mut ws),
+            &req,
+            1
+        ),
+        Outcome::Done
+    );
+    assert_eq!(
+        run_selector(
+            &mut FrontierUtility::new(config, &mut obj, &mut ws),
+            &req,
+            1
+        ),
+        Outcome::Done
+    );
+}
+
+#[test]
+fn a_blacklisted_frontier_is_skipped_until_the_map_around_it_changes() {
+    let mut grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let mut mem = Memory::new();
+    let mut obj = mem.objective();
+    let mut ws = FrontierWorkspace::<1024, 64>::new_boxed();
+    let mut sel = FrontierUtility::new(ExploreConfig::default(), &mut obj, &mut ws);
+    let first = {
+        let req = request(&grid, &trav, &laser);
+        let Outcome::Go(d) = run_selector(&mut sel, &req, 1) else {
+            panic!()
+        };
+        d.targets[0]
+    };
+    sel.blacklist(&grid, first).unwrap();
+    {
+        let req = request(&grid, &trav, &laser);
+        let Outcome::Go(d) = run_selector(&mut sel, &req, 1) else {
+            panic!()
+        };
+        assert!(d.targets[0].distance(first) > sel.blacklist_radius_m);
+    }
+    // The map near the blacklisted point changes: the entry lapses.
+    let g = *grid.geometry();
+    let c = g.cell_at(first).unwrap();
+    let i = g.index(Cell::new(c.col + 2, c.row)).unwrap();
+    grid.set_class(i, CellClass::Free, &mut ());
+    let trav = trav_of(&grid);
+    let req = request(&grid, &trav, &laser);
+    let _ = run_selector(&mut sel, &req, 1);
+    assert_eq!(sel.blacklisted(), 0);
+}
