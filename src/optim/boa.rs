@@ -3,8 +3,11 @@
 //! Source: S. Arora and S. Singh, "Butterfly optimization algorithm: a novel approach for global
 //! optimization", Soft Computing 23, 715–734 (2019).
 //!
-//! Each butterfly, in index order, emits the fragrance `f = c * |F|^a` (`F` its fitness,
-//! `c` the sensory modality, `a` the power exponent). With the switch probability `p` it takes
+//! Each butterfly, in index order, emits the fragrance `f = c * I^a`: `c` the sensory
+//! modality, `a` the power exponent, `I = min(|F|, 1)` the stimulus intensity from its fitness
+//! `F`. The cap keeps the thesis's tuned `c` and `a` (meant for intensities of order one; the
+//! exploration objective lies in `[-1, 0]`, where `I = |F|`) from producing steps hundreds of
+//! box widths long on fitnesses in the hundreds. With the switch probability `p` it takes
 //! the global step `x + f * (r1 * r2 * g* - x)` toward the best butterfly `g*`, otherwise the
 //! local step `x + f * (r1 * r2 * x_j - x_k)` with `j`, `k` drawn uniformly in the population;
 //! `r1`, `r2` are uniform in `[0, 1)` and drawn once per move (as in the authors' reference

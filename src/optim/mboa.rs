@@ -4,7 +4,7 @@
 //! for mechanical design optimization problems", Journal of the Brazilian Society of Mechanical
 //! Sciences and Engineering 40, 21 (2018).
 //!
-//! A BOA generation ([`super::boa`]: fragrance `c * |F|^a`, global step with probability `p`,
+//! A BOA generation ([`super::boa`]: fragrance `c * I^a`, global step with probability `p`,
 //! local step otherwise, greedy acceptance), followed by an intensive exploitation phase: with
 //! probability `p`, one extra point `g* + (r1 - r2) * g*` around the best butterfly `g*`
 //! (`r1`, `r2` uniform in `[0, 1)`, drawn per gene), clamped and evaluated. It is kept if it is

@@ -588,14 +588,20 @@ macro_rules! engine_accessors {
 }
 pub(crate) use engine_accessors;
 
-/// Fragrance of the butterfly optimizers: `c * |F|^a`.
+/// Fragrance of the butterfly optimizers, `c * I^a`, with the stimulus intensity
+/// `I = min(|F|, 1)`.
+///
+/// Arora and Singh define the fragrance on the stimulus intensity and tune `c` and `a`
+/// for intensities of order one; the thesis's objective is scaled to `[-1, 0]`, where
+/// `I = |F|` exactly. On a problem whose fitness runs into the hundreds (Rastrigin,
+/// Rosenbrock from a uniform start) the raw `|F|^a` gives steps hundreds of box widths
+/// long, which all land on the bounds and are rejected, so the run stalls; with the cap a
+/// step is at most `c` times the distance the method's equation names.
 pub(crate) fn fragrance(c: f32, fitness: f32, a: f32) -> f32 {
     let s = crate::math::abs(fitness);
-    if s.is_finite() {
-        c * crate::math::powf(s, a)
-    } else {
-        c * crate::math::powf(f32::MAX, a)
-    }
+    // NaN (never stored: it counts as +inf) and +inf both mean "far from good".
+    let s = if s.is_nan() { 1.0 } else { s.min(1.0) };
+    c * crate::math::powf(s, a)
 }
 
 /// When a run stops.

@@ -4,7 +4,8 @@
 //! energy-constrained exploration, and the 2023 PhD thesis (Bendahmane, USTO Oran) built on it; BOA itself is Arora & Singh (2019),
 //! see [`super::boa`].
 //!
-//! Per butterfly `i`, in index order, with fragrance `f = c * |F|^a`:
+//! Per butterfly `i`, in index order, with fragrance `f = c * I^a` (`I` the scaled
+//! fitness of [`super::boa`]):
 //! - with the crossover probability `p_c`: single-point crossover with a mate drawn uniformly
 //!   among the *other* butterflies, cut point uniform in `1..D-1` (genes before the cut from one
 //!   parent, after it from the other), giving two children, both clamped and evaluated; the
