@@ -4,6 +4,7 @@
 pub mod cli;
 pub mod dynamic;
 pub mod emulator;
+pub mod faults;
 pub mod laser;
 pub mod movingai;
 pub mod physics;

@@ -289,7 +289,7 @@ impl Server {
         loop {
             let mut line = String::new();
             assert!(stdout.read_line(&mut line).unwrap() > 0, "server exited");
-            let done = line.starts_with("laser ");
+            let done = line.trim() == "ready";
             lines.push(line.trim().to_string());
             if done {
                 break;
@@ -493,16 +493,15 @@ fn send_request(stream: &mut TcpStream, dec: &mut ColaDecoder, req: Request) -> 
     panic!("no reply to {req:?}");
 }
 
-#[test]
-fn lms1xx_session_streams_scans_matching_the_world_only_after_subscribing() {
-    let server = Server::start(&[]);
-    let addr = server.endpoint("laser lms1xx tcp");
-    let mut stream = TcpStream::connect(&addr).unwrap();
+/// Opens an LMS1xx session on `addr` with the clearpath driver's sequence, checks that nothing
+/// streams before the subscription, subscribes, and collects scans until `count` arrived or
+/// `timeout` passed, with the time (since the subscription) each one arrived.
+fn laser_session(addr: &str, count: usize, timeout: Duration) -> Vec<(Duration, ScanTelegram)> {
+    let mut stream = TcpStream::connect(addr).unwrap();
     stream
         .set_read_timeout(Some(Duration::from_millis(20)))
         .unwrap();
     let mut dec = Box::new(ColaDecoder::<16384>::new());
-    // The clearpath driver's sequence.
     for req in [
         Request::SetAccessMode {
             level: 3,
@@ -533,24 +532,40 @@ fn lms1xx_session_streams_scans_matching_the_world_only_after_subscribing() {
         ),
     }
     let mut pending = send_request(&mut stream, &mut dec, Request::SubscribeScanData(true));
-
-    let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
-    let expected =
-        LaserSim::new(laser_config(ScanConfig::DEFAULT_50HZ), 1).scan(&world, world.start(), &[]);
+    let subscribed = Instant::now();
     let mut scans = Vec::new();
-    let deadline = Instant::now() + Duration::from_secs(3);
-    while scans.len() < 5 && Instant::now() < deadline {
+    while scans.len() < count && subscribed.elapsed() < timeout {
         if let Ok(n) = stream.read(&mut rx) {
             pending.extend_from_slice(&rx[..n]);
         }
         {
             let mut input = &pending[..];
             while let Some(payload) = dec.decode(&mut input) {
-                scans.push(ScanTelegram::parse(payload).expect("scan telegram"));
+                let t = ScanTelegram::parse(payload).expect("scan telegram");
+                scans.push((subscribed.elapsed(), t));
             }
         }
         pending.clear();
     }
+    scans
+}
+
+/// The first `count` scans of an LMS1xx session on `addr`.
+fn laser_scans(addr: &str, count: usize, timeout: Duration) -> Vec<ScanTelegram> {
+    laser_session(addr, count, timeout)
+        .into_iter()
+        .map(|(_, t)| t)
+        .collect()
+}
+
+#[test]
+fn lms1xx_session_streams_scans_matching_the_world_only_after_subscribing() {
+    let server = Server::start(&[]);
+    let addr = server.endpoint("laser lms1xx tcp");
+    let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
+    let expected =
+        LaserSim::new(laser_config(ScanConfig::DEFAULT_50HZ), 1).scan(&world, world.start(), &[]);
+    let scans = laser_scans(&addr, 5, Duration::from_secs(3));
     assert_eq!(scans.len(), 5, "scans received");
     for t in &scans {
         assert!(!t.polled);
@@ -659,7 +674,7 @@ fn fault_specs_parse_and_bad_ones_are_refused() {
         Err(FaultSpecError::BadProbability { .. })
     ));
     assert!(matches!(
-        "latency=5".parse::<Faults>(),
+        "gremlins=5".parse::<Faults>(),
         Err(FaultSpecError::UnknownItem { .. })
     ));
 }
@@ -705,4 +720,120 @@ fn tcp_client_with_one_percent_corruption_connects_and_keeps_receiving_status_pa
     // About 20 sent; a 60-byte SIP survives 1 % corruption about half the time.
     assert!(valid >= 5, "{valid} valid status packets in 2 s");
     assert!(dec.stats().bad_checksum > 0, "no corruption seen");
+}
+
+#[test]
+fn two_robots_share_the_world_on_consecutive_endpoints_and_see_each_other() {
+    let server = Server::start(&["--robots", "2", "--tcp", "127.0.0.1:0"]);
+    // Robot 0 (at the start, facing east) sees robot 1, parked 0.75 m east of it, as a disc.
+    let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
+    let starts = papillon_sim::cli::serve::start_poses(&world, 2, 0.25).unwrap();
+    assert_eq!(starts[0], world.start());
+    let config = laser_config(ScanConfig::DEFAULT_50HZ);
+    let other = papillon_sim::physics::Disc::new(starts[1].position(), 0.25);
+    let expected = LaserSim::new(config, 1).scan(&world, starts[0], &[other]);
+    let alone = LaserSim::new(config, 1).scan(&world, starts[0], &[]);
+    let scan = &laser_scans(
+        &server.endpoint("robot 0: laser lms1xx tcp"),
+        1,
+        Duration::from_secs(3),
+    )[0];
+    let ch = scan.distance_channel().expect("DIST1");
+    let mut on_robot = 0;
+    for ((got, with), without) in ch.values.iter().zip(expected.beams()).zip(alone.beams()) {
+        let want = with.range_m.map_or(0, |r| (r * 1000.0).round() as u16);
+        assert!(got.abs_diff(want) <= 1, "got {got} mm, want {want} mm");
+        on_robot += usize::from(with.range_m != without.range_m);
+    }
+    assert!(on_robot >= 10, "{on_robot} beams end on the other robot");
+    // Each robot has its own microcontroller on its own port.
+    for robot in 0..2 {
+        let addr = server.endpoint(&format!("robot {robot}: arcos tcp"));
+        let mut stream = TcpStream::connect(&addr).unwrap();
+        stream
+            .set_read_timeout(Some(Duration::from_millis(20)))
+            .unwrap();
+        let (first, last) = drive_session(&mut stream);
+        assert_moved(&first, &last);
+    }
+}
+
+#[test]
+fn a_cut_drops_the_tcp_link_refuses_connections_and_then_lets_the_client_back() {
+    let server = Server::start(&["--tcp", "127.0.0.1:0", "--faults", "cut=1.5+1.5"]);
+    let addr = server.endpoint("arcos tcp");
+    let started = Instant::now();
+    let mut stream = TcpStream::connect(&addr).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .unwrap();
+    let mut dec = FrameDecoder::new();
+    stream.write_all(&bytes_of(Command::SYNC0)).unwrap();
+    assert!(read_until(
+        &mut stream,
+        &mut dec,
+        Duration::from_secs(1),
+        |p| { matches!(p, Packet::Sync(SyncReply::Sync0)) }
+    ));
+    // The link drops when the cut begins (read returns EOF).
+    let mut buf = [0u8; 256];
+    let dropped = loop {
+        match stream.read(&mut buf) {
+            Ok(0) => break started.elapsed(),
+            Ok(_) => {}
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) => {}
+            Err(_) => break started.elapsed(),
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(3),
+            "link never dropped"
+        );
+        let _ = stream.write_all(&bytes_of(Command::Pulse));
+    };
+    assert!(
+        dropped >= Duration::from_millis(1400),
+        "dropped at {dropped:?}"
+    );
+    // During the cut a new connection is closed at once.
+    let mut during = TcpStream::connect(&addr).unwrap();
+    during
+        .set_read_timeout(Some(Duration::from_millis(500)))
+        .unwrap();
+    let _ = during.write_all(&bytes_of(Command::SYNC0));
+    assert!(matches!(during.read(&mut buf), Ok(0) | Err(_)));
+    // After it, the client connects and drives again.
+    while started.elapsed() < Duration::from_millis(3200) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let mut after = TcpStream::connect(&addr).unwrap();
+    after
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .unwrap();
+    let (first, last) = drive_session(&mut after);
+    assert_moved(&first, &last);
+}
+
+#[test]
+fn a_laser_dropout_stops_the_scans_and_they_resume_after_it() {
+    let server = Server::start(&["--faults", "laser-drop=1.2+1.0"]);
+    let addr = server.endpoint("laser lms1xx tcp");
+    let started = Instant::now();
+    let scans = laser_session(&addr, usize::MAX, Duration::from_millis(2800));
+    // The session subscribed about 0.2 s after `started`; convert arrival times to server
+    // time conservatively with a 0.15 s margin either side of the window.
+    let offset = started.elapsed() - Duration::from_millis(2800);
+    let at = |d: Duration| (d + offset).as_secs_f64();
+    let before = scans.iter().filter(|(d, _)| at(*d) < 1.05).count();
+    let inside = scans
+        .iter()
+        .filter(|(d, _)| (1.35..2.05).contains(&at(*d)))
+        .count();
+    let after = scans.iter().filter(|(d, _)| at(*d) > 2.35).count();
+    assert!(before > 5, "{before} scans before the dropout");
+    assert_eq!(inside, 0, "scans during the dropout");
+    assert!(after > 5, "{after} scans after it");
 }

@@ -4,7 +4,10 @@
 //! exactly as it talks to the robot.
 //!
 //! One thread steps the physics at 100 Hz; each endpoint and each TCP client has its own
-//! thread running a sans-IO emulator ([`crate::emulator`]) against the shared robot body.
+//! thread running a sans-IO emulator ([`crate::emulator`]) against its robot's body. With
+//! `--robots N`, N robots share the world (each sees the others in its laser and collides
+//! with them) and robot `i` is served on the given ports plus `i` (`LINK-i` for ptys).
+//! Faults ([`crate::faults`]) are injected on the links, the laser and the bodies.
 
 use std::io::{self, Read, Write};
 use std::net::{TcpListener, TcpStream};
@@ -16,13 +19,15 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use papillon::geometry::{Point2, Pose2};
 use papillon::random::{self, ProjectRng};
 use papillon::sensor::{LaserConfig, Scan};
 
 use crate::emulator::arcos::ArcosEmulator;
 use crate::emulator::lms1xx::Lms1xxEmulator;
+use crate::faults::DelayLine;
 use crate::laser::LaserSim;
-use crate::physics::{BodyConfig, RobotBody};
+use crate::physics::{BodyConfig, Disc, RobotBody, advance_all};
 use crate::world::World;
 
 /// Cell size of the served world \[m\].
@@ -50,104 +55,21 @@ pub struct Args {
     /// Seed of the simulation's random choices (wheel slip, faults).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Byte faults on the ARCOS link, server to client: `corrupt=P,drop=P` (probabilities per
-    /// byte, e.g. `corrupt=0.01`).
+    /// Faults to inject, e.g. `corrupt=0.01,cut=10+3,laser-drop=20+2` (see the user guide:
+    /// corrupt, drop, latency, jitter, cut, laser-drop, slip, estop, drain).
     #[arg(long, default_value = "")]
     pub faults: Faults,
+    /// Robots sharing the world (1 to 16), served on consecutive endpoints.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=16))]
+    pub robots: u8,
 }
 
-/// Byte faults injected on the ARCOS link (server to client), drawn from a seeded generator.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Faults {
-    /// Probability that a byte has one bit flipped.
-    pub corrupt: f32,
-    /// Probability that a byte is lost.
-    pub drop: f32,
-}
+pub use crate::faults::{FaultSpecError, Faults};
 
-/// A `--faults` specification that cannot be read.
-#[derive(Clone, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum FaultSpecError {
-    /// An item that is not `name=value`, or a name other than `corrupt` and `drop`.
-    UnknownItem {
-        /// The item seen.
-        item: String,
-    },
-    /// A value that is not a probability in [0, 1].
-    BadProbability {
-        /// The item seen.
-        item: String,
-    },
-}
-
-impl std::fmt::Display for FaultSpecError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            FaultSpecError::UnknownItem { item } => {
-                write!(f, "unknown fault {item:?}: expected corrupt=P or drop=P")
-            }
-            FaultSpecError::BadProbability { item } => {
-                write!(f, "in {item:?}: expected a probability between 0 and 1")
-            }
-        }
-    }
-}
-
-impl std::error::Error for FaultSpecError {}
-
-impl std::str::FromStr for Faults {
-    type Err = FaultSpecError;
-
-    fn from_str(spec: &str) -> Result<Self, Self::Err> {
-        let mut faults = Faults::default();
-        for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
-            let unknown = || FaultSpecError::UnknownItem {
-                item: item.to_string(),
-            };
-            let (name, value) = item.split_once('=').ok_or_else(unknown)?;
-            let field = match name.trim() {
-                "corrupt" => &mut faults.corrupt,
-                "drop" => &mut faults.drop,
-                _ => return Err(unknown()),
-            };
-            *field = value
-                .trim()
-                .parse()
-                .ok()
-                .filter(|p: &f32| (0.0..=1.0).contains(p))
-                .ok_or_else(|| FaultSpecError::BadProbability {
-                    item: item.to_string(),
-                })?;
-        }
-        Ok(faults)
-    }
-}
-
-impl Faults {
-    /// Whether any fault is configured.
-    pub fn any(&self) -> bool {
-        self.corrupt > 0.0 || self.drop > 0.0
-    }
-
-    /// Drops and corrupts bytes of `data` in place.
-    pub fn apply(&self, rng: &mut ProjectRng, data: &mut Vec<u8>) {
-        if !self.any() {
-            return;
-        }
-        data.retain(|_| !random::chance(rng, self.drop));
-        for byte in data.iter_mut() {
-            if random::chance(rng, self.corrupt) {
-                *byte ^= 1 << random::below(rng, 8);
-            }
-        }
-    }
-}
-
-/// The world and the robot, shared by the endpoint threads.
+/// The world and the robots, shared by the endpoint threads.
 struct Sim {
     world: World,
-    body: Mutex<RobotBody>,
+    bodies: Mutex<Vec<RobotBody>>,
     start: Instant,
     seed: u64,
     faults: Faults,
@@ -159,14 +81,77 @@ impl Sim {
         self.start.elapsed().as_secs_f64()
     }
 
-    fn body(&self) -> MutexGuard<'_, RobotBody> {
-        self.body.lock().unwrap_or_else(|e| e.into_inner())
+    fn bodies(&self) -> MutexGuard<'_, Vec<RobotBody>> {
+        self.bodies.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    fn scan(&self, config: LaserConfig) -> Scan {
-        let pose = self.body().true_pose();
-        LaserSim::new(config, self.seed).scan(&self.world, pose, &[])
+    /// A scan from robot `robot`'s true pose; the other robots appear as discs.
+    fn scan(&self, robot: usize, config: LaserConfig) -> Scan {
+        let (pose, others) = {
+            let bodies = self.bodies();
+            let others: Vec<Disc> = bodies
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != robot)
+                .map(|(_, b)| b.disc())
+                .collect();
+            (bodies[robot].true_pose(), others)
+        };
+        LaserSim::new(config, self.seed ^ robot as u64).scan(&self.world, pose, &others)
     }
+}
+
+/// Start poses of `n` robots: the world's start for the first, then the nearest clear spots
+/// on a 0.75 m lattice around it, each at least a robot diameter from the others.
+pub fn start_poses(world: &World, n: usize, radius_m: f32) -> Result<Vec<Pose2>, String> {
+    let first = world.start();
+    let mut poses = vec![first];
+    let step = 0.75f32;
+    let mut ring = 1i32;
+    while poses.len() < n {
+        if ring > 40 {
+            return Err(format!(
+                "no room for {n} robots around the start in map {:?}",
+                world.name()
+            ));
+        }
+        for dy in -ring..=ring {
+            for dx in -ring..=ring {
+                if dx.abs().max(dy.abs()) != ring || poses.len() == n {
+                    continue;
+                }
+                let p = Point2::new(first.x + dx as f32 * step, first.y + dy as f32 * step);
+                let clear = !world.disc_hits_blocked(p, radius_m + 0.05)
+                    && poses
+                        .iter()
+                        .all(|q| q.position().distance(p) >= 2.0 * radius_m + 0.1);
+                if clear {
+                    poses.push(Pose2::new(p.x, p.y, first.theta));
+                }
+            }
+        }
+        ring += 1;
+    }
+    Ok(poses)
+}
+
+/// `addr` with its port moved up by `offset` (port 0, "any free port", stays 0).
+fn offset_addr(addr: &str, offset: usize) -> Result<String, String> {
+    if offset == 0 {
+        return Ok(addr.to_string());
+    }
+    let (host, port) = addr
+        .rsplit_once(':')
+        .ok_or_else(|| format!("{addr:?} is not HOST:PORT"))?;
+    let port: u16 = port
+        .parse()
+        .map_err(|_| format!("{addr:?}: bad port number"))?;
+    if port == 0 {
+        return Ok(addr.to_string());
+    }
+    let port = usize::from(port) + offset;
+    let port = u16::try_from(port).map_err(|_| format!("{addr:?}: port {port} is above 65535"))?;
+    Ok(format!("{host}:{port}"))
 }
 
 static STOP: AtomicBool = AtomicBool::new(false);
@@ -198,13 +183,20 @@ pub fn run(args: Args) -> ExitCode {
 fn serve(args: Args) -> Result<(), String> {
     let world = World::load(&args.map, MAP_RESOLUTION_M)
         .map_err(|e| format!("cannot load map {:?}: {e}", args.map))?;
-    let body = RobotBody::new(BodyConfig::default(), world.start(), args.seed);
+    let n = usize::from(args.robots);
+    let mut config = BodyConfig::default();
+    args.faults.apply_to_body(&mut config);
+    let bodies = start_poses(&world, n, config.radius_m)?
+        .into_iter()
+        .enumerate()
+        .map(|(i, pose)| RobotBody::new(config, pose, args.seed.wrapping_add(i as u64)))
+        .collect();
     let sim = Arc::new(Sim {
         world,
-        body: Mutex::new(body),
+        bodies: Mutex::new(bodies),
         start: Instant::now(),
         seed: args.seed,
-        faults: args.faults,
+        faults: args.faults.clone(),
         links: std::sync::atomic::AtomicU64::new(0),
     });
     install_signal_handlers();
@@ -214,41 +206,58 @@ fn serve(args: Args) -> Result<(), String> {
         thread::spawn(move || physics_loop(&sim));
     }
 
-    let mut link_to_remove = None;
-    if let Some(link) = &args.pty {
-        let (master, slave_path, slave) = open_pty().map_err(|e| format!("openpty: {e}"))?;
-        make_symlink(link, &slave_path)?;
-        link_to_remove = Some(link.clone());
-        println!("arcos pty {} -> {}", link.display(), slave_path.display());
-        let sim = Arc::clone(&sim);
-        thread::spawn(move || {
-            // Holding the slave open keeps the master readable between client sessions.
-            let _slave = slave;
-            let mut master = std::fs::File::from(master);
-            serve_arcos(&sim, &mut master);
-        });
-    }
-    if let Some(addr) = &args.tcp {
-        let listener = TcpListener::bind(addr).map_err(|e| format!("cannot bind {addr}: {e}"))?;
+    let mut links_to_remove = Vec::new();
+    for robot in 0..n {
+        let label = if n > 1 {
+            format!("robot {robot}: ")
+        } else {
+            String::new()
+        };
+        if let Some(link) = &args.pty {
+            let link = if n > 1 {
+                PathBuf::from(format!("{}-{robot}", link.display()))
+            } else {
+                link.clone()
+            };
+            let (master, slave_path, slave) = open_pty().map_err(|e| format!("openpty: {e}"))?;
+            make_symlink(&link, &slave_path)?;
+            println!(
+                "{label}arcos pty {} -> {}",
+                link.display(),
+                slave_path.display()
+            );
+            links_to_remove.push(link);
+            let sim = Arc::clone(&sim);
+            thread::spawn(move || {
+                // Holding the slave open keeps the master readable between client sessions.
+                let _slave = slave;
+                let mut master = std::fs::File::from(master);
+                serve_arcos(&sim, robot, &mut master, false);
+            });
+        }
+        if let Some(addr) = &args.tcp {
+            let addr = offset_addr(addr, robot)?;
+            let listener =
+                TcpListener::bind(&addr).map_err(|e| format!("cannot bind {addr}: {e}"))?;
+            let local = listener.local_addr().map_err(|e| e.to_string())?;
+            println!("{label}arcos tcp {local}");
+            let sim = Arc::clone(&sim);
+            thread::spawn(move || accept_loop(listener, sim, robot, serve_arcos_tcp));
+        }
+        let addr = offset_addr(&args.laser, robot)?;
+        let listener = TcpListener::bind(&addr).map_err(|e| format!("cannot bind {addr}: {e}"))?;
         let local = listener.local_addr().map_err(|e| e.to_string())?;
-        println!("arcos tcp {local}");
+        println!("{label}laser lms1xx tcp {local}");
         let sim = Arc::clone(&sim);
-        thread::spawn(move || accept_loop(listener, sim, serve_arcos_tcp));
+        thread::spawn(move || accept_loop(listener, sim, robot, serve_laser));
     }
-    let listener =
-        TcpListener::bind(&args.laser).map_err(|e| format!("cannot bind {}: {e}", args.laser))?;
-    let local = listener.local_addr().map_err(|e| e.to_string())?;
-    println!("laser lms1xx tcp {local}");
-    {
-        let sim = Arc::clone(&sim);
-        thread::spawn(move || accept_loop(listener, sim, serve_laser));
-    }
+    println!("ready");
     let _ = io::stdout().flush();
 
     while !STOP.load(Ordering::SeqCst) {
         thread::sleep(Duration::from_millis(20));
     }
-    if let Some(link) = link_to_remove {
+    for link in links_to_remove {
         let _ = std::fs::remove_file(&link);
     }
     let _ = writeln!(io::stdout(), "stopped");
@@ -259,49 +268,68 @@ fn physics_loop(sim: &Sim) {
     while !STOP.load(Ordering::SeqCst) {
         thread::sleep(Duration::from_millis(10));
         let now = sim.now_s();
-        let mut body = sim.body();
-        let dt = now - body.time_s();
+        let mut bodies = sim.bodies();
+        if !sim.faults.estops.is_empty() {
+            let pressed = sim.faults.estop_pressed(now);
+            for body in bodies.iter_mut() {
+                body.set_e_stop(pressed);
+            }
+        }
+        let dt = now - bodies[0].time_s();
         if dt > 0.0 {
-            body.advance(dt as f32, &sim.world, &[]);
+            advance_all(&mut bodies, dt as f32, &sim.world, &[]);
         }
     }
 }
 
-fn accept_loop(listener: TcpListener, sim: Arc<Sim>, serve: fn(&Sim, TcpStream)) {
+fn accept_loop(
+    listener: TcpListener,
+    sim: Arc<Sim>,
+    robot: usize,
+    serve: fn(&Sim, usize, TcpStream),
+) {
     for stream in listener.incoming().flatten() {
         let sim = Arc::clone(&sim);
-        thread::spawn(move || serve(&sim, stream));
+        thread::spawn(move || serve(&sim, robot, stream));
     }
 }
 
-fn serve_arcos_tcp(sim: &Sim, mut stream: TcpStream) {
+fn serve_arcos_tcp(sim: &Sim, robot: usize, mut stream: TcpStream) {
+    if sim.faults.link_cut(sim.now_s()) {
+        return; // the cable is out: the connection drops at once
+    }
     let _ = stream.set_nodelay(true);
     if stream
         .set_read_timeout(Some(Duration::from_millis(POLL_MS)))
         .is_ok()
     {
-        serve_arcos(sim, &mut stream);
+        serve_arcos(sim, robot, &mut stream, true);
     }
 }
 
-/// Runs an ARCOS session over `io` (reads time out or would block when idle) until EOF; a
-/// dropped link stops the robot and disables its motors.
-fn serve_arcos(sim: &Sim, io: &mut (impl Read + Write)) {
+/// Runs an ARCOS session for robot `robot` over `io` (reads time out or would block when
+/// idle) until EOF; a dropped link stops the robot and disables its motors. A TCP link
+/// (`drops_on_cut`) is closed when a `cut` fault begins; a serial line just goes silent.
+fn serve_arcos(sim: &Sim, robot: usize, io: &mut (impl Read + Write), drops_on_cut: bool) {
     let mut emu = ArcosEmulator::new(ROBOT_NAME);
     let link = sim.links.fetch_add(1, Ordering::SeqCst);
     let mut rng = random::seeded(sim.seed ^ (link + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-    arcos_session(sim, io, &mut emu, &mut rng);
-    emu.disconnect(&mut sim.body());
+    arcos_session(sim, robot, io, &mut emu, &mut rng, drops_on_cut);
+    emu.disconnect(&mut sim.bodies()[robot]);
 }
 
 fn arcos_session(
     sim: &Sim,
+    robot: usize,
     io: &mut (impl Read + Write),
     emu: &mut ArcosEmulator,
     rng: &mut ProjectRng,
+    drops_on_cut: bool,
 ) {
     let mut buf = [0u8; 1024];
     let mut out = Vec::new();
+    let mut send = Vec::new();
+    let mut line = DelayLine::default();
     while !STOP.load(Ordering::SeqCst) {
         let n = match io.read(&mut buf) {
             Ok(0) => return,
@@ -312,18 +340,33 @@ fn arcos_session(
                 0
             }
         };
-        {
-            let now = sim.now_s();
-            let mut body = sim.body();
-            emu.receive(now, &buf[..n], &mut body, &mut out);
-            emu.tick(now, &sim.world, &mut body, &mut out);
+        let now = sim.now_s();
+        let cut = sim.faults.link_cut(now);
+        if cut && drops_on_cut {
+            return;
         }
-        sim.faults.apply(rng, &mut out);
-        if !out.is_empty() {
-            if write_some(io, &out).is_err() {
+        {
+            let mut bodies = sim.bodies();
+            let body = &mut bodies[robot];
+            if !cut {
+                emu.receive(now, &buf[..n], body, &mut out);
+            }
+            emu.tick(now, &sim.world, body, &mut out);
+        }
+        if cut {
+            // The firmware runs on (its watchdog halts the robot), but nothing gets through.
+            out.clear();
+            line.clear();
+        } else {
+            sim.faults.damage(rng, &mut out);
+            line.push(&sim.faults, rng, now, std::mem::take(&mut out));
+            line.due(now, &mut send);
+        }
+        if !send.is_empty() {
+            if write_some(io, &send).is_err() {
                 return;
             }
-            out.clear();
+            send.clear();
         }
         if n == 0 {
             thread::sleep(Duration::from_millis(POLL_MS));
@@ -331,7 +374,7 @@ fn arcos_session(
     }
 }
 
-fn serve_laser(sim: &Sim, mut stream: TcpStream) {
+fn serve_laser(sim: &Sim, robot: usize, mut stream: TcpStream) {
     let _ = stream.set_nodelay(true);
     if stream
         .set_read_timeout(Some(Duration::from_millis(POLL_MS)))
@@ -350,8 +393,12 @@ fn serve_laser(sim: &Sim, mut stream: TcpStream) {
             Err(_) => return,
         };
         let now = sim.now_s();
-        emu.receive(now, &buf[..n], |c| sim.scan(c), &mut out);
-        emu.tick(now, |c| sim.scan(c), &mut out);
+        emu.receive(now, &buf[..n], |c| sim.scan(robot, c), &mut out);
+        let replies = out.len();
+        emu.tick(now, |c| sim.scan(robot, c), &mut out);
+        if sim.faults.laser_silent(now) {
+            out.truncate(replies); // replies still come; streamed scans do not
+        }
         if !out.is_empty() {
             if stream.write_all(&out).is_err() {
                 return;
