@@ -278,7 +278,12 @@ impl Server {
     fn start(extra: &[&str]) -> Self {
         let mut child = Process::new(env!("CARGO_BIN_EXE_papillon-sim"))
             .arg("serve")
-            .args(["--map", "empty", "--laser", "127.0.0.1:0"])
+            .args(["--map", "empty"])
+            .args(if extra.contains(&"--laser") {
+                &[][..]
+            } else {
+                &["--laser", "127.0.0.1:0"][..]
+            })
             .args(extra)
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
@@ -836,4 +841,95 @@ fn a_laser_dropout_stops_the_scans_and_they_resume_after_it() {
     assert!(before > 5, "{before} scans before the dropout");
     assert_eq!(inside, 0, "scans during the dropout");
     assert!(after > 5, "{after} scans after it");
+}
+
+#[test]
+fn lms200_on_a_second_pty_answers_aria_s_sequence_and_streams_matching_scans() {
+    use papillon::wire::lms200::{
+        DEFAULT_PASSWORD, Event, Lms200Decoder, Mode, Request as Lms200Request, Response, Variant,
+    };
+    let dir = temp_dir("lms200");
+    let link = dir.join("laser");
+    let mut server = Server::start(&["--laser-model", "lms200", "--laser", link.to_str().unwrap()]);
+    assert!(
+        server
+            .endpoint("laser lms200 pty")
+            .starts_with(link.to_str().unwrap())
+    );
+    let mut port = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(&link)
+        .unwrap();
+    // SAFETY: fcntl on a descriptor we own.
+    unsafe {
+        let fd = port.as_raw_fd();
+        let flags = libc::fcntl(fd, libc::F_GETFL);
+        libc::fcntl(fd, libc::F_SETFL, flags | libc::O_NONBLOCK);
+    }
+    let mut buf = [0u8; 1024];
+    for req in [
+        Lms200Request::SetMode(Mode::Setup {
+            password: DEFAULT_PASSWORD,
+        }),
+        Lms200Request::SetVariant(Variant::DEG180_RES1),
+        Lms200Request::SetMode(Mode::ContinuousOutput),
+    ] {
+        let n = req.emit(&mut buf).unwrap();
+        port.write_all(&buf[..n]).unwrap();
+    }
+    let mut dec = Lms200Decoder::new();
+    let mut events = Vec::new();
+    let mut scans = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(3);
+    while scans.len() < 3 && Instant::now() < deadline {
+        let n = match port.read(&mut buf) {
+            Ok(n) => n,
+            Err(_) => {
+                std::thread::sleep(Duration::from_millis(5));
+                continue;
+            }
+        };
+        let mut input = &buf[..n];
+        while let Some(e) = dec.decode(&mut input) {
+            match e {
+                Event::Ack => events.push("ack"),
+                Event::Nack => events.push("nack"),
+                Event::Telegram(t) => match Response::parse(&t).unwrap() {
+                    Response::ModeReply { result: 0, .. } => events.push("mode"),
+                    Response::VariantReply { accepted: true, .. } => events.push("variant"),
+                    Response::MeasuredValues(m) => scans.push(m),
+                    other => panic!("unexpected {other:?}"),
+                },
+            }
+        }
+    }
+    assert_eq!(
+        events,
+        ["ack", "mode", "ack", "variant", "ack", "mode"],
+        "replies"
+    );
+    assert_eq!(scans.len(), 3, "scans received");
+    let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
+    let config = papillon_sim::emulator::lms200::laser_config(Variant::DEG180_RES1);
+    let expected = LaserSim::new(config, 1).scan(&world, world.start(), &[]);
+    for m in &scans {
+        assert_eq!(m.values.len(), 181);
+        for (got, beam) in m.values.iter().zip(expected.beams()) {
+            let want = beam.range_m.map_or(0, |r| (r * 1000.0).round() as u16);
+            assert!(
+                (got & 0x1FFF).abs_diff(want) <= 1,
+                "got {got} mm, want {want} mm"
+            );
+        }
+        // Beam 0 points south (-90°) at the wall face 0.5 m away.
+        assert!((450..=550).contains(&m.values[0]), "south {}", m.values[0]);
+    }
+    drop(port);
+    assert!(server.terminate().success());
+    assert!(
+        std::fs::symlink_metadata(&link).is_err(),
+        "symlink left behind"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

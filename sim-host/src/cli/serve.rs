@@ -1,7 +1,7 @@
 //! `papillon-sim serve`: runs a simulated world in real time and serves an emulated P3-DX
 //! microcontroller (ARCOS, on a pseudo-terminal and/or TCP) and an emulated SICK LMS1xx
-//! (CoLa-A over TCP), so that the onboard binary or other P3-DX software can be tested
-//! exactly as it talks to the robot.
+//! (CoLa-A over TCP) or LMS200 (on a second pseudo-terminal), so that the onboard binary or
+//! other P3-DX software can be tested exactly as it talks to the robot.
 //!
 //! One thread steps the physics at 100 Hz; each endpoint and each TCP client has its own
 //! thread running a sans-IO emulator ([`crate::emulator`]) against its robot's body. With
@@ -25,6 +25,7 @@ use papillon::sensor::{LaserConfig, Scan};
 
 use crate::emulator::arcos::ArcosEmulator;
 use crate::emulator::lms1xx::Lms1xxEmulator;
+use crate::emulator::lms200::Lms200Emulator;
 use crate::faults::DelayLine;
 use crate::laser::LaserSim;
 use crate::physics::{BodyConfig, Disc, RobotBody, advance_all};
@@ -49,9 +50,13 @@ pub struct Args {
     /// Serve ARCOS over TCP on this address (MobileSim's is 127.0.0.1:8101).
     #[arg(long)]
     pub tcp: Option<String>,
-    /// Serve the LMS1xx laser (CoLa-A) on this TCP address.
-    #[arg(long, default_value = "127.0.0.1:2111")]
-    pub laser: String,
+    /// Where the laser is served: a TCP address for the LMS1xx (default 127.0.0.1:2111), a
+    /// pty symlink path for the LMS200 (default /tmp/papillon-sim-lms200).
+    #[arg(long)]
+    pub laser: Option<String>,
+    /// The emulated laser: an LMS1xx on TCP (CoLa-A) or an LMS200 on a pty (RS-232 telegrams).
+    #[arg(long, value_enum, default_value = "lms1xx")]
+    pub laser_model: LaserModel,
     /// Seed of the simulation's random choices (wheel slip, faults).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -65,6 +70,15 @@ pub struct Args {
 }
 
 pub use crate::faults::{FaultSpecError, Faults};
+
+/// Which laser `serve` emulates.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LaserModel {
+    /// SICK LMS1xx, CoLa-A over TCP.
+    Lms1xx,
+    /// SICK LMS200, telegrams over a serial line (a pty here).
+    Lms200,
+}
 
 /// The world and the robots, shared by the endpoint threads.
 struct Sim {
@@ -244,12 +258,41 @@ fn serve(args: Args) -> Result<(), String> {
             let sim = Arc::clone(&sim);
             thread::spawn(move || accept_loop(listener, sim, robot, serve_arcos_tcp));
         }
-        let addr = offset_addr(&args.laser, robot)?;
-        let listener = TcpListener::bind(&addr).map_err(|e| format!("cannot bind {addr}: {e}"))?;
-        let local = listener.local_addr().map_err(|e| e.to_string())?;
-        println!("{label}laser lms1xx tcp {local}");
-        let sim = Arc::clone(&sim);
-        thread::spawn(move || accept_loop(listener, sim, robot, serve_laser));
+        match args.laser_model {
+            LaserModel::Lms1xx => {
+                let addr = args.laser.as_deref().unwrap_or("127.0.0.1:2111");
+                let addr = offset_addr(addr, robot)?;
+                let listener =
+                    TcpListener::bind(&addr).map_err(|e| format!("cannot bind {addr}: {e}"))?;
+                let local = listener.local_addr().map_err(|e| e.to_string())?;
+                println!("{label}laser lms1xx tcp {local}");
+                let sim = Arc::clone(&sim);
+                thread::spawn(move || accept_loop(listener, sim, robot, serve_laser));
+            }
+            LaserModel::Lms200 => {
+                let link = args.laser.as_deref().unwrap_or("/tmp/papillon-sim-lms200");
+                let link = if n > 1 {
+                    PathBuf::from(format!("{link}-{robot}"))
+                } else {
+                    PathBuf::from(link)
+                };
+                let (master, slave_path, slave) =
+                    open_pty().map_err(|e| format!("openpty: {e}"))?;
+                make_symlink(&link, &slave_path)?;
+                println!(
+                    "{label}laser lms200 pty {} -> {}",
+                    link.display(),
+                    slave_path.display()
+                );
+                links_to_remove.push(link);
+                let sim = Arc::clone(&sim);
+                thread::spawn(move || {
+                    let _slave = slave;
+                    let mut master = std::fs::File::from(master);
+                    serve_lms200(&sim, robot, &mut master);
+                });
+            }
+        }
     }
     println!("ready");
     let _ = io::stdout().flush();
@@ -404,6 +447,35 @@ fn serve_laser(sim: &Sim, robot: usize, mut stream: TcpStream) {
                 return;
             }
             out.clear();
+        }
+    }
+}
+
+/// Runs the LMS200 of robot `robot` on a pty master (non-blocking) until shutdown.
+fn serve_lms200(sim: &Sim, robot: usize, io: &mut (impl Read + Write)) {
+    let mut emu = Lms200Emulator::new();
+    let mut buf = [0u8; 1024];
+    let mut out = Vec::new();
+    while !STOP.load(Ordering::SeqCst) {
+        let n = match io.read(&mut buf) {
+            Ok(n) => n,
+            Err(e) if is_idle(&e) => 0,
+            // No client has the slave open: wait for one.
+            Err(_) => 0,
+        };
+        let now = sim.now_s();
+        emu.receive(now, &buf[..n], &mut out);
+        let replies = out.len();
+        emu.tick(now, |c| sim.scan(robot, c), &mut out);
+        if sim.faults.laser_silent(now) {
+            out.truncate(replies);
+        }
+        if !out.is_empty() {
+            let _ = write_some(io, &out);
+            out.clear();
+        }
+        if n == 0 {
+            thread::sleep(Duration::from_millis(POLL_MS));
         }
     }
 }
