@@ -1378,7 +1378,7 @@ impl<const N: usize> Mission<N> {
             let path = self.follower.path();
             let from = self.follower.current_index().min(path.len());
             let remaining = polyline_length(here, &path[from..]);
-            if remaining <= self.config.decide_ahead_m && path.len() >= 1 {
+            if remaining <= self.config.decide_ahead_m && !path.is_empty() {
                 let end = path[path.len() - 1];
                 let before = if path.len() >= 2 {
                     path[path.len() - 2]
