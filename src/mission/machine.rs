@@ -46,6 +46,10 @@ const ASIDE_DISTANCE_M: f32 = 1.2;
 const RETRY_S: f32 = 1.0;
 /// Most cells lifted off (own body) or stamped on (other robots) the map while planning.
 const MAX_LIFTED: usize = 256;
+/// Bumper contacts remembered.
+const MAX_CONTACTS: usize = 16;
+/// How long a bumper contact is remembered while planning.
+const CONTACT_MEMORY: Duration = Duration::from_secs(120);
 /// Other robots within this distance are stamped on the map while planning \[m\].
 const STAMP_RANGE_M: f32 = 3.0;
 /// The robot's body on the map: its turning radius plus this \[m\].
@@ -122,6 +126,9 @@ pub struct Mission<const N: usize> {
     /// The remaining waypoints of the last path given up (for telling whether a robot is in
     /// the way, and for publishing while the robot holds).
     last_path: heapless::Vec<Point2, MAX_SHARED_WAYPOINTS>,
+    /// Where the bumpers found something (a segment across the bumper, map frame) and until
+    /// when it is remembered: obstacles the laser may not see (glass, low objects).
+    contacts: heapless::Deque<(Point2, Point2, Time), MAX_CONTACTS>,
     trail: heapless::Deque<Point2, TRAIL_LEN>,
     last_step: Option<Time>,
 }
@@ -198,6 +205,7 @@ impl<const N: usize> Mission<N> {
             blacklist: heapless::Vec::new(),
             ahead: None,
             last_path: heapless::Vec::new(),
+            contacts: heapless::Deque::new(),
             trail: heapless::Deque::new(),
             last_step: None,
             config,
@@ -562,17 +570,21 @@ impl<const N: usize> Mission<N> {
             } => {
                 let fp = self.config.safety.footprint;
                 let res = map.grid.geometry().resolution_m;
-                if front_bumper {
-                    let p = self
-                        .pose_map
-                        .transform_point(Point2::new(fp.front_m + 0.5 * res, 0.0));
-                    self.mark_occupied(map, p);
-                }
-                if rear_bumper {
-                    let p = self
-                        .pose_map
-                        .transform_point(Point2::new(-fp.rear_m - 0.5 * res, 0.0));
-                    self.mark_occupied(map, p);
+                let half = 0.5 * fp.width_m;
+                for (pressed, x) in [
+                    (front_bumper, fp.front_m + 0.5 * res),
+                    (rear_bumper, -fp.rear_m - 0.5 * res),
+                ] {
+                    if !pressed {
+                        continue;
+                    }
+                    let a = self.pose_map.transform_point(Point2::new(x, -half));
+                    let b = self.pose_map.transform_point(Point2::new(x, half));
+                    self.mark_occupied(map, self.pose_map.transform_point(Point2::new(x, 0.0)));
+                    if self.contacts.is_full() {
+                        self.contacts.pop_front();
+                    }
+                    let _ = self.contacts.push_back((a, b, now + CONTACT_MEMORY));
                 }
                 self.yielding = None;
                 if !matches!(self.state, MissionState::Done(_) | MissionState::Fault(_)) {
@@ -746,8 +758,9 @@ impl<const N: usize> Mission<N> {
         lifted
     }
 
-    /// Sets the cells under the other robots nearby (by their marks) Occupied, recording the
-    /// old values in `saved`.
+    /// Sets the cells under the other robots nearby (by their marks), and across the
+    /// bumper where it recently touched something, Occupied, recording the old values in
+    /// `saved`.
     fn stamp_others(
         &self,
         map: &mut SharedMap<N>,
@@ -759,6 +772,27 @@ impl<const N: usize> Mission<N> {
         let span = math::ceil(r / geom.resolution_m) as i32;
         let here = self.pose_map.position();
         let occupied = map.grid.bounds().max;
+        // What the bumpers found lately, across the bumper's width.
+        for &(a, b, until) in &self.contacts {
+            if now > until {
+                continue;
+            }
+            let n = math::ceil(a.distance(b) / (0.5 * geom.resolution_m)) as usize;
+            for k in 0..=n {
+                let f = k as f32 / n.max(1) as f32;
+                let p = Point2::new(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
+                let Some(i) = geom.cell_at(p).and_then(|c| geom.index(c)) else {
+                    continue;
+                };
+                if map.grid.class(i) == CellClass::Occupied {
+                    continue;
+                }
+                if saved.push((i, map.grid.log_odds_at(i))).is_err() {
+                    return;
+                }
+                map.grid.set_log_odds(i, occupied, &mut map.trav);
+            }
+        }
         for k in 0..map.robots.len() {
             let m = &map.robots[k];
             let p = m.pose.position();

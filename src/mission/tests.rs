@@ -733,7 +733,7 @@ fn corridor_world() -> World {
 /// no deadlock, no collision.
 #[test]
 fn two_robots_meeting_head_on_in_a_corridor_never_deadlock() {
-    for seed in 0..3u64 {
+    for seed in 0..6u64 {
         let config = MissionConfig {
             selector: SelectorKind::NearestFrontier,
             ..MissionConfig::default()
@@ -965,4 +965,61 @@ fn report_decide_while_driving() {
             );
         }
     }
+}
+
+/// A pane of glass across a door: the laser sees through it, the bumper finds it. The
+/// mission backs off, puts it on the map, replans through the other door, and does not keep
+/// ramming the glass.
+#[test]
+fn an_obstacle_only_the_bumper_finds_is_avoided_without_looping() {
+    let config = frontier_config();
+    let world = two_rooms();
+    let mut sim = Sim::new(world.clone(), &config, 8);
+    world.reveal(&mut sim.map);
+    sim.add(config, Pose2::new(2.0, 2.5, 0.0), Slip::thesis());
+    let goal = Point2::new(6.5, 2.5);
+    sim.bots[0].mission.go_to(&[goal]).unwrap();
+    let in_glass = |p: Point2| (3.85..4.15).contains(&p.x) && (2.0..3.0).contains(&p.y);
+    let mut contacts = 0;
+    let mut pressed = false;
+    while sim.secs() < 300.0 {
+        let before = sim.bots[0].body.pose();
+        sim.period();
+        let bot = &mut sim.bots[0];
+        let pose = bot.true_pose();
+        // The bumper ring: 0.21 m ahead of the centre, 0.30 m behind.
+        let front = pose.transform_point(Point2::new(0.21, 0.0));
+        let rear = pose.transform_point(Point2::new(-0.30, 0.0));
+        let hit_front = in_glass(front);
+        let hit_rear = in_glass(rear);
+        if hit_front || hit_rear {
+            // Blocked: the pose stays where it was (the wheels push in vain).
+            bot.body.set_pose(before);
+            if !pressed {
+                contacts += 1;
+            }
+        }
+        pressed = hit_front || hit_rear;
+        bot.flags.front_bumper = hit_front;
+        bot.flags.rear_bumper = hit_rear;
+        if pose.position().distance(goal) < 0.1 {
+            break;
+        }
+    }
+    let m = &sim.bots[0].mission;
+    let end = sim.bots[0].true_pose().position();
+    assert!(
+        end.distance(goal) < 0.1,
+        "stopped at {end:?}: {:?} {:?}",
+        m.state(),
+        m.stats()
+    );
+    assert!(contacts >= 1, "never touched the glass");
+    assert!(contacts <= 6, "rammed the glass {contacts} times");
+    assert!(sim.bots[0].log.iter().any(|(_, e)| matches!(
+        e,
+        MissionEvent::Replanned {
+            cause: ReplanCause::Contact
+        }
+    )));
 }
