@@ -544,6 +544,30 @@ fn an_obstacle_ahead_stops_the_robot_in_the_period_it_appears() {
     )));
 }
 
+/// (b) Obstacle ahead that only the safety monitor sees (inside the mapping blind zone,
+/// 0.30 m, so never on the map by scans): `Stop` in the period it appears, the return put on
+/// the map, a replan for `ObstacleAhead` before any motion.
+#[test]
+fn an_obstacle_in_the_blind_zone_is_caught_by_the_safety_monitor() {
+    let mut sim = cruising(17);
+    let p = sim.bots[0].true_pose();
+    // A thin pole 0.27 m ahead of the centre (6 cm off the bumper), in the laser's blind zone.
+    let x = p.x + 0.27;
+    sim.world.fill(x, p.y - 0.05, x + 0.05, p.y + 0.05, true);
+    let cmd = sim.period()[0];
+    assert_eq!(cmd, RobotCommand::Stop);
+    let seen = no_motion_before_fresh_plan(&mut sim, 100, false);
+    assert!(
+        seen.iter().any(|e| matches!(
+            e,
+            MissionEvent::Replanned {
+                cause: ReplanCause::ObstacleAhead
+            }
+        )),
+        "{seen:?}"
+    );
+}
+
 /// (b) Bumper and stall: stop in the same period, back off, replan before driving on.
 #[test]
 fn bumper_and_stall_stop_the_robot_in_the_same_period() {
