@@ -1070,8 +1070,9 @@ impl<const N: usize> Mission<N> {
     }
 }
 
+/// `s` seconds as a duration; negative or NaN gives zero, too large the longest duration.
 fn secs(s: f32) -> Duration {
-    Duration::from_secs_f32(s.max(0.0))
+    Duration::try_from_secs_f32(s.max(0.0)).unwrap_or(Duration::MAX)
 }
 
 /// Length of the polyline from `from` through `points` \[m\].

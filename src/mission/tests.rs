@@ -903,6 +903,21 @@ fn reported_coverage_ends_the_mission() {
     assert!(!moving(sim.period()[0]));
 }
 
+/// A mission's own memory does not grow with the map: the map and the decision memory are
+/// shared, borrowed per step. Most of it is the latest scan the safety monitor checks
+/// (1081 beams of 12 bytes).
+#[test]
+fn a_mission_stays_small_whatever_the_map() {
+    let small = core::mem::size_of::<Mission<CELLS>>();
+    let large = core::mem::size_of::<Mission<150_000>>();
+    assert_eq!(small, large);
+    let scan = core::mem::size_of::<Scan>();
+    assert!(
+        small < scan + 8 * 1024,
+        "{small} bytes, {scan} of them the scan"
+    );
+}
+
 #[test]
 fn bad_configs_are_refused_with_the_field_named() {
     let config = MissionConfig {
@@ -920,6 +935,13 @@ fn bad_configs_are_refused_with_the_field_named() {
         Mission::<CELLS>::new(0, MissionConfig::default(), Pose2::new(f32::NAN, 0.0, 0.0)),
         Err(MissionError::NotFinite { .. })
     ));
+    // A huge wait is no panic: it saturates.
+    let config = MissionConfig {
+        yield_wait_s: 1e30,
+        stuck_timeout_s: 1e30,
+        ..MissionConfig::default()
+    };
+    assert!(Mission::<CELLS>::new(0, config, Pose2::default()).is_ok());
 }
 
 /// Figures for the module docs: stop time with and without deciding while driving (run with
