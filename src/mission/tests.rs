@@ -1069,3 +1069,56 @@ fn an_obstacle_only_the_bumper_finds_is_avoided_without_looping() {
         }
     )));
 }
+
+/// Two robots exploring the two rooms on one shared map: both finish, the map is complete,
+/// they never touch.
+#[test]
+fn two_robots_explore_one_shared_map_to_done() {
+    for (seed, selector) in [
+        (61, SelectorKind::NearestFrontier),
+        (62, SelectorKind::FrontierUtility),
+        (63, SelectorKind::Optimized(crate::optim::Method::Xboa)),
+    ] {
+        let config = MissionConfig {
+            selector,
+            ..MissionConfig::default()
+        };
+        let mut sim = Sim::new(two_rooms(), &config, seed);
+        sim.add(config.clone(), Pose2::new(1.0, 1.0, 0.3), Slip::thesis());
+        sim.add(config, Pose2::new(7.0, 4.0, -2.8), Slip::thesis());
+        let mut closest = f32::INFINITY;
+        while sim.secs() < 900.0 {
+            sim.period();
+            let (pa, pb) = (
+                sim.bots[0].true_pose().position(),
+                sim.bots[1].true_pose().position(),
+            );
+            closest = closest.min(pa.distance(pb));
+            for p in [pa, pb] {
+                assert!(
+                    sim.world.clearance(p) > 0.18,
+                    "seed {seed}: wall hit at {p:?}"
+                );
+            }
+            if sim
+                .bots
+                .iter()
+                .all(|b| matches!(b.mission.state(), MissionState::Done(_)))
+            {
+                break;
+            }
+        }
+        for b in &sim.bots {
+            assert_eq!(
+                b.mission.state(),
+                MissionState::Done(DoneReason::NothingReachable),
+                "seed {seed} after {} s: {:?}",
+                sim.secs(),
+                b.mission.stats()
+            );
+        }
+        let known = known_fraction(&sim);
+        assert!(known > 0.97, "seed {seed}: {known}");
+        assert!(closest > 0.45, "seed {seed}: robots came {closest} m close");
+    }
+}
