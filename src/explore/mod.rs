@@ -8,14 +8,18 @@
 //! - [`nearest_frontier`]: Yamauchi (1997): the frontier with the shortest path distance.
 //! - [`frontier_utility`]: explore_lite's rule (frontier size minus a distance cost), with path
 //!   distance and a blacklist of frontiers the robot failed to reach.
+//! - [`view_cache`] and [`memo`]: what one decision computes once and reuses (each viewpoint's
+//!   visible Unknown cells; each candidate's evaluation).
 //!
 //! Every selector implements [`TargetSelector`] and fills the same [`Decision`]; the caller
 //! measures the compute time (the core reads no clock).
 
 pub mod frontier_utility;
+pub mod memo;
 pub mod nearest_frontier;
 pub mod objective;
 pub mod optimized;
+pub mod view_cache;
 
 #[cfg(all(test, feature = "std"))]
 mod tests;
@@ -24,6 +28,7 @@ pub use frontier_utility::FrontierUtility;
 pub use nearest_frontier::NearestFrontier;
 pub use objective::{CandidateStatus, Evaluation, ExploreObjective};
 pub use optimized::Optimized;
+pub use view_cache::{ViewCache, ViewCacheStats};
 
 use crate::control::follower::MAX_WAYPOINTS;
 use crate::geometry::{Point2, Pose2};
