@@ -46,7 +46,7 @@ use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::{Cell, CellClass, OccupancyGrid};
 use crate::math;
 use crate::optim::Problem;
-use crate::planner::{AStar, DistanceField, prune_to_waypoints};
+use crate::planner::{AStar, DistanceField, prune_to_waypoints, prune_to_waypoints_with_boxes};
 use crate::raycast;
 use crate::sensor::LaserConfig;
 use crate::units;
@@ -216,7 +216,10 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         self.config = *config;
         self.memo.clear();
         self.cached = match self.views.as_deref_mut() {
-            Some(v) => v.begin(req.grid, req.laser),
+            Some(v) => {
+                v.boxes.build(req.trav);
+                v.begin(req.grid, req.laser)
+            }
             None => false,
         };
         Ok(())
@@ -352,8 +355,12 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
                 _ => CandidateStatus::Unreachable,
             })?;
             let out = &mut self.waypoints[self.waypoint_len..];
-            let n = prune_to_waypoints(req.trav, &self.leg[..planned.len], out)
-                .map_err(|_| CandidateStatus::TooLong)?;
+            let leg = &self.leg[..planned.len];
+            let n = match self.views.as_deref() {
+                Some(v) => prune_to_waypoints_with_boxes(req.trav, &v.boxes, leg, out),
+                None => prune_to_waypoints(req.trav, leg, out),
+            }
+            .map_err(|_| CandidateStatus::TooLong)?;
             // Later legs start where the previous one ended: drop the repeated waypoint.
             if self.waypoint_len > 0 && n > 0 {
                 self.waypoints.copy_within(

@@ -490,17 +490,18 @@ fn house_fixture() -> HouseMaps {
     let mut grid =
         OccupancyGrid::<HOUSE_CELLS>::new_boxed(map.geometry, LogOddsBounds::default()).unwrap();
     map.load_into(&mut grid).unwrap();
-    let mut trav = Traversability::<HOUSE_CELLS>::new_boxed(
-        map.geometry,
-        TraversabilityConfig::default(),
-    )
-    .unwrap();
+    let mut trav =
+        Traversability::<HOUSE_CELLS>::new_boxed(map.geometry, TraversabilityConfig::default())
+            .unwrap();
     trav.rebuild_from(&grid).unwrap();
     (grid, trav)
 }
 
 /// The benchmark's request: robot at (1.5 m, 1.5 m) facing east, 60 steps of battery.
-fn house_request<'a>(maps: &'a HouseMaps, laser: &'a LaserConfig) -> DecisionRequest<'a, HOUSE_CELLS> {
+fn house_request<'a>(
+    maps: &'a HouseMaps,
+    laser: &'a LaserConfig,
+) -> DecisionRequest<'a, HOUSE_CELLS> {
     DecisionRequest {
         grid: &maps.0,
         trav: &maps.1,
@@ -524,7 +525,10 @@ fn the_house_fixture_is_a_mid_mission_snapshot() {
     assert_eq!((g.width, g.height, g.resolution_m), (240, 240, 0.1));
     // Known within 6 m of the robot, Unknown beyond.
     let robot = Point2::new(1.5, 1.5);
-    assert_eq!(grid.class_of(g.cell_at(robot).unwrap()), Some(CellClass::Free));
+    assert_eq!(
+        grid.class_of(g.cell_at(robot).unwrap()),
+        Some(CellClass::Free)
+    );
     for i in 0..g.cell_count() {
         let d = g.cell_center(g.cell(i)).distance(robot);
         assert_eq!(grid.class(i).is_known(), d <= 6.0, "cell {i} at {d} m");
@@ -634,7 +638,11 @@ fn remembered_evaluations_equal_fresh_ones() {
             let fitness = obj.problem(&req).evaluate(&genes);
             assert_eq!(fitness, obj.evaluate_targets(&req, &targets).fitness);
         }
-        assert!(obj.remembered_evaluations() >= 180, "{}", obj.remembered_evaluations());
+        assert!(
+            obj.remembered_evaluations() >= 180,
+            "{}",
+            obj.remembered_evaluations()
+        );
     }
 }
 
@@ -672,6 +680,9 @@ fn decisions_on_the_house_fixture_are_deterministic_per_seed() {
     }
     for o in &outcomes {
         let Outcome::Go(d) = o else { panic!("{o:?}") };
-        assert!(d.predicted_gain_cells > 0 && d.energy_steps <= req.battery_steps, "{d:?}");
+        assert!(
+            d.predicted_gain_cells > 0 && d.energy_steps <= req.battery_steps,
+            "{d:?}"
+        );
     }
 }

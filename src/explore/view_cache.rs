@@ -24,12 +24,16 @@
 //! **Cache**: an open-addressing table keyed by (cell, direction), cleared in O(1) per decision
 //! by a generation number. When the table or its arena is full, a window is computed into
 //! scratch space and used without being stored: the same result, only slower. Nothing is
-//! allocated; every capacity is a constant (about 10 MB in all, built on the heap by
+//! allocated; every capacity is a constant (about 14 MB in all, built on the heap by
 //! [`ViewCache::new_boxed`] on a host).
+//!
+//! The cache also carries the decision's [`BlockedBoxes`], with which the objective prunes
+//! its paths to waypoints without walking every line of sight (same waypoints).
 
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{Cell, CellClass, GridGeometry, OccupancyGrid};
 use crate::math;
+use crate::planner::BlockedBoxes;
 use crate::raycast;
 use crate::sensor::{LaserConfig, MAX_BEAMS};
 
@@ -118,6 +122,8 @@ pub struct ViewCache {
     views: [u128; VIEW_ROWS],
     scratch: [u128; MAX_WINDOW_ROWS],
     stats: ViewCacheStats,
+    /// Blocked-cell counts of the decision's traversability layer.
+    pub(crate) boxes: BlockedBoxes,
 }
 
 impl core::fmt::Debug for ViewCache {
@@ -162,7 +168,11 @@ fn or128(bits: &mut [u64], p: i64, v: u128) -> (usize, usize) {
         [v as u64, (v >> 64) as u64, 0]
     } else {
         let shifted = v << s;
-        [shifted as u64, (shifted >> 64) as u64, (v >> (128 - s)) as u64]
+        [
+            shifted as u64,
+            (shifted >> 64) as u64,
+            (v >> (128 - s)) as u64,
+        ]
     };
     let mut lo = usize::MAX;
     let mut hi = 0usize;
@@ -182,7 +192,8 @@ impl ViewCache {
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
         // SAFETY: every field is an integer, a float, a bool, an array or a plain struct of
-        // them (no references, enums or niches), for which all-zero bytes are valid values.
+        // them (no references, enums or niches; `BlockedBoxes` likewise), for which all-zero
+        // bytes are valid values.
         let mut cache = unsafe {
             let layout = std::alloc::Layout::new::<Self>();
             let raw = std::alloc::alloc_zeroed(layout) as *mut Self;
@@ -351,6 +362,7 @@ impl ViewCache {
     /// direction `first` sees, beam by beam (a cell seen by several beams is visited several
     /// times). Reads the grid's classes directly: the reference the windows are checked
     /// against.
+    #[cfg(test)]
     pub(crate) fn visit_visible_unknown<const N: usize>(
         &self,
         grid: &OccupancyGrid<N>,
@@ -362,8 +374,7 @@ impl ViewCache {
         for b in 0..self.beams {
             let j = (first + self.beam_direction[b] as usize) % self.directions;
             for &[dc, dr] in self.template_of(j) {
-                let Some(i) = g.index(Cell::new(cell.col + dc as i32, cell.row + dr as i32))
-                else {
+                let Some(i) = g.index(Cell::new(cell.col + dc as i32, cell.row + dr as i32)) else {
                     break;
                 };
                 match grid.class(i) {
@@ -375,11 +386,12 @@ impl ViewCache {
         }
     }
 
-    /// The fan of direction `j` (all its beams' template cells), if the fans fit.
-    fn fan(&mut self, j: usize) -> Option<&[u128]> {
+    /// Builds the fan of direction `j` (all its beams' template cells) if the fans fit;
+    /// returns whether it is available at `fans[j * rows..]`.
+    fn ensure_fan(&mut self, j: usize) -> bool {
         let rows = self.rows;
         if self.directions * rows > FAN_ROWS {
-            return None;
+            return false;
         }
         if !self.fan_ready[j] {
             let r = self.radius as i32;
@@ -393,7 +405,7 @@ impl ViewCache {
             self.fans[j * rows..(j + 1) * rows].copy_from_slice(&fan[..rows]);
             self.fan_ready[j] = true;
         }
-        Some(&self.fans[j * rows..(j + 1) * rows])
+        true
     }
 
     /// Computes the window of (`cell`, `first`) into the entry or the scratch rows.
@@ -402,57 +414,62 @@ impl ViewCache {
         let r = self.radius as i64;
         let (w, h) = (self.geometry.width as i64, self.geometry.height as i64);
         let (col0, row0) = (cell.col as i64 - r, cell.row as i64 - r);
-        // Window columns inside the grid.
-        let mut col_mask = 0u128;
-        for k in 0..rows as i64 {
-            if (0..w).contains(&(col0 + k)) {
-                col_mask |= 1 << k;
+        // Window columns inside the grid: bits lo..hi.
+        let lo = (-col0).clamp(0, rows as i64) as u32;
+        let hi = (w - col0).clamp(0, rows as i64) as u32;
+        let below = |n: u32| {
+            if n >= 128 {
+                u128::MAX
+            } else {
+                (1u128 << n) - 1
             }
-        }
-        let mut window = [0u128; MAX_WINDOW_ROWS];
-        let mut done = false;
-        if let Some(fan) = self.fan(first) {
-            let mut fan_rows = [0u128; MAX_WINDOW_ROWS];
-            fan_rows[..rows].copy_from_slice(fan);
-            let blocked = (0..rows).any(|k| {
-                let gr = row0 + k as i64;
-                (0..h).contains(&gr)
-                    && read128(&self.occupied, gr * w + col0) & col_mask & fan_rows[k] != 0
-            });
-            if !blocked {
-                for (k, out) in window[..rows].iter_mut().enumerate() {
-                    let gr = row0 + k as i64;
-                    if (0..h).contains(&gr) {
-                        *out = fan_rows[k] & col_mask & read128(&self.unknown, gr * w + col0);
-                    }
-                }
-                self.stats.unobstructed += 1;
-                done = true;
-            }
-        }
-        if !done {
-            for b in 0..self.beams {
-                let j = (first + self.beam_direction[b] as usize) % self.directions;
-                for &[dc, dr] in self.template_of(j) {
-                    let (c, rr) = (cell.col as i64 + dc as i64, cell.row as i64 + dr as i64);
-                    if !(0..w).contains(&c) || !(0..h).contains(&rr) {
-                        break;
-                    }
-                    let i = (rr * w + c) as usize;
-                    if self.occupied[i / 64] >> (i % 64) & 1 != 0 {
-                        break;
-                    }
-                    if self.unknown[i / 64] >> (i % 64) & 1 != 0 {
-                        window[(dr as i64 + r) as usize] |= 1 << (dc as i64 + r);
-                    }
-                }
-            }
-        }
+        };
+        let col_mask = below(hi) & !below(lo);
+        // Window rows inside the grid.
+        let k0 = (-row0).clamp(0, rows as i64) as usize;
+        let k1 = (h - row0).clamp(0, rows as i64) as usize;
+        let fan_ok = self.ensure_fan(first);
         let dst = match at {
             Window::Entry(e) => &mut self.views[e * rows..(e + 1) * rows],
             Window::Scratch => &mut self.scratch[..rows],
         };
-        dst.copy_from_slice(&window[..rows]);
+        dst.fill(0);
+        if fan_ok {
+            let fan = &self.fans[first * rows..(first + 1) * rows];
+            let blocked = (k0..k1).any(|k| {
+                let p = (row0 + k as i64) * w + col0;
+                fan[k] & col_mask != 0 && read128(&self.occupied, p) & col_mask & fan[k] != 0
+            });
+            if !blocked {
+                for k in k0..k1 {
+                    let bits = fan[k] & col_mask;
+                    if bits != 0 {
+                        let p = (row0 + k as i64) * w + col0;
+                        dst[k] = bits & read128(&self.unknown, p);
+                    }
+                }
+                self.stats.unobstructed += 1;
+                return;
+            }
+        }
+        for b in 0..self.beams {
+            let j = (first + self.beam_direction[b] as usize) % self.directions;
+            let t = &self.template
+                [self.template_start[j] as usize..self.template_start[j + 1] as usize];
+            for &[dc, dr] in t {
+                let (c, rr) = (cell.col as i64 + dc as i64, cell.row as i64 + dr as i64);
+                if !(0..w).contains(&c) || !(0..h).contains(&rr) {
+                    break;
+                }
+                let i = (rr * w + c) as usize;
+                if self.occupied[i / 64] >> (i % 64) & 1 != 0 {
+                    break;
+                }
+                if self.unknown[i / 64] >> (i % 64) & 1 != 0 {
+                    dst[(dr as i64 + r) as usize] |= 1 << (dc as i64 + r);
+                }
+            }
+        }
     }
 
     /// The window of (`cell`, `first`): from the cache, or computed (and stored if room).
@@ -460,9 +477,8 @@ impl ViewCache {
         let index = cell.row as u32 * self.geometry.width as u32 + cell.col as u32;
         let direction = first as u32;
         let mask = TABLE_SLOTS - 1;
-        let mut h = (index.wrapping_mul(0x9E37_79B1) ^ direction.wrapping_mul(0x85EB_CA77))
-            as usize
-            & mask;
+        let mut h =
+            (index.wrapping_mul(0x9E37_79B1) ^ direction.wrapping_mul(0x85EB_CA77)) as usize & mask;
         let limit = self
             .entry_limit
             .min(VIEW_ROWS / self.rows.max(1))
