@@ -452,22 +452,27 @@ impl ViewCache {
                 return;
             }
         }
+        // Some beam may stop early: walk each beam over the window's Occupied and Unknown
+        // bits (cells outside the grid are neither, and a beam that left the grid never
+        // comes back, so walking on past the edge adds nothing).
+        let mut occupied = [0u128; MAX_WINDOW_ROWS];
+        let mut unknown = [0u128; MAX_WINDOW_ROWS];
+        for k in k0..k1 {
+            let p = (row0 + k as i64) * w + col0;
+            occupied[k] = read128(&self.occupied, p) & col_mask;
+            unknown[k] = read128(&self.unknown, p) & col_mask;
+        }
         for b in 0..self.beams {
             let j = (first + self.beam_direction[b] as usize) % self.directions;
             let t = &self.template
                 [self.template_start[j] as usize..self.template_start[j + 1] as usize];
             for &[dc, dr] in t {
-                let (c, rr) = (cell.col as i64 + dc as i64, cell.row as i64 + dr as i64);
-                if !(0..w).contains(&c) || !(0..h).contains(&rr) {
+                let k = (dr as i64 + r) as usize;
+                let bit = 1u128 << (dc as i64 + r);
+                if occupied[k] & bit != 0 {
                     break;
                 }
-                let i = (rr * w + c) as usize;
-                if self.occupied[i / 64] >> (i % 64) & 1 != 0 {
-                    break;
-                }
-                if self.unknown[i / 64] >> (i % 64) & 1 != 0 {
-                    dst[(dr as i64 + r) as usize] |= 1 << (dc as i64 + r);
-                }
+                dst[k] |= unknown[k] & bit;
             }
         }
     }

@@ -10,6 +10,7 @@
 use super::Traversability;
 use super::traversability::CODE_BLOCKED;
 use crate::grid::Cell;
+use crate::math;
 
 /// Largest table \[entries\]: `(width + 1) * (height + 1)` of the grid.
 pub const MAX_BOX_TABLE: usize = (1 << 20) + (1 << 12);
@@ -78,11 +79,44 @@ impl BlockedBoxes {
     /// blocked cell; `false` whenever the table is not built.
     #[inline]
     pub fn is_clear(&self, a: Cell, b: Cell) -> bool {
+        self.is_range_clear(
+            a.col.min(b.col),
+            a.row.min(b.row),
+            a.col.max(b.col),
+            a.row.max(b.row),
+        )
+    }
+
+    /// Whether the segment between the centres of `a` and `b` is proven clear by covering it
+    /// with boxes: the whole segment's bounding box, else (up to `depth` halvings) the boxes
+    /// of its halves. Every cell the segment touches (corners included) lies in the boxes, so
+    /// `true` implies [`super::has_line_of_sight`]; `false` proves nothing.
+    pub fn is_segment_clear(&self, a: Cell, b: Cell, depth: u32) -> bool {
+        let centre = |c: Cell| (c.col as f32 + 0.5, c.row as f32 + 0.5);
+        self.cover(centre(a), centre(b), depth)
+    }
+
+    fn cover(&self, p: (f32, f32), q: (f32, f32), depth: u32) -> bool {
+        // A point on the line x = X touches the cells on both sides of it: columns from
+        // ceil(min x) - 1 to floor(max x) hold every touched cell (likewise rows).
+        let lo = |a: f32, b: f32| math::ceil(a.min(b)) as i32 - 1;
+        let hi = |a: f32, b: f32| math::floor(a.max(b)) as i32;
+        if self.is_range_clear(lo(p.0, q.0), lo(p.1, q.1), hi(p.0, q.0), hi(p.1, q.1)) {
+            return true;
+        }
+        if depth == 0 {
+            return false;
+        }
+        let m = ((p.0 + q.0) / 2.0, (p.1 + q.1) / 2.0);
+        self.cover(p, m, depth - 1) && self.cover(m, q, depth - 1)
+    }
+
+    /// Whether columns `c0..=c1` x rows `r0..=r1` lie in the grid and hold no blocked cell.
+    #[inline]
+    fn is_range_clear(&self, c0: i32, r0: i32, c1: i32, r1: i32) -> bool {
         if !self.ready {
             return false;
         }
-        let (c0, c1) = (a.col.min(b.col), a.col.max(b.col));
-        let (r0, r1) = (a.row.min(b.row), a.row.max(b.row));
         if c0 < 0 || r0 < 0 || c1 as usize >= self.width || r1 as usize >= self.height {
             return false;
         }
@@ -135,6 +169,34 @@ mod tests {
             clear += boxes.is_clear(a, b) as u32;
         }
         assert!(clear > 20, "{clear}");
+    }
+
+    #[test]
+    fn a_segment_covered_by_clear_boxes_has_a_line_of_sight() {
+        let mut rng = seeded(4);
+        let mut boxes = BlockedBoxes::new_boxed();
+        let (mut proven, mut clear) = (0, 0);
+        for seed in 0..5 {
+            let trav = layer(200 + seed);
+            assert!(boxes.build(&*trav));
+            for _ in 0..2000 {
+                let mut cell = || {
+                    Cell::new(
+                        range_f32(&mut rng, 0.0, W as f32) as i32,
+                        range_f32(&mut rng, 0.0, H as f32) as i32,
+                    )
+                };
+                let (a, b) = (cell(), cell());
+                let sees = crate::planner::has_line_of_sight(&*trav, a, b);
+                clear += sees as u32;
+                if boxes.is_segment_clear(a, b, 4) {
+                    assert!(sees, "{a:?} {b:?}");
+                    proven += 1;
+                }
+            }
+        }
+        // Most clear segments are proven so by the boxes.
+        assert!(proven * 2 > clear, "{proven} of {clear}");
     }
 
     #[test]

@@ -74,9 +74,12 @@ pub fn prune_to_waypoints<const N: usize>(
     prune_with(trav, path, out, |a, b| has_line_of_sight(trav, a, b))
 }
 
+/// Halvings of a segment when covering it with boxes ([`BlockedBoxes::is_segment_clear`]).
+const BOX_DEPTH: u32 = 3;
+
 /// [`prune_to_waypoints`] with the line of sight first checked on `boxes` (built from `trav`):
-/// a segment whose cells' bounding box holds no blocked cell is clear without being walked.
-/// Same result, faster in open space.
+/// a segment covered by boxes without blocked cells is clear without being walked. Same
+/// result, faster in open space.
 pub fn prune_to_waypoints_with_boxes<const N: usize>(
     trav: &Traversability<N>,
     boxes: &BlockedBoxes,
@@ -84,7 +87,7 @@ pub fn prune_to_waypoints_with_boxes<const N: usize>(
     out: &mut [Point2],
 ) -> Result<usize, PlanError> {
     prune_with(trav, path, out, |a, b| {
-        boxes.is_clear(a, b) || has_line_of_sight(trav, a, b)
+        boxes.is_segment_clear(a, b, BOX_DEPTH) || has_line_of_sight(trav, a, b)
     })
 }
 
