@@ -105,6 +105,9 @@ pub struct ViewCache {
     beams: usize,
     beam_direction: [u16; MAX_BEAMS],
     template: [[i8; 2]; MAX_TEMPLATE_CELLS],
+    /// Per template cell: its window word (`2 * row + half`) and bit, for the walk.
+    template_word: [u16; MAX_TEMPLATE_CELLS],
+    template_bit: [u64; MAX_TEMPLATE_CELLS],
     template_start: [u32; MAX_DIRECTIONS + 1],
     fan_ready: [bool; MAX_DIRECTIONS],
     fans: [u128; FAN_ROWS],
@@ -330,6 +333,12 @@ impl ViewCache {
         if radius as usize > MAX_VIEW_RADIUS_CELLS {
             return false;
         }
+        for t in 0..n {
+            let [dc, dr] = self.template[t];
+            let (k, bit) = ((dr as i32 + radius) as u16, (dc as i32 + radius) as u32);
+            self.template_word[t] = 2 * k + (bit / 64) as u16;
+            self.template_bit[t] = 1 << (bit % 64);
+        }
         self.directions = m;
         self.beams = beams;
         self.radius = radius as usize;
@@ -455,25 +464,31 @@ impl ViewCache {
         // Some beam may stop early: walk each beam over the window's Occupied and Unknown
         // bits (cells outside the grid are neither, and a beam that left the grid never
         // comes back, so walking on past the edge adds nothing).
-        let mut occupied = [0u128; MAX_WINDOW_ROWS];
-        let mut unknown = [0u128; MAX_WINDOW_ROWS];
+        let mut occupied = [0u64; 2 * MAX_WINDOW_ROWS];
+        let mut unknown = [0u64; 2 * MAX_WINDOW_ROWS];
+        let mut seen = [0u64; 2 * MAX_WINDOW_ROWS];
         for k in k0..k1 {
             let p = (row0 + k as i64) * w + col0;
-            occupied[k] = read128(&self.occupied, p) & col_mask;
-            unknown[k] = read128(&self.unknown, p) & col_mask;
+            let o = read128(&self.occupied, p) & col_mask;
+            let u = read128(&self.unknown, p) & col_mask;
+            (occupied[2 * k], occupied[2 * k + 1]) = (o as u64, (o >> 64) as u64);
+            (unknown[2 * k], unknown[2 * k + 1]) = (u as u64, (u >> 64) as u64);
         }
         for b in 0..self.beams {
             let j = (first + self.beam_direction[b] as usize) % self.directions;
-            let t = &self.template
-                [self.template_start[j] as usize..self.template_start[j + 1] as usize];
-            for &[dc, dr] in t {
-                let k = (dr as i64 + r) as usize;
-                let bit = 1u128 << (dc as i64 + r);
-                if occupied[k] & bit != 0 {
+            let range = self.template_start[j] as usize..self.template_start[j + 1] as usize;
+            let words = &self.template_word[range.clone()];
+            let bits = &self.template_bit[range];
+            for (&word, &bit) in words.iter().zip(bits) {
+                let word = word as usize;
+                if occupied[word] & bit != 0 {
                     break;
                 }
-                dst[k] |= unknown[k] & bit;
+                seen[word] |= unknown[word] & bit;
             }
+        }
+        for (k, out) in dst.iter_mut().enumerate() {
+            *out = seen[2 * k] as u128 | (seen[2 * k + 1] as u128) << 64;
         }
     }
 
