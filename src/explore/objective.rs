@@ -493,6 +493,13 @@ impl<const N: usize> core::fmt::Debug for BoundObjective<'_, '_, '_, N> {
     }
 }
 
+impl<const N: usize> BoundObjective<'_, '_, '_, N> {
+    /// The decision's distance field.
+    pub(crate) fn field(&self) -> &DistanceField<N> {
+        self.objective.field
+    }
+}
+
 impl<const N: usize> Problem for BoundObjective<'_, '_, '_, N> {
     fn dim(&self) -> usize {
         2 * self.objective.config.targets

@@ -686,3 +686,35 @@ fn decisions_on_the_house_fixture_are_deterministic_per_seed() {
         );
     }
 }
+
+#[test]
+fn a_frontier_biased_start_draws_reachable_frontier_cells_and_stays_deterministic() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    obj.prepare(&req, &ExploreConfig::default()).unwrap();
+    let mut rng = seeded(31);
+    for _ in 0..50 {
+        let c = sample_reachable_frontier(&grid, obj.field(), &mut rng).unwrap();
+        assert!(obj.field().is_reachable(c));
+        let i = grid.geometry().index(c).unwrap();
+        let w = grid.geometry().width;
+        let near_frontier = [i, i - 1, i + 1, i - w, i + w]
+            .iter()
+            .any(|&n| crate::frontier::is_frontier_cell(&grid, n));
+        assert!(near_frontier, "{c:?}");
+    }
+    let config = ExploreConfig {
+        population: 6,
+        max_generations: 5,
+        ..ExploreConfig::default()
+    };
+    let mut sel = Optimized::new(Method::Xboa, config, &mut obj);
+    sel.initial = InitialPopulation::NearFrontiers { share: 0.5 };
+    let a = run_selector(&mut sel, &req, 9);
+    assert_eq!(a, run_selector(&mut sel, &req, 9));
+    assert!(matches!(a, Outcome::Go(_)));
+}
