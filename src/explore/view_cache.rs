@@ -54,6 +54,10 @@ pub const MAX_GRID_CELLS: usize = 1 << 20;
 
 const MAX_WINDOW_ROWS: usize = 2 * MAX_VIEW_RADIUS_CELLS + 1;
 const GRID_WORDS: usize = MAX_GRID_CELLS / 64 + 4;
+/// The union bit set holds bit `i + UNION_PAD` for cell `i`, so that a window reaching west of
+/// column 0 on row 0 still starts at a non-negative bit.
+const UNION_PAD: i64 = 128;
+const UNION_WORDS: usize = GRID_WORDS + 8;
 const TABLE_SLOTS: usize = 2 * MAX_VIEWS;
 
 /// Counters of the current decision.
@@ -116,7 +120,7 @@ pub struct ViewCache {
     geometry: GridGeometry,
     unknown: [u64; GRID_WORDS],
     occupied: [u64; GRID_WORDS],
-    union: [u64; GRID_WORDS],
+    union: [u64; UNION_WORDS],
     // The cache.
     generation: u32,
     table: [Slot; TABLE_SLOTS],
@@ -161,33 +165,21 @@ fn read128(bits: &[u64], p: i64) -> u128 {
     }
 }
 
-/// ORs `v` into a flat bit set at bit `p` on; returns the first and last word index touched
-/// (bits falling outside the set must be 0).
-#[inline]
-fn or128(bits: &mut [u64], p: i64, v: u128) -> (usize, usize) {
-    let w = p.div_euclid(64);
-    let s = p.rem_euclid(64) as u32;
-    let parts: [u64; 3] = if s == 0 {
-        [v as u64, (v >> 64) as u64, 0]
+/// ORs `v` into a flat bit set at bit `q` on (the set must hold the words `q / 64` to
+/// `q / 64 + 2`).
+#[inline(always)]
+fn or128(bits: &mut [u64], q: usize, v: u128) {
+    let w = q / 64;
+    let s = (q % 64) as u32;
+    if s == 0 {
+        bits[w] |= v as u64;
+        bits[w + 1] |= (v >> 64) as u64;
     } else {
         let shifted = v << s;
-        [
-            shifted as u64,
-            (shifted >> 64) as u64,
-            (v >> (128 - s)) as u64,
-        ]
-    };
-    let mut lo = usize::MAX;
-    let mut hi = 0usize;
-    for (k, &part) in parts.iter().enumerate() {
-        let i = w + k as i64;
-        if part != 0 && i >= 0 && (i as usize) < bits.len() {
-            bits[i as usize] |= part;
-            lo = lo.min(i as usize);
-            hi = hi.max(i as usize);
-        }
+        bits[w] |= shifted as u64;
+        bits[w + 1] |= (shifted >> 64) as u64;
+        bits[w + 2] |= (v >> (128 - s)) as u64;
     }
-    (lo, hi)
 }
 
 impl ViewCache {
@@ -254,7 +246,7 @@ impl ViewCache {
         let words = cells / 64 + 1;
         self.unknown[..words].fill(0);
         self.occupied[..words].fill(0);
-        self.union[..words + 3].fill(0);
+        self.union[..words + 8].fill(0);
         for i in 0..cells {
             match grid.class(i) {
                 CellClass::Unknown => self.unknown[i / 64] |= 1 << (i % 64),
@@ -551,11 +543,18 @@ impl ViewCache {
                 Window::Scratch => &self.scratch[..rows],
             };
             let (col0, row0) = (cell.col as i64 - r, cell.row as i64 - r);
-            for (k, &bits) in src.iter().enumerate() {
+            // Window bits are set only for cells inside the grid, so every non-zero row
+            // starts at a bit between UNION_PAD - radius and UNION_PAD + cells.
+            let start = |k: usize| ((row0 + k as i64) * w + col0 + UNION_PAD) as usize;
+            let Some(first) = src.iter().position(|&b| b != 0) else {
+                continue;
+            };
+            let last = src.iter().rposition(|&b| b != 0).unwrap_or(first);
+            lo = lo.min(start(first) / 64);
+            hi = hi.max(start(last) / 64 + 2);
+            for (k, &bits) in src.iter().enumerate().take(last + 1).skip(first) {
                 if bits != 0 {
-                    let (a, b) = or128(&mut self.union, (row0 + k as i64) * w + col0, bits);
-                    lo = lo.min(a);
-                    hi = hi.max(b);
+                    or128(&mut self.union, start(k), bits);
                 }
             }
         }

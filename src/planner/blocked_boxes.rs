@@ -10,7 +10,6 @@
 use super::Traversability;
 use super::traversability::CODE_BLOCKED;
 use crate::grid::Cell;
-use crate::math;
 
 /// Largest table \[entries\]: `(width + 1) * (height + 1)` of the grid.
 pub const MAX_BOX_TABLE: usize = (1 << 20) + (1 << 12);
@@ -92,23 +91,33 @@ impl BlockedBoxes {
     /// of its halves. Every cell the segment touches (corners included) lies in the boxes, so
     /// `true` implies [`super::has_line_of_sight`]; `false` proves nothing.
     pub fn is_segment_clear(&self, a: Cell, b: Cell, depth: u32) -> bool {
-        let centre = |c: Cell| (c.col as f32 + 0.5, c.row as f32 + 0.5);
-        self.cover(centre(a), centre(b), depth)
+        // Coordinates in units of 1 / 2^(depth + 1) cell, so that the centres and every
+        // midpoint are integers.
+        let depth = depth.min(20);
+        let scale = 1i64 << (depth + 1);
+        let half = scale / 2;
+        let centre = |c: Cell| (c.col as i64 * scale + half, c.row as i64 * scale + half);
+        self.cover(centre(a), centre(b), scale, depth)
     }
 
-    fn cover(&self, p: (f32, f32), q: (f32, f32), depth: u32) -> bool {
+    fn cover(&self, p: (i64, i64), q: (i64, i64), scale: i64, depth: u32) -> bool {
         // A point on the line x = X touches the cells on both sides of it: columns from
         // ceil(min x) - 1 to floor(max x) hold every touched cell (likewise rows).
-        let lo = |a: f32, b: f32| math::ceil(a.min(b)) as i32 - 1;
-        let hi = |a: f32, b: f32| math::floor(a.max(b)) as i32;
-        if self.is_range_clear(lo(p.0, q.0), lo(p.1, q.1), hi(p.0, q.0), hi(p.1, q.1)) {
+        let lo = |a: i64, b: i64| (a.min(b) + scale - 1).div_euclid(scale) - 1;
+        let hi = |a: i64, b: i64| a.max(b).div_euclid(scale);
+        let (c0, c1) = (lo(p.0, q.0), hi(p.0, q.0));
+        let (r0, r1) = (lo(p.1, q.1), hi(p.1, q.1));
+        let fits = |v: i64| v >= i32::MIN as i64 && v <= i32::MAX as i64;
+        if [c0, c1, r0, r1].into_iter().all(fits)
+            && self.is_range_clear(c0 as i32, r0 as i32, c1 as i32, r1 as i32)
+        {
             return true;
         }
         if depth == 0 {
             return false;
         }
-        let m = ((p.0 + q.0) / 2.0, (p.1 + q.1) / 2.0);
-        self.cover(p, m, depth - 1) && self.cover(m, q, depth - 1)
+        let m = ((p.0 + q.0) / 2, (p.1 + q.1) / 2);
+        self.cover(p, m, scale, depth - 1) && self.cover(m, q, scale, depth - 1)
     }
 
     /// Whether columns `c0..=c1` x rows `r0..=r1` lie in the grid and hold no blocked cell.
