@@ -718,3 +718,36 @@ fn a_frontier_biased_start_draws_reachable_frontier_cells_and_stays_deterministi
     assert_eq!(a, run_selector(&mut sel, &req, 9));
     assert!(matches!(a, Outcome::Go(_)));
 }
+
+#[test]
+fn a_laser_beyond_the_cache_capacities_is_predicted_by_tracing() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    // 8 m of range is 80 cells, more than a cache window holds.
+    let long = LaserConfig {
+        max_range_m: 8.0,
+        ..laser()
+    };
+    let req = request(&grid, &trav, &long);
+    let mut cached = Memory::<CELLS>::new();
+    let mut traced = Memory::<CELLS>::new();
+    let mut a = cached.objective();
+    let mut b = traced.traced();
+    let config = ExploreConfig::default();
+    a.prepare(&req, &config).unwrap();
+    b.prepare(&req, &config).unwrap();
+    assert!(!a.uses_view_cache());
+    for t in [
+        Point2::new(4.0, 1.0),
+        Point2::new(2.5, 3.0),
+        Point2::new(1.2, 0.5),
+    ] {
+        let e = a.evaluate_targets(&req, &[t]);
+        assert_eq!(e, b.evaluate_targets(&req, &[t]));
+    }
+    // Back to the usual laser: the cache serves again.
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    a.prepare(&req, &config).unwrap();
+    assert!(a.uses_view_cache());
+}
