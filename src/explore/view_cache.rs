@@ -182,7 +182,69 @@ fn or128(bits: &mut [u64], q: usize, v: u128) {
     }
 }
 
+impl Default for ViewCache {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+const EMPTY_SLOT: Slot = Slot {
+    generation: 0,
+    cell: 0,
+    direction: 0,
+    entry: 0,
+};
+
 impl ViewCache {
+    /// An empty cache, for a `static` without an allocator (15.1 MB: on a host prefer
+    /// [`Self::new_boxed`]).
+    pub const fn new() -> Self {
+        Self {
+            key: TemplateKey {
+                beam_count: 0,
+                first_angle_rad: 0.0,
+                step_rad: 0.0,
+                max_range_m: 0.0,
+                resolution_m: 0.0,
+            },
+            templates_ok: false,
+            directions: 0,
+            radius: 0,
+            rows: 0,
+            beams: 0,
+            beam_direction: [0; MAX_BEAMS],
+            template: [[0; 2]; MAX_TEMPLATE_CELLS],
+            template_word: [0; MAX_TEMPLATE_CELLS],
+            template_bit: [0; MAX_TEMPLATE_CELLS],
+            template_start: [0; MAX_DIRECTIONS + 1],
+            fan_ready: [false; MAX_DIRECTIONS],
+            fans: [0; FAN_ROWS],
+            ready: false,
+            geometry: GridGeometry {
+                width: 0,
+                height: 0,
+                resolution_m: 0.0,
+                origin: Point2::new(0.0, 0.0),
+            },
+            unknown: [0; GRID_WORDS],
+            occupied: [0; GRID_WORDS],
+            union: [0; UNION_WORDS],
+            generation: 0,
+            table: [EMPTY_SLOT; TABLE_SLOTS],
+            entries: 0,
+            entry_limit: MAX_VIEWS,
+            views: [0; VIEW_ROWS],
+            scratch: [0; MAX_WINDOW_ROWS],
+            stats: ViewCacheStats {
+                hits: 0,
+                misses: 0,
+                overflows: 0,
+                unobstructed: 0,
+            },
+            boxes: BlockedBoxes::new(),
+        }
+    }
+
     /// An empty cache built directly on the heap (15.1 MB).
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {

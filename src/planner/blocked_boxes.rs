@@ -33,8 +33,25 @@ impl core::fmt::Debug for BlockedBoxes {
     }
 }
 
+impl Default for BlockedBoxes {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl BlockedBoxes {
-    /// An empty table built directly on the heap (4 MB).
+    /// An empty table, for a `static` without an allocator (4.2 MB: on a host prefer
+    /// [`Self::new_boxed`]).
+    pub const fn new() -> Self {
+        Self {
+            width: 0,
+            height: 0,
+            ready: false,
+            sums: [0; MAX_BOX_TABLE],
+        }
+    }
+
+    /// An empty table built directly on the heap (4.2 MB).
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
         // SAFETY: integers, a bool and an array of integers: all-zero bytes are valid.
