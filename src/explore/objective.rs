@@ -36,6 +36,10 @@
 //!   cell's diagonal away) and their directions (at most half a beam step away) differ. If the
 //!   laser or grid does not fit the cache's capacities, the traced model is used.
 //!
+//! With a cache, paths are also pruned to waypoints with its table of blocked cells
+//! ([`crate::planner::BlockedBoxes`]: the same waypoints, found without walking every line of
+//! sight).
+//!
 //! **Scaling**: the optimizers minimise `-(score / unknown_cells)`, in `[-1, 0]`, where
 //! `unknown_cells` is the number of Unknown cells in the grid (the largest possible gain);
 //! large fitness magnitudes upset the butterfly methods' fragrance `c·|F|^a`.
