@@ -8,14 +8,18 @@
 //! - [`nearest_frontier`]: Yamauchi (1997): the frontier with the shortest path distance.
 //! - [`frontier_utility`]: explore_lite's rule (frontier size minus a distance cost), with path
 //!   distance and a blacklist of frontiers the robot failed to reach.
+//! - [`view_cache`] and [`memo`]: what one decision computes once and reuses (each viewpoint's
+//!   visible Unknown cells; each candidate's evaluation).
 //!
 //! Every selector implements [`TargetSelector`] and fills the same [`Decision`]; the caller
 //! measures the compute time (the core reads no clock).
 
 pub mod frontier_utility;
+pub mod memo;
 pub mod nearest_frontier;
 pub mod objective;
 pub mod optimized;
+pub mod view_cache;
 
 #[cfg(all(test, feature = "std"))]
 mod tests;
@@ -23,7 +27,8 @@ mod tests;
 pub use frontier_utility::FrontierUtility;
 pub use nearest_frontier::NearestFrontier;
 pub use objective::{CandidateStatus, Evaluation, ExploreObjective};
-pub use optimized::Optimized;
+pub use optimized::{InitialPopulation, Optimized};
+pub use view_cache::{ViewCache, ViewCacheStats};
 
 use crate::control::follower::MAX_WAYPOINTS;
 use crate::geometry::{Point2, Pose2};
@@ -239,5 +244,25 @@ pub(crate) fn any_reachable_frontier<const N: usize>(
 ) -> bool {
     (0..grid.cell_count()).any(|i| {
         crate::frontier::is_frontier_cell(grid, i) && reach_frontier_cell(grid, field, i).is_some()
+    })
+}
+
+/// A reachable frontier cell (as [`reach_frontier_cell`] gives it) found by scanning the grid
+/// from a random cell onwards (wrapping round); `None` if there is none. Cells following long
+/// runs without frontier are drawn more often than others: a cheap draw, not a uniform one.
+pub(crate) fn sample_reachable_frontier<const N: usize, R: rand_core::Rng>(
+    grid: &OccupancyGrid<N>,
+    field: &DistanceField<N>,
+    rng: &mut R,
+) -> Option<Cell> {
+    let n = grid.cell_count();
+    let start = crate::random::below(rng, n);
+    (0..n).find_map(|k| {
+        let i = (start + k) % n;
+        if crate::frontier::is_frontier_cell(grid, i) {
+            reach_frontier_cell(grid, field, i).map(|(c, _)| c)
+        } else {
+            None
+        }
     })
 }

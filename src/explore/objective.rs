@@ -16,9 +16,29 @@
 //! outside the grid, on a blocked (Occupied, inflated) or unreachable cell, scores the worst
 //! fitness, [`WORST_FITNESS`].
 //!
-//! **Speed**: one distance field from the robot's cell per decision ([`ExploreObjective::prepare`])
+//! # Speed
+//!
+//! One distance field from the robot's cell per decision ([`ExploreObjective::prepare`])
 //! serves every candidate's first leg; later legs use A*. All working memory is owned by the
-//! objective or borrowed from the caller: an evaluation allocates nothing.
+//! objective or borrowed from the caller: an evaluation allocates nothing. Within a decision,
+//! the optimizer's evaluations are remembered by target cells ([`super::memo`]: exact, since
+//! an evaluation depends only on those cells).
+//!
+//! Two ways to predict the gain, chosen by the constructor:
+//! - **traced** ([`ExploreObjective::new`]): every beam of every viewpoint is traced from the
+//!   viewpoint's exact pose (Amanatides & Woo traversal) and seen cells are stamped;
+//! - **cached** ([`ExploreObjective::with_view_cache`]): each viewpoint's scan is taken from
+//!   the centre of its cell with beams along fixed directions (1° apart for the thesis laser),
+//!   its visible Unknown cells are computed once per decision as a bit window and cached by
+//!   (cell, direction), and a candidate's gain is the population count of the union of its
+//!   viewpoints' windows ([`super::view_cache`]). The path, its viewpoints and its energy are
+//!   the same as in the traced model; only where each scan's beams start (at most half a
+//!   cell's diagonal away) and their directions (at most half a beam step away) differ. If the
+//!   laser or grid does not fit the cache's capacities, the traced model is used.
+//!
+//! With a cache, paths are also pruned to waypoints with its table of blocked cells
+//! ([`crate::planner::BlockedBoxes`]: the same waypoints, found without walking every line of
+//! sight).
 //!
 //! **Scaling**: the optimizers minimise `-(score / unknown_cells)`, in `[-1, 0]`, where
 //! `unknown_cells` is the number of Unknown cells in the grid (the largest possible gain);
@@ -30,11 +50,13 @@ use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::{Cell, CellClass, OccupancyGrid};
 use crate::math;
 use crate::optim::Problem;
-use crate::planner::{AStar, DistanceField, prune_to_waypoints};
+use crate::planner::{AStar, DistanceField, prune_to_waypoints, prune_to_waypoints_with_boxes};
 use crate::raycast;
 use crate::sensor::LaserConfig;
 use crate::units;
 
+use super::memo::EvalMemo;
+use super::view_cache::{ViewCache, ViewCacheStats};
 use super::{DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS};
 use crate::control::follower::MAX_WAYPOINTS;
 
@@ -97,6 +119,9 @@ pub struct ExploreObjective<'m, const N: usize> {
     unknown_cells: u32,
     budget_steps: f32,
     config: ExploreConfig,
+    memo: EvalMemo,
+    views: Option<&'m mut ViewCache>,
+    cached: bool,
 }
 
 impl<const N: usize> core::fmt::Debug for ExploreObjective<'_, N> {
@@ -118,6 +143,27 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         astar: &'m mut AStar<N>,
         stamps: &'m mut [u32],
     ) -> Self {
+        Self::build(field, astar, stamps, None)
+    }
+
+    /// An objective predicting gains with the cached model (see [Speed](self#speed)), over the
+    /// caller's planner memory, stamp slice (as for [`Self::new`]) and visibility cache (on a
+    /// host: `ViewCache::new_boxed()`).
+    pub fn with_view_cache(
+        field: &'m mut DistanceField<N>,
+        astar: &'m mut AStar<N>,
+        stamps: &'m mut [u32],
+        views: &'m mut ViewCache,
+    ) -> Self {
+        Self::build(field, astar, stamps, Some(views))
+    }
+
+    fn build(
+        field: &'m mut DistanceField<N>,
+        astar: &'m mut AStar<N>,
+        stamps: &'m mut [u32],
+        views: Option<&'m mut ViewCache>,
+    ) -> Self {
         stamps.fill(0);
         Self {
             field,
@@ -136,6 +182,9 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
             unknown_cells: 0,
             budget_steps: 0.0,
             config: ExploreConfig::default(),
+            memo: EvalMemo::new(),
+            views,
+            cached: false,
         }
     }
 
@@ -169,7 +218,37 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         self.unknown_cells = (cells - req.grid.counts().known()) as u32;
         self.budget_steps = req.battery_steps - config.reserve_steps;
         self.config = *config;
+        self.memo.clear();
+        self.cached = match self.views.as_deref_mut() {
+            Some(v) => {
+                v.boxes.build(req.trav);
+                v.begin(req.grid, req.laser)
+            }
+            None => false,
+        };
         Ok(())
+    }
+
+    /// Whether this decision predicts gains with the cached model (a visibility cache was
+    /// given and the laser and grid fit it).
+    pub fn uses_view_cache(&self) -> bool {
+        self.cached
+    }
+
+    /// The visibility cache, if one was given.
+    #[cfg(test)]
+    pub(crate) fn view_cache(&self) -> Option<&ViewCache> {
+        self.views.as_deref()
+    }
+
+    /// Counters of the visibility cache for the current decision (zero without one).
+    pub fn view_stats(&self) -> ViewCacheStats {
+        self.views.as_deref().map(|v| v.stats()).unwrap_or_default()
+    }
+
+    /// Optimizer evaluations of the current decision answered from remembered ones.
+    pub fn remembered_evaluations(&self) -> u32 {
+        self.memo.hits()
     }
 
     /// The distance field from the robot's cell (valid after [`Self::prepare`]).
@@ -226,7 +305,12 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
             eval.status = status;
             return eval;
         }
-        eval.gain_cells = self.predict_gain(req.grid, req.laser);
+        eval.gain_cells = match self.views.as_deref_mut() {
+            Some(views) if self.cached => {
+                views.gain(req.laser, &self.viewpoints[..self.viewpoint_len])
+            }
+            _ => self.predict_gain(req.grid, req.laser),
+        };
         eval.fitness = self.fitness_of(eval.gain_cells, eval.energy_steps);
         eval
     }
@@ -275,8 +359,12 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
                 _ => CandidateStatus::Unreachable,
             })?;
             let out = &mut self.waypoints[self.waypoint_len..];
-            let n = prune_to_waypoints(req.trav, &self.leg[..planned.len], out)
-                .map_err(|_| CandidateStatus::TooLong)?;
+            let leg = &self.leg[..planned.len];
+            let n = match self.views.as_deref() {
+                Some(v) => prune_to_waypoints_with_boxes(req.trav, &v.boxes, leg, out),
+                None => prune_to_waypoints(req.trav, leg, out),
+            }
+            .map_err(|_| CandidateStatus::TooLong)?;
             // Later legs start where the previous one ended: drop the repeated waypoint.
             if self.waypoint_len > 0 && n > 0 {
                 self.waypoints.copy_within(
@@ -409,6 +497,13 @@ impl<const N: usize> core::fmt::Debug for BoundObjective<'_, '_, '_, N> {
     }
 }
 
+impl<const N: usize> BoundObjective<'_, '_, '_, N> {
+    /// The decision's distance field.
+    pub(crate) fn field(&self) -> &DistanceField<N> {
+        self.objective.field
+    }
+}
+
 impl<const N: usize> Problem for BoundObjective<'_, '_, '_, N> {
     fn dim(&self) -> usize {
         2 * self.objective.config.targets
@@ -427,11 +522,26 @@ impl<const N: usize> Problem for BoundObjective<'_, '_, '_, N> {
 
     fn evaluate(&mut self, genes: &[f32]) -> f32 {
         let mut pts = [Point2::new(0.0, 0.0); MAX_TARGETS];
+        let mut cells = [0u32; MAX_TARGETS];
         let k = (genes.len() / 2).min(MAX_TARGETS);
+        let geom = self.req.grid.geometry();
+        let mut inside = true;
         for (i, p) in pts[..k].iter_mut().enumerate() {
             *p = Point2::new(genes[2 * i], genes[2 * i + 1]);
+            match geom.cell_at(*p).and_then(|c| geom.index(c)) {
+                Some(index) => cells[i] = index as u32,
+                None => inside = false,
+            }
         }
-        self.objective.evaluate_targets(self.req, &pts[..k]).fitness
+        if !inside {
+            return self.objective.evaluate_targets(self.req, &pts[..k]).fitness;
+        }
+        if let Some(eval) = self.objective.memo.get(&cells[..k]) {
+            return eval.fitness;
+        }
+        let eval = self.objective.evaluate_targets(self.req, &pts[..k]);
+        self.objective.memo.put(&cells[..k], eval);
+        eval.fitness
     }
 }
 

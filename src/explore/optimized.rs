@@ -2,19 +2,36 @@
 //! method with [`Method::Xboa`] (Bendahmane, PhD thesis, USTO Oran 2023), or any of the other
 //! methods of [`crate::optim`] for comparison.
 //!
-//! The initial population is drawn uniformly in the map bounds from the caller's seeded RNG;
-//! the run stops after [`ExploreConfig::max_generations`] generations (no early stop, so the
+//! The initial population is drawn from the caller's seeded RNG, uniformly in the map bounds
+//! (the thesis; the default) or partly on reachable frontier cells
+//! ([`InitialPopulation::NearFrontiers`]; measured in `docs/benchmarks.md`); the run stops after [`ExploreConfig::max_generations`] generations (no early stop, so the
 //! history has one entry per generation). The best genome is evaluated once more to produce
 //! the plan.
 
-use crate::optim::{self, Method, Optimizer, Population, StopRules};
+use crate::optim::{self, MAX_DIM, Method, Optimizer, Population, Problem, StopRules};
+use crate::random;
 
-use super::objective::{ExploreObjective, WORST_FITNESS};
+use super::objective::{BoundObjective, ExploreObjective, WORST_FITNESS};
 use super::{
     DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS, Outcome, TargetSelector,
-    any_reachable_frontier,
+    any_reachable_frontier, sample_reachable_frontier,
 };
 use crate::geometry::Point2;
+
+/// How the optimizer's initial population is drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum InitialPopulation {
+    /// Every gene uniform in the map bounds (the thesis).
+    Uniform,
+    /// The first `round(share * population)` individuals put each target on a reachable
+    /// frontier cell (the cell the robot would drive to, see [`super::NearestFrontier`]),
+    /// drawn by scanning the grid from a random cell to the next such cell; the others are
+    /// uniform.
+    NearFrontiers {
+        /// Fraction of the population started on frontiers, 0 to 1.
+        share: f32,
+    },
+}
 
 /// Optimizer-based target selection.
 #[derive(Debug)]
@@ -23,6 +40,8 @@ pub struct Optimized<'o, 'm, const N: usize> {
     pub method: Method,
     /// Decision settings (k, reserve, population, generations).
     pub config: ExploreConfig,
+    /// How the initial population is drawn ([`InitialPopulation::Uniform`] by default).
+    pub initial: InitialPopulation,
     objective: &'o mut ExploreObjective<'m, N>,
 }
 
@@ -36,6 +55,7 @@ impl<'o, 'm, const N: usize> Optimized<'o, 'm, N> {
         Self {
             method,
             config,
+            initial: InitialPopulation::Uniform,
             objective,
         }
     }
@@ -61,8 +81,15 @@ impl<const N: usize> TargetSelector<N> for Optimized<'_, '_, N> {
             .build(self.config.population, rules.max_generations);
         let (best, evaluations, history_len) = {
             let mut problem = self.objective.problem(req);
-            let initial = Population::uniform(&problem, self.config.population, rng)
-                .map_err(DecideError::Optimizer)?;
+            let initial = match self.initial {
+                InitialPopulation::Uniform => {
+                    Population::uniform(&problem, self.config.population, rng)
+                }
+                InitialPopulation::NearFrontiers { share } => {
+                    near_frontiers(&problem, req, self.config.population, share, rng)
+                }
+            }
+            .map_err(DecideError::Optimizer)?;
             optim::run(&mut opt, &mut problem, &initial, &rules, rng)
                 .map_err(DecideError::Optimizer)?;
             let mut best = [0.0f32; 2 * MAX_TARGETS];
@@ -88,4 +115,35 @@ impl<const N: usize> TargetSelector<N> for Optimized<'_, '_, N> {
                 battery_steps: req.battery_steps,
             })
     }
+}
+
+/// An initial population with `share` of its individuals on reachable frontier cells.
+fn near_frontiers<const N: usize, R: rand_core::Rng>(
+    problem: &BoundObjective<'_, '_, '_, N>,
+    req: &DecisionRequest<'_, N>,
+    size: usize,
+    share: f32,
+    rng: &mut R,
+) -> Result<Population, optim::OptimError> {
+    let dim = problem.dim();
+    let mut pop = Population::new(dim)?;
+    let on_frontiers = (share.clamp(0.0, 1.0) * size as f32 + 0.5) as usize;
+    let geom = req.grid.geometry();
+    let mut g = [0.0f32; MAX_DIM];
+    for n in 0..size {
+        for (i, x) in g[..dim].iter_mut().enumerate() {
+            let (lo, hi) = problem.bounds(i);
+            *x = random::range_f32(rng, lo, hi);
+        }
+        if n < on_frontiers {
+            for t in 0..dim / 2 {
+                if let Some(cell) = sample_reachable_frontier(req.grid, problem.field(), rng) {
+                    let c = geom.cell_center(cell);
+                    (g[2 * t], g[2 * t + 1]) = (c.x, c.y);
+                }
+            }
+        }
+        pop.push(&g[..dim])?;
+    }
+    Ok(pop)
 }

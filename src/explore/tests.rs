@@ -84,22 +84,35 @@ fn true_scan(pose: Pose2, laser: &LaserConfig) -> Scan {
     scan
 }
 
-struct Memory {
-    field: Box<DistanceField<CELLS>>,
-    astar: Box<AStar<CELLS>>,
+struct Memory<const N: usize> {
+    field: Box<DistanceField<N>>,
+    astar: Box<AStar<N>>,
     stamps: Vec<u32>,
+    views: Box<ViewCache>,
 }
 
-impl Memory {
+impl<const N: usize> Memory<N> {
     fn new() -> Self {
         Self {
             field: DistanceField::new_boxed(),
             astar: AStar::new_boxed(),
-            stamps: vec![0; CELLS],
+            stamps: vec![0; N],
+            views: ViewCache::new_boxed(),
         }
     }
 
-    fn objective(&mut self) -> ExploreObjective<'_, CELLS> {
+    /// The objective with the cached gain model (the one the selectors are benchmarked with).
+    fn objective(&mut self) -> ExploreObjective<'_, N> {
+        ExploreObjective::with_view_cache(
+            &mut self.field,
+            &mut self.astar,
+            &mut self.stamps,
+            &mut self.views,
+        )
+    }
+
+    /// The objective with the traced gain model.
+    fn traced(&mut self) -> ExploreObjective<'_, N> {
         ExploreObjective::new(&mut self.field, &mut self.astar, &mut self.stamps)
     }
 }
@@ -147,12 +160,20 @@ fn actual_gain(grid: &Grid, viewpoints: &[Pose2], laser: &LaserConfig) -> u32 {
 
 #[test]
 fn predicted_gain_matches_the_gain_of_simulated_scans_within_5_percent() {
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    predicted_gain_matches_simulated_scans(&mut obj);
+    assert!(obj.uses_view_cache());
+    let mut obj = mem.traced();
+    predicted_gain_matches_simulated_scans(&mut obj);
+    assert!(!obj.uses_view_cache());
+}
+
+fn predicted_gain_matches_simulated_scans(obj: &mut ExploreObjective<'_, CELLS>) {
     let grid = fixture_grid();
     let trav = trav_of(&grid);
     let laser = laser();
     let req = request(&grid, &trav, &laser);
-    let mut mem = Memory::new();
-    let mut obj = mem.objective();
     let plans: [&[Point2]; 4] = [
         &[Point2::new(4.0, 1.0)],
         &[Point2::new(2.5, 3.0)],
@@ -189,7 +210,7 @@ fn the_path_visits_the_targets_in_order_and_costs_its_length_plus_turns() {
     let trav = trav_of(&grid);
     let laser = laser();
     let req = request(&grid, &trav, &laser);
-    let mut mem = Memory::new();
+    let mut mem = Memory::<CELLS>::new();
     let mut obj = mem.objective();
     let config = ExploreConfig {
         targets: 1,
@@ -220,7 +241,7 @@ fn infeasible_or_blocked_candidates_always_score_worst() {
     let grid = fixture_grid();
     let trav = trav_of(&grid);
     let laser = laser();
-    let mut mem = Memory::new();
+    let mut mem = Memory::<CELLS>::new();
     let mut obj = mem.objective();
     let mut rng = seeded(11);
     let mut seen = [0usize; 6];
@@ -284,7 +305,7 @@ fn each_selector_is_deterministic_per_seed_and_plans_a_feasible_path() {
     let trav = trav_of(&grid);
     let laser = laser();
     let req = request(&grid, &trav, &laser);
-    let mut mem = Memory::new();
+    let mut mem = Memory::<CELLS>::new();
     let mut obj = mem.objective();
     let mut ws = FrontierWorkspace::<1024, 64>::new_boxed();
     let mut outcomes = Vec::new();
@@ -342,7 +363,7 @@ fn the_optimized_selector_beats_the_median_random_candidate() {
     let trav = trav_of(&grid);
     let laser = laser();
     let req = request(&grid, &trav, &laser);
-    let mut mem = Memory::new();
+    let mut mem = Memory::<CELLS>::new();
     let mut obj = mem.objective();
     let config = ExploreConfig {
         population: 10,
@@ -391,7 +412,7 @@ fn every_selector_says_done_when_nothing_reachable_is_unknown() {
     let trav = trav_of(&grid);
     let laser = laser();
     let req = request(&grid, &trav, &laser);
-    let mut mem = Memory::new();
+    let mut mem = Memory::<CELLS>::new();
     let mut obj = mem.objective();
     let mut ws = FrontierWorkspace::<1024, 64>::new_boxed();
     let config = ExploreConfig::default();
@@ -422,7 +443,7 @@ fn a_blacklisted_frontier_is_skipped_until_the_map_around_it_changes() {
     let mut grid = fixture_grid();
     let trav = trav_of(&grid);
     let laser = laser();
-    let mut mem = Memory::new();
+    let mut mem = Memory::<CELLS>::new();
     let mut obj = mem.objective();
     let mut ws = FrontierWorkspace::<1024, 64>::new_boxed();
     let mut sel = FrontierUtility::new(ExploreConfig::default(), &mut obj, &mut ws);
@@ -450,4 +471,283 @@ fn a_blacklisted_frontier_is_skipped_until_the_map_around_it_changes() {
     let req = request(&grid, &trav, &laser);
     let _ = run_selector(&mut sel, &req, 1);
     assert_eq!(sel.blacklisted(), 0);
+}
+
+// The mid-mission House snapshot of `fixtures/` (see `fixtures/README.md`) and the caches.
+
+const HOUSE_CELLS: usize = 240 * 240;
+
+type HouseMaps = (
+    Box<OccupancyGrid<HOUSE_CELLS>>,
+    Box<Traversability<HOUSE_CELLS>>,
+);
+
+/// The House snapshot the exploration benchmark decides on.
+fn house_fixture() -> HouseMaps {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/house-mid-mission.yaml");
+    let map = crate::mapfile::read_map(&path).unwrap();
+    let mut grid =
+        OccupancyGrid::<HOUSE_CELLS>::new_boxed(map.geometry, LogOddsBounds::default()).unwrap();
+    map.load_into(&mut grid).unwrap();
+    let mut trav =
+        Traversability::<HOUSE_CELLS>::new_boxed(map.geometry, TraversabilityConfig::default())
+            .unwrap();
+    trav.rebuild_from(&grid).unwrap();
+    (grid, trav)
+}
+
+/// The benchmark's request: robot at (1.5 m, 1.5 m) facing east, 60 steps of battery.
+fn house_request<'a>(
+    maps: &'a HouseMaps,
+    laser: &'a LaserConfig,
+) -> DecisionRequest<'a, HOUSE_CELLS> {
+    DecisionRequest {
+        grid: &maps.0,
+        trav: &maps.1,
+        pose: Pose2::new(1.5, 1.5, 0.0),
+        battery_steps: 60.0,
+        laser,
+    }
+}
+
+fn random_targets(rng: &mut impl rand_core::Rng, k: usize) -> Vec<Point2> {
+    (0..k)
+        .map(|_| Point2::new(range_f32(rng, 0.0, 24.0), range_f32(rng, 0.0, 24.0)))
+        .collect()
+}
+
+#[test]
+fn the_house_fixture_is_a_mid_mission_snapshot() {
+    let maps = house_fixture();
+    let grid = &maps.0;
+    let g = grid.geometry();
+    assert_eq!((g.width, g.height, g.resolution_m), (240, 240, 0.1));
+    // Known within 6 m of the robot, Unknown beyond.
+    let robot = Point2::new(1.5, 1.5);
+    assert_eq!(
+        grid.class_of(g.cell_at(robot).unwrap()),
+        Some(CellClass::Free)
+    );
+    for i in 0..g.cell_count() {
+        let d = g.cell_center(g.cell(i)).distance(robot);
+        assert_eq!(grid.class(i).is_known(), d <= 6.0, "cell {i} at {d} m");
+    }
+    assert!(grid.counts().known() > 4000, "{:?}", grid.counts());
+}
+
+#[test]
+fn cached_gains_equal_the_union_of_the_cells_each_viewpoint_sees_on_the_house_fixture() {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let req = house_request(&maps, &laser);
+    let mut mem = Memory::<HOUSE_CELLS>::new();
+    let mut obj = mem.objective();
+    let mut rng = seeded(21);
+    let mut feasible = 0;
+    for k in [1usize, 2] {
+        let config = ExploreConfig {
+            targets: k,
+            ..ExploreConfig::default()
+        };
+        obj.prepare(&req, &config).unwrap();
+        assert!(obj.uses_view_cache());
+        for _ in 0..150 {
+            let targets = random_targets(&mut rng, k);
+            let eval = obj.evaluate_targets(&req, &targets);
+            if eval.status != CandidateStatus::Feasible {
+                continue;
+            }
+            feasible += 1;
+            let views = obj.view_cache().unwrap();
+            let mut seen = std::collections::HashSet::new();
+            for &vp in obj.viewpoints() {
+                let (cell, first) = views.key_of(&laser, vp).unwrap();
+                views.visit_visible_unknown(req.grid, cell, first, |i| {
+                    seen.insert(i);
+                });
+            }
+            assert_eq!(eval.gain_cells as usize, seen.len(), "{targets:?}");
+        }
+        let stats = obj.view_stats();
+        // Viewpoints were reused, and both the word-operation and the beam-walk cases ran.
+        assert!(stats.hits > 0 && stats.misses > 0, "{stats:?}");
+        assert!(
+            stats.unobstructed > 0 && stats.unobstructed < stats.misses,
+            "{stats:?}"
+        );
+    }
+    assert!(feasible > 150, "{feasible}");
+}
+
+#[test]
+fn a_full_view_cache_computes_further_viewpoints_without_storing_them() {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let req = house_request(&maps, &laser);
+    let mut full = Memory::<HOUSE_CELLS>::new();
+    let mut small = Memory::<HOUSE_CELLS>::new();
+    let mut none = Memory::<HOUSE_CELLS>::new();
+    small.views.set_entry_limit(5);
+    none.views.set_entry_limit(0);
+    let mut a = full.objective();
+    let mut b = small.objective();
+    let mut c = none.objective();
+    let config = ExploreConfig::default();
+    for obj in [&mut a, &mut b, &mut c] {
+        obj.prepare(&req, &config).unwrap();
+    }
+    let mut rng = seeded(22);
+    for _ in 0..60 {
+        let t = random_targets(&mut rng, 1);
+        let ea = a.evaluate_targets(&req, &t);
+        assert_eq!(ea, b.evaluate_targets(&req, &t));
+        assert_eq!(ea, c.evaluate_targets(&req, &t));
+    }
+    assert_eq!(a.view_stats().overflows, 0);
+    assert!(b.view_stats().overflows > 0 && b.view_stats().misses == 5);
+    assert!(c.view_stats().hits == 0 && c.view_stats().misses == 0);
+    assert!(c.view_stats().overflows > 0);
+}
+
+#[test]
+fn remembered_evaluations_equal_fresh_ones() {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let req = house_request(&maps, &laser);
+    let mut mem = Memory::<HOUSE_CELLS>::new();
+    let mut obj = mem.objective();
+    let mut rng = seeded(23);
+    for k in [1usize, 2] {
+        let config = ExploreConfig {
+            targets: k,
+            ..ExploreConfig::default()
+        };
+        obj.prepare(&req, &config).unwrap();
+        // A few candidates proposed again and again (as by a converging population), then
+        // more distinct ones than the memory holds.
+        let repeated: Vec<Vec<Point2>> = (0..20).map(|_| random_targets(&mut rng, k)).collect();
+        let n = super::memo::MEMO_CAPACITY + 100;
+        for case in 0..n {
+            let targets = if case < 200 {
+                repeated[case % repeated.len()].clone()
+            } else {
+                random_targets(&mut rng, k)
+            };
+            let genes: Vec<f32> = targets.iter().flat_map(|p| [p.x, p.y]).collect();
+            let fitness = obj.problem(&req).evaluate(&genes);
+            assert_eq!(fitness, obj.evaluate_targets(&req, &targets).fitness);
+        }
+        assert!(
+            obj.remembered_evaluations() >= 180,
+            "{}",
+            obj.remembered_evaluations()
+        );
+    }
+}
+
+#[test]
+fn decisions_on_the_house_fixture_are_deterministic_per_seed() {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let req = house_request(&maps, &laser);
+    let mut mem = Memory::<HOUSE_CELLS>::new();
+    let mut obj = mem.objective();
+    let mut ws = FrontierWorkspace::<8192, 256>::new_boxed();
+    let config = ExploreConfig {
+        population: 5,
+        max_generations: 10,
+        ..ExploreConfig::default()
+    };
+    let mut outcomes = Vec::new();
+    {
+        let mut sel = Optimized::new(Method::Xboa, config, &mut obj);
+        let a = sel.decide(&req, &mut seeded(1)).unwrap();
+        assert_eq!(a, sel.decide(&req, &mut seeded(1)).unwrap());
+        outcomes.push(a);
+    }
+    {
+        let mut sel = NearestFrontier::new(config, &mut obj, &mut ws);
+        let a = sel.decide(&req, &mut seeded(1)).unwrap();
+        assert_eq!(a, sel.decide(&req, &mut seeded(2)).unwrap());
+        outcomes.push(a);
+    }
+    {
+        let mut sel = FrontierUtility::new(config, &mut obj, &mut ws);
+        let a = sel.decide(&req, &mut seeded(1)).unwrap();
+        assert_eq!(a, sel.decide(&req, &mut seeded(2)).unwrap());
+        outcomes.push(a);
+    }
+    for o in &outcomes {
+        let Outcome::Go(d) = o else { panic!("{o:?}") };
+        assert!(
+            d.predicted_gain_cells > 0 && d.energy_steps <= req.battery_steps,
+            "{d:?}"
+        );
+    }
+}
+
+#[test]
+fn a_frontier_biased_start_draws_reachable_frontier_cells_and_stays_deterministic() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    obj.prepare(&req, &ExploreConfig::default()).unwrap();
+    let mut rng = seeded(31);
+    for _ in 0..50 {
+        let c = sample_reachable_frontier(&grid, obj.field(), &mut rng).unwrap();
+        assert!(obj.field().is_reachable(c));
+        let i = grid.geometry().index(c).unwrap();
+        let w = grid.geometry().width;
+        let near_frontier = [i, i - 1, i + 1, i - w, i + w]
+            .iter()
+            .any(|&n| crate::frontier::is_frontier_cell(&grid, n));
+        assert!(near_frontier, "{c:?}");
+    }
+    let config = ExploreConfig {
+        population: 6,
+        max_generations: 5,
+        ..ExploreConfig::default()
+    };
+    let mut sel = Optimized::new(Method::Xboa, config, &mut obj);
+    sel.initial = InitialPopulation::NearFrontiers { share: 0.5 };
+    let a = run_selector(&mut sel, &req, 9);
+    assert_eq!(a, run_selector(&mut sel, &req, 9));
+    assert!(matches!(a, Outcome::Go(_)));
+}
+
+#[test]
+fn a_laser_beyond_the_cache_capacities_is_predicted_by_tracing() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    // 8 m of range is 80 cells, more than a cache window holds.
+    let long = LaserConfig {
+        max_range_m: 8.0,
+        ..laser()
+    };
+    let req = request(&grid, &trav, &long);
+    let mut cached = Memory::<CELLS>::new();
+    let mut traced = Memory::<CELLS>::new();
+    let mut a = cached.objective();
+    let mut b = traced.traced();
+    let config = ExploreConfig::default();
+    a.prepare(&req, &config).unwrap();
+    b.prepare(&req, &config).unwrap();
+    assert!(!a.uses_view_cache());
+    for t in [
+        Point2::new(4.0, 1.0),
+        Point2::new(2.5, 3.0),
+        Point2::new(1.2, 0.5),
+    ] {
+        let e = a.evaluate_targets(&req, &[t]);
+        assert_eq!(e, b.evaluate_targets(&req, &[t]));
+    }
+    // Back to the usual laser: the cache serves again.
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    a.prepare(&req, &config).unwrap();
+    assert!(a.uses_view_cache());
 }

@@ -16,17 +16,19 @@
 //! without clearing (generation stamps): no query allocates.
 
 pub mod astar;
+pub mod blocked_boxes;
 pub mod distance_field;
 mod search;
 pub mod traversability;
 pub mod waypoints;
 
 pub use astar::AStar;
+pub use blocked_boxes::BlockedBoxes;
 pub use distance_field::DistanceField;
 pub use traversability::{
     Traversability, TraversabilityConfig, TraversabilityError, UnknownPolicy,
 };
-pub use waypoints::{has_line_of_sight, prune_to_waypoints};
+pub use waypoints::{has_line_of_sight, prune_to_waypoints, prune_to_waypoints_with_boxes};
 
 use crate::grid::Cell;
 

@@ -10,7 +10,7 @@
 //! 1965). No segment may cross a blocked or inflated cell. A path from A* or the distance field
 //! never cuts corners, so consecutive cells always see each other and the pass always advances.
 
-use super::{PlanError, Traversability};
+use super::{BlockedBoxes, PlanError, Traversability};
 use crate::geometry::Point2;
 use crate::grid::Cell;
 
@@ -71,6 +71,32 @@ pub fn prune_to_waypoints<const N: usize>(
     path: &[Cell],
     out: &mut [Point2],
 ) -> Result<usize, PlanError> {
+    prune_with(trav, path, out, |a, b| has_line_of_sight(trav, a, b))
+}
+
+/// Halvings of a segment when covering it with boxes ([`BlockedBoxes::is_segment_clear`]).
+const BOX_DEPTH: u32 = 3;
+
+/// [`prune_to_waypoints`] with the line of sight first checked on `boxes` (built from `trav`):
+/// a segment covered by boxes without blocked cells is clear without being walked. Same
+/// result, faster in open space.
+pub fn prune_to_waypoints_with_boxes<const N: usize>(
+    trav: &Traversability<N>,
+    boxes: &BlockedBoxes,
+    path: &[Cell],
+    out: &mut [Point2],
+) -> Result<usize, PlanError> {
+    prune_with(trav, path, out, |a, b| {
+        boxes.is_segment_clear(a, b, BOX_DEPTH) || has_line_of_sight(trav, a, b)
+    })
+}
+
+fn prune_with<const N: usize>(
+    trav: &Traversability<N>,
+    path: &[Cell],
+    out: &mut [Point2],
+    sees: impl Fn(Cell, Cell) -> bool,
+) -> Result<usize, PlanError> {
     let geometry = trav.geometry();
     let mut count = 0usize;
     let mut push = |cell: Cell, count: &mut usize| -> Result<(), PlanError> {
@@ -91,7 +117,7 @@ pub fn prune_to_waypoints<const N: usize>(
     let mut anchor = 0usize;
     let mut k = 1usize;
     while k < path.len() {
-        if has_line_of_sight(trav, path[anchor], path[k]) {
+        if sees(path[anchor], path[k]) {
             k += 1;
             continue;
         }

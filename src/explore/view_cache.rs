@@ -1,0 +1,631 @@
+//! Visibility of the predicted scans, computed once per viewpoint and cached within a decision.
+//!
+//! **Model** (the objective's [cached model](super::objective#speed)): a predicted scan is taken
+//! from the centre of the cell holding the laser, and its beams follow `M = round(2π / step)`
+//! fixed directions `j · 2π / M` (for the thesis laser, 1° apart, so a beam's direction is its
+//! true direction rounded to the nearest degree). Along each direction the cells a segment of
+//! the usable range from a cell centre crosses are listed once ("templates", computed with the
+//! exact traversal of [`crate::raycast`]: Amanatides & Woo, "A Fast Voxel Traversal Algorithm
+//! for Ray Tracing", Eurographics 1987). A beam walks its template from the viewpoint's cell,
+//! stops at the first Occupied cell or at the grid edge, crosses Free and Unknown cells, and
+//! sees the Unknown cells it crosses, as in the traced model.
+//!
+//! **Representation**: the Unknown cells one viewpoint (cell, direction of its first beam)
+//! sees are stored as a window of `2R + 1` rows of 128 bits centred on its cell (`R` the range
+//! in cells, at most [`MAX_VIEW_RADIUS_CELLS`]). A candidate's gain is the population count of
+//! the bitwise OR of its viewpoints' windows in a grid-sized bit set, so a cell seen from
+//! several viewpoints counts once (the "bitmap" union of classic visibility-based coverage
+//! planners; here it replaces per-cell generation stamps).
+//!
+//! **Fast case**: when no Occupied cell lies among the cells the fan's templates cover, no beam
+//! is stopped, and the window is the fan's cells (precomputed per direction) AND the grid's
+//! Unknown cells, a few word operations per row instead of a walk.
+//!
+//! **Cache**: an open-addressing table keyed by (cell, direction), cleared in O(1) per decision
+//! by a generation number. When the table or its arena is full, a window is computed into
+//! scratch space and used without being stored: the same result, only slower. Nothing is
+//! allocated; every capacity is a constant (15.1 MB in all, built on the heap by
+//! [`ViewCache::new_boxed`] on a host).
+//!
+//! The cache also carries the decision's [`BlockedBoxes`], with which the objective prunes
+//! its paths to waypoints without walking every line of sight (same waypoints).
+
+use crate::geometry::{Point2, Pose2};
+use crate::grid::{Cell, CellClass, GridGeometry, OccupancyGrid};
+use crate::math;
+use crate::planner::BlockedBoxes;
+use crate::raycast;
+use crate::sensor::{LaserConfig, MAX_BEAMS};
+
+/// Largest usable range the cache handles \[cells\] (a window row is 128 bits wide).
+pub const MAX_VIEW_RADIUS_CELLS: usize = 63;
+/// Most beam directions (`round(2π / step)`; 1440 = a quarter of a degree).
+pub const MAX_DIRECTIONS: usize = 1440;
+/// Most template cells over all directions.
+pub const MAX_TEMPLATE_CELLS: usize = 1 << 16;
+/// Rows of the per-direction fan windows (all directions' windows together).
+pub const FAN_ROWS: usize = 1 << 16;
+/// Most cached viewpoints per decision.
+pub const MAX_VIEWS: usize = 8192;
+/// Rows of the cached viewpoint windows (all viewpoints together; 8 MB).
+pub const VIEW_ROWS: usize = 1 << 19;
+/// Largest grid the cache handles \[cells\].
+pub const MAX_GRID_CELLS: usize = 1 << 20;
+
+const MAX_WINDOW_ROWS: usize = 2 * MAX_VIEW_RADIUS_CELLS + 1;
+const GRID_WORDS: usize = MAX_GRID_CELLS / 64 + 4;
+/// The union bit set holds bit `i + UNION_PAD` for cell `i`, so that a window reaching west of
+/// column 0 on row 0 still starts at a non-negative bit.
+const UNION_PAD: i64 = 128;
+const UNION_WORDS: usize = GRID_WORDS + 8;
+const TABLE_SLOTS: usize = 2 * MAX_VIEWS;
+
+/// Counters of the current decision.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ViewCacheStats {
+    /// Viewpoints found in the cache.
+    pub hits: u32,
+    /// Viewpoints computed and stored.
+    pub misses: u32,
+    /// Viewpoints computed without being stored (cache full).
+    pub overflows: u32,
+    /// Computed viewpoints whose fan met no Occupied cell (word operations only).
+    pub unobstructed: u32,
+}
+
+#[derive(Clone, Copy)]
+struct Slot {
+    generation: u32,
+    cell: u32,
+    direction: u32,
+    entry: u32,
+}
+
+/// The laser and resolution the templates were built for.
+#[derive(Clone, Copy, PartialEq)]
+struct TemplateKey {
+    beam_count: u16,
+    first_angle_rad: f32,
+    step_rad: f32,
+    max_range_m: f32,
+    resolution_m: f32,
+}
+
+/// Where a viewpoint's window lives.
+#[derive(Clone, Copy)]
+enum Window {
+    Entry(usize),
+    Scratch,
+}
+
+/// Per-decision visibility cache of predicted scans; see the [module documentation](self).
+pub struct ViewCache {
+    // Templates: depend on the laser and the resolution only, kept across decisions.
+    key: TemplateKey,
+    templates_ok: bool,
+    directions: usize,
+    radius: usize,
+    rows: usize,
+    beams: usize,
+    beam_direction: [u16; MAX_BEAMS],
+    template: [[i8; 2]; MAX_TEMPLATE_CELLS],
+    /// Per template cell: its window word (`2 * row + half`) and bit, for the walk.
+    template_word: [u16; MAX_TEMPLATE_CELLS],
+    template_bit: [u64; MAX_TEMPLATE_CELLS],
+    template_start: [u32; MAX_DIRECTIONS + 1],
+    fan_ready: [bool; MAX_DIRECTIONS],
+    fans: [u128; FAN_ROWS],
+    // The decision's grid.
+    ready: bool,
+    geometry: GridGeometry,
+    unknown: [u64; GRID_WORDS],
+    occupied: [u64; GRID_WORDS],
+    union: [u64; UNION_WORDS],
+    // The cache.
+    generation: u32,
+    table: [Slot; TABLE_SLOTS],
+    entries: usize,
+    entry_limit: usize,
+    views: [u128; VIEW_ROWS],
+    scratch: [u128; MAX_WINDOW_ROWS],
+    stats: ViewCacheStats,
+    /// Blocked-cell counts of the decision's traversability layer.
+    pub(crate) boxes: BlockedBoxes,
+}
+
+impl core::fmt::Debug for ViewCache {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ViewCache")
+            .field("ready", &self.ready)
+            .field("directions", &self.directions)
+            .field("radius", &self.radius)
+            .field("entries", &self.entries)
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+/// 128 bits of a flat bit set from bit `p` on (bits outside the set read as 0).
+#[inline]
+fn read128(bits: &[u64], p: i64) -> u128 {
+    let w = p.div_euclid(64);
+    let s = p.rem_euclid(64) as u32;
+    let get = |i: i64| -> u128 {
+        if i >= 0 && (i as usize) < bits.len() {
+            bits[i as usize] as u128
+        } else {
+            0
+        }
+    };
+    let lo = get(w) | (get(w + 1) << 64);
+    if s == 0 {
+        lo
+    } else {
+        (lo >> s) | (get(w + 2) << (128 - s))
+    }
+}
+
+/// ORs `v` into a flat bit set at bit `q` on (the set must hold the words `q / 64` to
+/// `q / 64 + 2`).
+#[inline(always)]
+fn or128(bits: &mut [u64], q: usize, v: u128) {
+    let w = q / 64;
+    let s = (q % 64) as u32;
+    if s == 0 {
+        bits[w] |= v as u64;
+        bits[w + 1] |= (v >> 64) as u64;
+    } else {
+        let shifted = v << s;
+        bits[w] |= shifted as u64;
+        bits[w + 1] |= (shifted >> 64) as u64;
+        bits[w + 2] |= (v >> (128 - s)) as u64;
+    }
+}
+
+impl Default for ViewCache {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+const EMPTY_SLOT: Slot = Slot {
+    generation: 0,
+    cell: 0,
+    direction: 0,
+    entry: 0,
+};
+
+impl ViewCache {
+    /// An empty cache, for a `static` without an allocator (15.1 MB: on a host prefer
+    /// [`Self::new_boxed`]).
+    pub const fn new() -> Self {
+        Self {
+            key: TemplateKey {
+                beam_count: 0,
+                first_angle_rad: 0.0,
+                step_rad: 0.0,
+                max_range_m: 0.0,
+                resolution_m: 0.0,
+            },
+            templates_ok: false,
+            directions: 0,
+            radius: 0,
+            rows: 0,
+            beams: 0,
+            beam_direction: [0; MAX_BEAMS],
+            template: [[0; 2]; MAX_TEMPLATE_CELLS],
+            template_word: [0; MAX_TEMPLATE_CELLS],
+            template_bit: [0; MAX_TEMPLATE_CELLS],
+            template_start: [0; MAX_DIRECTIONS + 1],
+            fan_ready: [false; MAX_DIRECTIONS],
+            fans: [0; FAN_ROWS],
+            ready: false,
+            geometry: GridGeometry {
+                width: 0,
+                height: 0,
+                resolution_m: 0.0,
+                origin: Point2::new(0.0, 0.0),
+            },
+            unknown: [0; GRID_WORDS],
+            occupied: [0; GRID_WORDS],
+            union: [0; UNION_WORDS],
+            generation: 0,
+            table: [EMPTY_SLOT; TABLE_SLOTS],
+            entries: 0,
+            entry_limit: MAX_VIEWS,
+            views: [0; VIEW_ROWS],
+            scratch: [0; MAX_WINDOW_ROWS],
+            stats: ViewCacheStats {
+                hits: 0,
+                misses: 0,
+                overflows: 0,
+                unobstructed: 0,
+            },
+            boxes: BlockedBoxes::new(),
+        }
+    }
+
+    /// An empty cache built directly on the heap (15.1 MB).
+    #[cfg(feature = "std")]
+    pub fn new_boxed() -> std::boxed::Box<Self> {
+        // SAFETY: every field is an integer, a float, a bool, an array or a plain struct of
+        // them (no references, enums or niches; `BlockedBoxes` likewise), for which all-zero
+        // bytes are valid values.
+        let mut cache = unsafe {
+            let layout = std::alloc::Layout::new::<Self>();
+            let raw = std::alloc::alloc_zeroed(layout) as *mut Self;
+            if raw.is_null() {
+                std::alloc::handle_alloc_error(layout);
+            }
+            std::boxed::Box::from_raw(raw)
+        };
+        cache.entry_limit = MAX_VIEWS;
+        cache
+    }
+
+    /// Caps the number of viewpoints stored per decision (at most [`MAX_VIEWS`]); further
+    /// viewpoints are computed without being stored. For memory-bounded runs and tests.
+    pub fn set_entry_limit(&mut self, limit: usize) {
+        self.entry_limit = limit.min(MAX_VIEWS);
+    }
+
+    /// Counters of the current decision.
+    pub fn stats(&self) -> ViewCacheStats {
+        self.stats
+    }
+
+    /// Starts a decision on `grid` seen by `laser`. Returns `false` when the cached model
+    /// cannot serve this grid or laser (range above [`MAX_VIEW_RADIUS_CELLS`], more than
+    /// [`MAX_DIRECTIONS`] directions or [`MAX_BEAMS`] beams, templates over
+    /// [`MAX_TEMPLATE_CELLS`], grid over [`MAX_GRID_CELLS`]); the objective then traces the
+    /// beams instead.
+    pub(crate) fn begin<const N: usize>(
+        &mut self,
+        grid: &OccupancyGrid<N>,
+        laser: &LaserConfig,
+    ) -> bool {
+        self.ready = false;
+        self.stats = ViewCacheStats::default();
+        let geometry = *grid.geometry();
+        let cells = geometry.cell_count();
+        if cells > MAX_GRID_CELLS {
+            return false;
+        }
+        let key = TemplateKey {
+            beam_count: laser.beam_count,
+            first_angle_rad: laser.first_angle_rad,
+            step_rad: laser.step_rad,
+            max_range_m: laser.max_range_m,
+            resolution_m: geometry.resolution_m,
+        };
+        if key != self.key {
+            self.key = key;
+            self.templates_ok = self.build_templates(laser, geometry.resolution_m);
+        }
+        if !self.templates_ok {
+            return false;
+        }
+        let words = cells / 64 + 1;
+        self.unknown[..words].fill(0);
+        self.occupied[..words].fill(0);
+        self.union[..words + 8].fill(0);
+        for i in 0..cells {
+            match grid.class(i) {
+                CellClass::Unknown => self.unknown[i / 64] |= 1 << (i % 64),
+                CellClass::Occupied => self.occupied[i / 64] |= 1 << (i % 64),
+                CellClass::Free => {}
+            }
+        }
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            for s in self.table.iter_mut() {
+                s.generation = 0;
+            }
+            self.generation = 1;
+        }
+        self.entries = 0;
+        self.geometry = geometry;
+        self.ready = true;
+        true
+    }
+
+    /// Lists each direction's template cells; `false` if the laser does not fit.
+    fn build_templates(&mut self, laser: &LaserConfig, resolution_m: f32) -> bool {
+        self.directions = 0;
+        self.fan_ready = [false; MAX_DIRECTIONS];
+        let tau = 2.0 * core::f32::consts::PI;
+        let len = laser.max_range_m / resolution_m;
+        let beams = laser.beam_count as usize;
+        if !(len.is_finite() && len > 0.0 && laser.step_rad.is_finite() && laser.step_rad > 0.0)
+            || beams == 0
+            || beams > MAX_BEAMS
+            || len > MAX_VIEW_RADIUS_CELLS as f32 - 1.0
+        {
+            return false;
+        }
+        let m = math::round(tau / laser.step_rad) as usize;
+        if m == 0 || m > MAX_DIRECTIONS {
+            return false;
+        }
+        let delta = tau / m as f32;
+        for b in 0..beams {
+            let d = math::round(b as f32 * laser.step_rad / delta) as i64;
+            self.beam_direction[b] = d.rem_euclid(m as i64) as u16;
+        }
+        // Template of direction j: the cells the segment of length `len` from the centre of
+        // cell (r0, r0) of a unit grid crosses, as offsets from that cell.
+        let r0 = MAX_VIEW_RADIUS_CELLS as i32 + 1;
+        let side = 2 * r0 as usize + 1;
+        let Ok(unit) = GridGeometry::new(side, side, 1.0, Point2::new(-(r0 as f32), -(r0 as f32)))
+        else {
+            return false;
+        };
+        let from = Point2::new(0.5, 0.5);
+        let mut n = 0usize;
+        let mut radius = 0i32;
+        let mut overflow = false;
+        for j in 0..m {
+            self.template_start[j] = n as u32;
+            let a = j as f32 * delta;
+            let to = Point2::new(0.5 + len * math::cos(a), 0.5 + len * math::sin(a));
+            raycast::traverse(&unit, from, to, |c, _| {
+                if n == MAX_TEMPLATE_CELLS {
+                    overflow = true;
+                    return core::ops::ControlFlow::Break(());
+                }
+                let (dc, dr) = (c.col - r0, c.row - r0);
+                radius = radius.max(dc.abs()).max(dr.abs());
+                self.template[n] = [dc as i8, dr as i8];
+                n += 1;
+                core::ops::ControlFlow::Continue(())
+            });
+            if overflow {
+                return false;
+            }
+        }
+        self.template_start[m] = n as u32;
+        if radius as usize > MAX_VIEW_RADIUS_CELLS {
+            return false;
+        }
+        for t in 0..n {
+            let [dc, dr] = self.template[t];
+            let (k, bit) = ((dr as i32 + radius) as u16, (dc as i32 + radius) as u32);
+            self.template_word[t] = 2 * k + (bit / 64) as u16;
+            self.template_bit[t] = 1 << (bit % 64);
+        }
+        self.directions = m;
+        self.beams = beams;
+        self.radius = radius as usize;
+        self.rows = 2 * self.radius + 1;
+        true
+    }
+
+    /// The direction index of a beam at `angle` \[rad\].
+    #[inline]
+    fn direction_of(&self, angle: f32) -> usize {
+        let delta = 2.0 * core::f32::consts::PI / self.directions as f32;
+        (math::round(angle / delta) as i64).rem_euclid(self.directions as i64) as usize
+    }
+
+    /// The viewpoint's cell and the direction of its first beam; `None` if the laser is
+    /// outside the grid (such a scan counts nothing).
+    pub(crate) fn key_of(&self, laser: &LaserConfig, viewpoint: Pose2) -> Option<(Cell, usize)> {
+        let pose = viewpoint.compose(laser.mount);
+        let cell = self.geometry.cell_at(pose.position())?;
+        Some((cell, self.direction_of(pose.theta + laser.first_angle_rad)))
+    }
+
+    /// Cells of the template of direction `j`.
+    #[inline]
+    fn template_of(&self, j: usize) -> &[[i8; 2]] {
+        &self.template[self.template_start[j] as usize..self.template_start[j + 1] as usize]
+    }
+
+    /// Calls `visit` with the flat index of every Unknown cell the scan from `cell` with first
+    /// direction `first` sees, beam by beam (a cell seen by several beams is visited several
+    /// times). Reads the grid's classes directly: the reference the windows are checked
+    /// against.
+    #[cfg(test)]
+    pub(crate) fn visit_visible_unknown<const N: usize>(
+        &self,
+        grid: &OccupancyGrid<N>,
+        cell: Cell,
+        first: usize,
+        mut visit: impl FnMut(usize),
+    ) {
+        let g = grid.geometry();
+        for b in 0..self.beams {
+            let j = (first + self.beam_direction[b] as usize) % self.directions;
+            for &[dc, dr] in self.template_of(j) {
+                let Some(i) = g.index(Cell::new(cell.col + dc as i32, cell.row + dr as i32)) else {
+                    break;
+                };
+                match grid.class(i) {
+                    CellClass::Occupied => break,
+                    CellClass::Unknown => visit(i),
+                    CellClass::Free => {}
+                }
+            }
+        }
+    }
+
+    /// Builds the fan of direction `j` (all its beams' template cells) if the fans fit;
+    /// returns whether it is available at `fans[j * rows..]`.
+    fn ensure_fan(&mut self, j: usize) -> bool {
+        let rows = self.rows;
+        if self.directions * rows > FAN_ROWS {
+            return false;
+        }
+        if !self.fan_ready[j] {
+            let r = self.radius as i32;
+            let mut fan = [0u128; MAX_WINDOW_ROWS];
+            for b in 0..self.beams {
+                let k = (j + self.beam_direction[b] as usize) % self.directions;
+                for &[dc, dr] in self.template_of(k) {
+                    fan[(dr as i32 + r) as usize] |= 1 << (dc as i32 + r);
+                }
+            }
+            self.fans[j * rows..(j + 1) * rows].copy_from_slice(&fan[..rows]);
+            self.fan_ready[j] = true;
+        }
+        true
+    }
+
+    /// Computes the window of (`cell`, `first`) into the entry or the scratch rows.
+    fn compute(&mut self, cell: Cell, first: usize, at: Window) {
+        let rows = self.rows;
+        let r = self.radius as i64;
+        let (w, h) = (self.geometry.width as i64, self.geometry.height as i64);
+        let (col0, row0) = (cell.col as i64 - r, cell.row as i64 - r);
+        // Window columns inside the grid: bits lo..hi.
+        let lo = (-col0).clamp(0, rows as i64) as u32;
+        let hi = (w - col0).clamp(0, rows as i64) as u32;
+        let below = |n: u32| {
+            if n >= 128 {
+                u128::MAX
+            } else {
+                (1u128 << n) - 1
+            }
+        };
+        let col_mask = below(hi) & !below(lo);
+        // Window rows inside the grid.
+        let k0 = (-row0).clamp(0, rows as i64) as usize;
+        let k1 = (h - row0).clamp(0, rows as i64) as usize;
+        let fan_ok = self.ensure_fan(first);
+        let dst = match at {
+            Window::Entry(e) => &mut self.views[e * rows..(e + 1) * rows],
+            Window::Scratch => &mut self.scratch[..rows],
+        };
+        dst.fill(0);
+        if fan_ok {
+            let fan = &self.fans[first * rows..(first + 1) * rows];
+            let blocked = (k0..k1).any(|k| {
+                let p = (row0 + k as i64) * w + col0;
+                fan[k] & col_mask != 0 && read128(&self.occupied, p) & col_mask & fan[k] != 0
+            });
+            if !blocked {
+                for k in k0..k1 {
+                    let bits = fan[k] & col_mask;
+                    if bits != 0 {
+                        let p = (row0 + k as i64) * w + col0;
+                        dst[k] = bits & read128(&self.unknown, p);
+                    }
+                }
+                self.stats.unobstructed += 1;
+                return;
+            }
+        }
+        // Some beam may stop early: walk each beam over the window's Occupied and Unknown
+        // bits (cells outside the grid are neither, and a beam that left the grid never
+        // comes back, so walking on past the edge adds nothing).
+        let mut occupied = [0u64; 2 * MAX_WINDOW_ROWS];
+        let mut unknown = [0u64; 2 * MAX_WINDOW_ROWS];
+        let mut seen = [0u64; 2 * MAX_WINDOW_ROWS];
+        for k in k0..k1 {
+            let p = (row0 + k as i64) * w + col0;
+            let o = read128(&self.occupied, p) & col_mask;
+            let u = read128(&self.unknown, p) & col_mask;
+            (occupied[2 * k], occupied[2 * k + 1]) = (o as u64, (o >> 64) as u64);
+            (unknown[2 * k], unknown[2 * k + 1]) = (u as u64, (u >> 64) as u64);
+        }
+        for b in 0..self.beams {
+            let j = (first + self.beam_direction[b] as usize) % self.directions;
+            let range = self.template_start[j] as usize..self.template_start[j + 1] as usize;
+            let words = &self.template_word[range.clone()];
+            let bits = &self.template_bit[range];
+            for (&word, &bit) in words.iter().zip(bits) {
+                let word = word as usize;
+                if occupied[word] & bit != 0 {
+                    break;
+                }
+                seen[word] |= unknown[word] & bit;
+            }
+        }
+        for (k, out) in dst.iter_mut().enumerate() {
+            *out = seen[2 * k] as u128 | (seen[2 * k + 1] as u128) << 64;
+        }
+    }
+
+    /// The window of (`cell`, `first`): from the cache, or computed (and stored if room).
+    fn window(&mut self, cell: Cell, first: usize) -> Window {
+        let index = cell.row as u32 * self.geometry.width as u32 + cell.col as u32;
+        let direction = first as u32;
+        let mask = TABLE_SLOTS - 1;
+        let mut h =
+            (index.wrapping_mul(0x9E37_79B1) ^ direction.wrapping_mul(0x85EB_CA77)) as usize & mask;
+        let limit = self
+            .entry_limit
+            .min(VIEW_ROWS / self.rows.max(1))
+            .min(MAX_VIEWS);
+        for _ in 0..TABLE_SLOTS {
+            let slot = self.table[h];
+            if slot.generation != self.generation {
+                if self.entries >= limit {
+                    break;
+                }
+                let e = self.entries;
+                self.entries += 1;
+                self.table[h] = Slot {
+                    generation: self.generation,
+                    cell: index,
+                    direction,
+                    entry: e as u32,
+                };
+                self.compute(cell, first, Window::Entry(e));
+                self.stats.misses += 1;
+                return Window::Entry(e);
+            }
+            if slot.cell == index && slot.direction == direction {
+                self.stats.hits += 1;
+                return Window::Entry(slot.entry as usize);
+            }
+            h = (h + 1) & mask;
+        }
+        self.compute(cell, first, Window::Scratch);
+        self.stats.overflows += 1;
+        Window::Scratch
+    }
+
+    /// Unknown cells seen from `viewpoints` (robot poses; the laser is at `laser.mount` on the
+    /// robot), each counted once. Call [`Self::begin`] first (and only if it returned `true`).
+    pub(crate) fn gain(&mut self, laser: &LaserConfig, viewpoints: &[Pose2]) -> u32 {
+        debug_assert!(self.ready);
+        let rows = self.rows;
+        let r = self.radius as i64;
+        let w = self.geometry.width as i64;
+        let mut lo = usize::MAX;
+        let mut hi = 0usize;
+        for &vp in viewpoints {
+            let Some((cell, first)) = self.key_of(laser, vp) else {
+                continue;
+            };
+            let at = self.window(cell, first);
+            let src = match at {
+                Window::Entry(e) => &self.views[e * rows..(e + 1) * rows],
+                Window::Scratch => &self.scratch[..rows],
+            };
+            let (col0, row0) = (cell.col as i64 - r, cell.row as i64 - r);
+            // Window bits are set only for cells inside the grid, so every non-zero row
+            // starts at a bit between UNION_PAD - radius and UNION_PAD + cells.
+            let start = |k: usize| ((row0 + k as i64) * w + col0 + UNION_PAD) as usize;
+            let Some(first) = src.iter().position(|&b| b != 0) else {
+                continue;
+            };
+            let last = src.iter().rposition(|&b| b != 0).unwrap_or(first);
+            lo = lo.min(start(first) / 64);
+            hi = hi.max(start(last) / 64 + 2);
+            for (k, &bits) in src.iter().enumerate().take(last + 1).skip(first) {
+                if bits != 0 {
+                    or128(&mut self.union, start(k), bits);
+                }
+            }
+        }
+        if lo > hi {
+            return 0;
+        }
+        let touched = &mut self.union[lo..=hi];
+        let gain = touched.iter().map(|x| x.count_ones()).sum();
+        touched.fill(0);
+        gain
+    }
+}

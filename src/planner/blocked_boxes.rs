@@ -1,0 +1,270 @@
+//! Counts of blocked cells in any axis-aligned box in O(1): a summed-area table (Crow,
+//! "Summed-Area Tables for Texture Mapping", SIGGRAPH 1984) over the traversability layer.
+//!
+//! The segment between two cell centres only touches cells inside the two cells' bounding box,
+//! so a box without blocked cells proves a line of sight without walking it. Waypoint pruning
+//! ([`super::waypoints::prune_to_waypoints_with_boxes`]) tests the line of sight from its
+//! anchor to every following cell of a path; in open space this turns each test into four
+//! look-ups, and the result is the same as walking every segment.
+
+use super::Traversability;
+use super::traversability::CODE_BLOCKED;
+use crate::grid::Cell;
+
+/// Largest table \[entries\]: `(width + 1) * (height + 1)` of the grid.
+pub const MAX_BOX_TABLE: usize = (1 << 20) + (1 << 12);
+
+/// Summed-area table of the blocked cells of a traversability layer.
+pub struct BlockedBoxes {
+    width: usize,
+    height: usize,
+    ready: bool,
+    /// `sums[r * (width + 1) + c]`: blocked cells in rows `< r` and columns `< c`.
+    sums: [u32; MAX_BOX_TABLE],
+}
+
+impl core::fmt::Debug for BlockedBoxes {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("BlockedBoxes")
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("ready", &self.ready)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Default for BlockedBoxes {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl BlockedBoxes {
+    /// An empty table, for a `static` without an allocator (4.2 MB: on a host prefer
+    /// [`Self::new_boxed`]).
+    pub const fn new() -> Self {
+        Self {
+            width: 0,
+            height: 0,
+            ready: false,
+            sums: [0; MAX_BOX_TABLE],
+        }
+    }
+
+    /// An empty table built directly on the heap (4.2 MB).
+    #[cfg(feature = "std")]
+    pub fn new_boxed() -> std::boxed::Box<Self> {
+        // SAFETY: integers, a bool and an array of integers: all-zero bytes are valid.
+        unsafe {
+            let layout = std::alloc::Layout::new::<Self>();
+            let raw = std::alloc::alloc_zeroed(layout) as *mut Self;
+            if raw.is_null() {
+                std::alloc::handle_alloc_error(layout);
+            }
+            std::boxed::Box::from_raw(raw)
+        }
+    }
+
+    /// Counts the blocked cells of `trav`. Returns `false` (and answers no box query) if the
+    /// grid's table exceeds [`MAX_BOX_TABLE`].
+    pub fn build<const N: usize>(&mut self, trav: &Traversability<N>) -> bool {
+        let g = trav.geometry();
+        let (w, h) = (g.width, g.height);
+        self.ready = false;
+        if (w + 1) * (h + 1) > MAX_BOX_TABLE {
+            return false;
+        }
+        let codes = trav.codes();
+        let stride = w + 1;
+        self.sums[..stride].fill(0);
+        for r in 0..h {
+            let mut row_sum = 0u32;
+            self.sums[(r + 1) * stride] = 0;
+            for c in 0..w {
+                row_sum += (codes[r * w + c] == CODE_BLOCKED) as u32;
+                self.sums[(r + 1) * stride + c + 1] = self.sums[r * stride + c + 1] + row_sum;
+            }
+        }
+        self.width = w;
+        self.height = h;
+        self.ready = true;
+        true
+    }
+
+    /// Whether the bounding box of cells `a` and `b` (inclusive) lies in the grid and holds no
+    /// blocked cell; `false` whenever the table is not built.
+    #[inline]
+    pub fn is_clear(&self, a: Cell, b: Cell) -> bool {
+        self.is_range_clear(
+            a.col.min(b.col),
+            a.row.min(b.row),
+            a.col.max(b.col),
+            a.row.max(b.row),
+        )
+    }
+
+    /// Whether the segment between the centres of `a` and `b` is proven clear by covering it
+    /// with boxes: the whole segment's bounding box, else (up to `depth` halvings) the boxes
+    /// of its halves. Every cell the segment touches (corners included) lies in the boxes, so
+    /// `true` implies [`super::has_line_of_sight`]; `false` proves nothing.
+    pub fn is_segment_clear(&self, a: Cell, b: Cell, depth: u32) -> bool {
+        // Coordinates in units of 1 / 2^(depth + 1) cell, so that the centres and every
+        // midpoint are integers.
+        let depth = depth.min(20);
+        let scale = 1i64 << (depth + 1);
+        let half = scale / 2;
+        let centre = |c: Cell| (c.col as i64 * scale + half, c.row as i64 * scale + half);
+        self.cover(centre(a), centre(b), scale, depth)
+    }
+
+    fn cover(&self, p: (i64, i64), q: (i64, i64), scale: i64, depth: u32) -> bool {
+        // A point on the line x = X touches the cells on both sides of it: columns from
+        // ceil(min x) - 1 to floor(max x) hold every touched cell (likewise rows).
+        let lo = |a: i64, b: i64| (a.min(b) + scale - 1).div_euclid(scale) - 1;
+        let hi = |a: i64, b: i64| a.max(b).div_euclid(scale);
+        let (c0, c1) = (lo(p.0, q.0), hi(p.0, q.0));
+        let (r0, r1) = (lo(p.1, q.1), hi(p.1, q.1));
+        let fits = |v: i64| v >= i32::MIN as i64 && v <= i32::MAX as i64;
+        if [c0, c1, r0, r1].into_iter().all(fits)
+            && self.is_range_clear(c0 as i32, r0 as i32, c1 as i32, r1 as i32)
+        {
+            return true;
+        }
+        if depth == 0 {
+            return false;
+        }
+        let m = ((p.0 + q.0) / 2, (p.1 + q.1) / 2);
+        self.cover(p, m, scale, depth - 1) && self.cover(m, q, scale, depth - 1)
+    }
+
+    /// Whether columns `c0..=c1` x rows `r0..=r1` lie in the grid and hold no blocked cell.
+    #[inline]
+    fn is_range_clear(&self, c0: i32, r0: i32, c1: i32, r1: i32) -> bool {
+        if !self.ready {
+            return false;
+        }
+        if c0 < 0 || r0 < 0 || c1 as usize >= self.width || r1 as usize >= self.height {
+            return false;
+        }
+        let stride = self.width + 1;
+        let at = |r: i32, c: i32| self.sums[r as usize * stride + c as usize];
+        at(r1 + 1, c1 + 1) + at(r0, c0) == at(r0, c1 + 1) + at(r1 + 1, c0)
+    }
+}
+
+#[cfg(all(test, feature = "std"))]
+mod tests {
+    use super::*;
+    use crate::geometry::Point2;
+    use crate::planner::{DistanceField, prune_to_waypoints, prune_to_waypoints_with_boxes};
+    use crate::random::{range_f32, seeded};
+
+    const W: usize = 50;
+    const H: usize = 30;
+
+    /// Random walls (about 12 % of the cells), seeded.
+    fn layer(seed: u64) -> std::boxed::Box<Traversability<{ W * H }>> {
+        let mut rng = seeded(seed);
+        let walls: Vec<bool> = (0..W * H)
+            .map(|_| range_f32(&mut rng, 0.0, 1.0) < 0.12)
+            .collect();
+        Traversability::from_blocked_boxed(W, H, |c| walls[c.row as usize * W + c.col as usize])
+            .unwrap()
+    }
+
+    #[test]
+    fn box_queries_match_counting_the_cells() {
+        let trav = layer(1);
+        let mut boxes = BlockedBoxes::new_boxed();
+        assert!(boxes.build(&*trav));
+        let mut rng = seeded(2);
+        let mut clear = 0;
+        for _ in 0..2000 {
+            let mut cell = || {
+                Cell::new(
+                    range_f32(&mut rng, -2.0, W as f32 + 2.0) as i32,
+                    range_f32(&mut rng, -2.0, H as f32 + 2.0) as i32,
+                )
+            };
+            let (a, b) = (cell(), cell());
+            let inside = trav.geometry().contains(a) && trav.geometry().contains(b);
+            let none_blocked = (a.row.min(b.row)..=a.row.max(b.row)).all(|r| {
+                (a.col.min(b.col)..=a.col.max(b.col)).all(|c| trav.is_passable(Cell::new(c, r)))
+            });
+            assert_eq!(boxes.is_clear(a, b), inside && none_blocked, "{a:?} {b:?}");
+            clear += boxes.is_clear(a, b) as u32;
+        }
+        assert!(clear > 20, "{clear}");
+    }
+
+    #[test]
+    fn a_segment_covered_by_clear_boxes_has_a_line_of_sight() {
+        let mut rng = seeded(4);
+        let mut boxes = BlockedBoxes::new_boxed();
+        let (mut proven, mut clear) = (0, 0);
+        for seed in 0..5 {
+            let trav = layer(200 + seed);
+            assert!(boxes.build(&*trav));
+            for _ in 0..2000 {
+                let mut cell = || {
+                    Cell::new(
+                        range_f32(&mut rng, 0.0, W as f32) as i32,
+                        range_f32(&mut rng, 0.0, H as f32) as i32,
+                    )
+                };
+                let (a, b) = (cell(), cell());
+                let sees = crate::planner::has_line_of_sight(&*trav, a, b);
+                clear += sees as u32;
+                if boxes.is_segment_clear(a, b, 4) {
+                    assert!(sees, "{a:?} {b:?}");
+                    proven += 1;
+                }
+            }
+        }
+        // Most clear segments are proven so by the boxes.
+        assert!(proven * 2 > clear, "{proven} of {clear}");
+    }
+
+    #[test]
+    fn pruning_with_boxes_gives_the_same_waypoints() {
+        let mut field = DistanceField::<{ W * H }>::new_boxed();
+        let mut boxes = BlockedBoxes::new_boxed();
+        let mut path = [Cell::new(0, 0); W * H];
+        let mut rng = seeded(3);
+        let mut compared = 0;
+        for seed in 0..10 {
+            let trav = layer(100 + seed);
+            assert!(boxes.build(&*trav));
+            let start = Cell::new(W as i32 / 2, H as i32 / 2);
+            if field.compute(&*trav, start).is_err() {
+                continue;
+            }
+            for _ in 0..50 {
+                let goal = Cell::new(
+                    range_f32(&mut rng, 0.0, W as f32) as i32,
+                    range_f32(&mut rng, 0.0, H as f32) as i32,
+                );
+                let Ok(p) = field.path_to(goal, &mut path) else {
+                    continue;
+                };
+                let mut plain = [Point2::new(0.0, 0.0); 64];
+                let mut fast = [Point2::new(0.0, 0.0); 64];
+                let n = prune_to_waypoints(&*trav, &path[..p.len], &mut plain).unwrap();
+                let m = prune_to_waypoints_with_boxes(&*trav, &boxes, &path[..p.len], &mut fast)
+                    .unwrap();
+                assert_eq!(plain[..n], fast[..m]);
+                compared += 1;
+            }
+        }
+        assert!(compared > 200, "{compared}");
+    }
+
+    #[test]
+    fn an_unbuilt_table_proves_nothing() {
+        let trav = Traversability::<{ W * H }>::from_blocked_boxed(W, H, |_| false).unwrap();
+        let mut boxes = BlockedBoxes::new_boxed();
+        assert!(!boxes.is_clear(Cell::new(0, 0), Cell::new(1, 1)));
+        assert!(boxes.build(&*trav));
+        assert!(boxes.is_clear(Cell::new(0, 0), Cell::new(W as i32 - 1, H as i32 - 1)));
+    }
+}
