@@ -1,9 +1,9 @@
-//! One exploration decision on a mid-mission snapshot of the thesis's House map: xBOA with
+//! One exploration decision on a mid-mission snapshot of the project's House world: xBOA with
 //! population 5 and 20 (30 generations, k = 1) and the two frontier selectors.
 //!
 //! The snapshot is the fixture `fixtures/house-mid-mission.yaml` (240 x 240 cells at 10 cm;
 //! cells within 6 m of the robot at (1.5 m, 1.5 m) known, the rest Unknown; see
-//! `fixtures/README.md` and `examples/house_snapshot.rs`, which regenerates it).
+//! `fixtures/README.md` and `sim-host/examples/house_snapshot.rs`, which regenerates it).
 //!
 //! Run: `cargo bench -p papillon --no-default-features --features std --bench explore --
 //! --warm-up-time 1 --measurement-time 3`
