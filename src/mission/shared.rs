@@ -8,7 +8,7 @@
 //! step out of the path of a robot it yields to.
 
 use crate::control::Time;
-use crate::explore::ExploreObjective;
+use crate::explore::{ExploreObjective, ViewCache};
 use crate::frontier::FrontierWorkspace;
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{GridGeometry, OccupancyGrid};
@@ -148,12 +148,14 @@ impl<const N: usize> SharedMap<N> {
     }
 }
 
-/// Decision working memory: distance field, A*, visited-cell stamps and frontier search
-/// memory. One per process is enough, as robots decide one after the other.
+/// Decision working memory: distance field, A*, visited-cell stamps, the visibility cache of
+/// the exploration objective (15.1 MB, whatever `N`) and frontier search memory. One per
+/// process is enough, as robots decide one after the other.
 pub struct Workspace<const N: usize> {
     field: DistanceField<N>,
     astar: AStar<N>,
     stamps: [u32; N],
+    views: ViewCache,
     frontier: FrontierWorkspace<N, MAX_FRONTIERS>,
 }
 
@@ -172,12 +174,14 @@ impl<const N: usize> Default for Workspace<N> {
 }
 
 impl<const N: usize> Workspace<N> {
-    /// Working memory built on the stack (or in a `static`); about 90 bytes per cell.
+    /// Working memory built on the stack (or in a `static`); about 90 bytes per cell plus
+    /// the 15.1 MB visibility cache.
     pub const fn new() -> Self {
         Self {
             field: DistanceField::new(),
             astar: AStar::new(),
             stamps: [0; N],
+            views: ViewCache::new(),
             frontier: FrontierWorkspace::new(),
         }
     }
@@ -188,8 +192,9 @@ impl<const N: usize> Workspace<N> {
         let field = DistanceField::<N>::new_boxed();
         let astar = AStar::<N>::new_boxed();
         let frontier = FrontierWorkspace::<N, MAX_FRONTIERS>::new_boxed();
+        let views = ViewCache::new_boxed();
         let layout = std::alloc::Layout::new::<Self>();
-        // SAFETY: zeroed memory is a valid `[u32; N]`; the three other fields are copied bit
+        // SAFETY: zeroed memory is a valid `[u32; N]`; the four other fields are copied bit
         // for bit from their own heap boxes (plain data without drop glue, so freeing those
         // boxes afterwards drops nothing twice).
         unsafe {
@@ -200,6 +205,7 @@ impl<const N: usize> Workspace<N> {
             core::ptr::copy_nonoverlapping(&*field, core::ptr::addr_of_mut!((*raw).field), 1);
             core::ptr::copy_nonoverlapping(&*astar, core::ptr::addr_of_mut!((*raw).astar), 1);
             core::ptr::copy_nonoverlapping(&*frontier, core::ptr::addr_of_mut!((*raw).frontier), 1);
+            core::ptr::copy_nonoverlapping(&*views, core::ptr::addr_of_mut!((*raw).views), 1);
             std::boxed::Box::from_raw(raw)
         }
     }
@@ -212,7 +218,12 @@ impl<const N: usize> Workspace<N> {
         &mut FrontierWorkspace<N, MAX_FRONTIERS>,
     ) {
         (
-            ExploreObjective::new(&mut self.field, &mut self.astar, &mut self.stamps),
+            ExploreObjective::with_view_cache(
+                &mut self.field,
+                &mut self.astar,
+                &mut self.stamps,
+                &mut self.views,
+            ),
             &mut self.frontier,
         )
     }
