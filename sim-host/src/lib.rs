@@ -7,4 +7,5 @@ pub mod emulator;
 pub mod laser;
 pub mod movingai;
 pub mod physics;
+pub mod render;
 pub mod world;

@@ -22,6 +22,8 @@ enum Command {
     Plan(cli::plan::Args),
     /// Serve an emulated P3-DX microcontroller and LMS1xx laser over a simulated world.
     Serve(cli::serve::Args),
+    /// Score a saved robot map (ROS map_server YAML + PGM) against a world's ground truth.
+    Score(cli::score::Args),
 }
 
 fn main() -> ExitCode {
@@ -30,5 +32,6 @@ fn main() -> ExitCode {
         Command::Optimize(args) => cli::optimize::run(args),
         Command::Plan(args) => cli::plan::run(args),
         Command::Serve(args) => cli::serve::run(args),
+        Command::Score(args) => cli::score::run(args),
     }
 }

@@ -2,4 +2,5 @@
 
 pub mod optimize;
 pub mod plan;
+pub mod score;
 pub mod serve;
