@@ -12,6 +12,7 @@ use papillon::mission::{MissionConfig, SelectorKind};
 use papillon::optim::Method;
 
 use crate::dynamic::Dynamics;
+use crate::physics::SlipConfig;
 use crate::render::{self, Track};
 use crate::runner::{self, RunConfig, RunReport, Runner};
 use crate::world::World;
@@ -52,6 +53,11 @@ pub struct Args {
     /// the map's south-west corner, heading east).
     #[arg(long, num_args = 2..=3, allow_hyphen_values = true, value_names = ["X", "Y", "THETA"])]
     pub start: Option<Vec<String>>,
+    /// Odometry slip of the simulated robots: thesis (a 1.5 cm slide at the end of each move,
+    /// what the thesis saw), full (also heading and distance random walks, see
+    /// docs/simulator.md) or none.
+    #[arg(long, default_value = "thesis")]
+    pub slip: String,
     /// Cell size [m] (the map file's own for .yaml).
     #[arg(long, default_value = "0.1")]
     pub resolution: String,
@@ -77,6 +83,8 @@ pub struct Setup {
     pub method: String,
     /// `short` or `long`.
     pub strategy: String,
+    /// `thesis`, `full` or `none`.
+    pub slip: String,
 }
 
 fn number<T: std::str::FromStr>(option: &str, text: &str, what: &str) -> Result<T, String> {
@@ -171,7 +179,17 @@ impl Setup {
             let pose = Pose2::new(nums[0], nums[1], nums.get(2).copied().unwrap_or(0.0));
             world.set_start(pose);
         }
-        let run = RunConfig::new(mission, robots, seed);
+        let mut run = RunConfig::new(mission, robots, seed);
+        run.body.slip = match args.slip.as_str() {
+            "thesis" => SlipConfig::thesis(),
+            "full" => SlipConfig::default(),
+            "none" => SlipConfig::none(),
+            other => {
+                return Err(format!(
+                    "--slip: expected thesis, full or none, got '{other}'"
+                ));
+            }
+        };
         if !world.start_is_clear(run.body.radius_m) {
             let s = world.start();
             return Err(format!(
@@ -187,6 +205,7 @@ impl Setup {
             run,
             method: args.method.clone(),
             strategy: args.strategy.clone(),
+            slip: args.slip.clone(),
         })
     }
 }
@@ -230,6 +249,7 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
         "strategy": setup.strategy,
         "targets": m.explore.targets,
         "battery_steps": m.battery_steps,
+        "slip": setup.slip,
         "coverage": report.coverage,
         "observable_cells": report.observable_cells,
         "known_cells": report.known_cells,
@@ -419,6 +439,7 @@ mod tests {
             battery: None,
             start: None,
             resolution: "0.1".into(),
+            slip: "thesis".into(),
             json: false,
             png: None,
             frames: None,
@@ -441,6 +462,7 @@ mod tests {
         assert_eq!((s.run.robots, s.run.seed), (1, 25));
         assert_eq!(s.world.start(), Pose2::new(1.0, 1.0, 0.0));
         assert_eq!(m.battery_steps, MissionConfig::default().battery_steps);
+        assert_eq!(s.run.body.slip, SlipConfig::thesis());
     }
 
     #[test]
@@ -458,6 +480,7 @@ mod tests {
                 "--targets:",
             ),
             (Args { seed: "-1".into(), ..args() }, "--seed:"),
+            (Args { slip: "lots".into(), ..args() }, "--slip:"),
             (Args { battery: Some("0".into()), ..args() }, "--battery:"),
             (
                 Args { start: Some(vec!["0.1".into(), "0.1".into()]), ..args() },
