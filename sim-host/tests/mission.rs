@@ -99,8 +99,9 @@ fn a_door_closing_ahead_of_the_robot_causes_a_replan_not_a_collision() {
     assert!(close_at < through);
     // Second run, same seed: the door closes as the robot heads for it.
     let (x0, y0, x1, y1) = builtin::LAB_DOOR;
-    let dynamics = Dynamics::new()
-        .with_door(Door::new(&world, x0, y0, x1, y1, DoorState::Open).at(close_at, DoorState::Closed));
+    let dynamics = Dynamics::new().with_door(
+        Door::new(&world, x0, y0, x1, y1, DoorState::Open).at(close_at, DoorState::Closed),
+    );
     let mut runner = Runner::new(world, dynamics, config()).unwrap();
     let report = runner.run().unwrap();
     let replans_after: Vec<_> = report
@@ -114,9 +115,7 @@ fn a_door_closing_ahead_of_the_robot_causes_a_replan_not_a_collision() {
         report.events
     );
     assert_eq!(report.collisions(), 0, "the robot hit something");
-    let blocked_door = runner
-        .world()
-        .is_blocked_at(door);
+    let blocked_door = runner.world().is_blocked_at(door);
     assert!(blocked_door, "the door did close");
     assert!(report.reason.is_some());
 }
@@ -149,6 +148,7 @@ fn sim(args: &[&str]) -> std::process::Output {
 #[test]
 fn json_output_is_one_object_with_every_key() {
     let png = std::env::temp_dir().join(format!("papillon-mission-{}.png", std::process::id()));
+    let frames = std::env::temp_dir().join(format!("papillon-frames-{}", std::process::id()));
     let out = sim(&[
         "mission",
         "--map",
@@ -158,8 +158,14 @@ fn json_output_is_one_object_with_every_key() {
         "--json",
         "--png",
         png.to_str().unwrap(),
+        "--frames",
+        frames.to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8(out.stdout).unwrap();
     assert_eq!(text.trim().lines().count(), 1, "{text}");
     let v: serde_json::Value = serde_json::from_str(text.trim()).unwrap();
@@ -197,6 +203,11 @@ fn json_output_is_one_object_with_every_key() {
     // The lab is 80 x 80 cells at 0.1 m, drawn at 4 pixels per cell.
     assert_eq!((img.width(), img.height()), (320, 320));
     std::fs::remove_file(&png).unwrap();
+    // One frame per decision.
+    let written = std::fs::read_dir(&frames).unwrap().count();
+    assert_eq!(written as u64, v["decisions"].as_u64().unwrap());
+    assert!(written > 0);
+    std::fs::remove_dir_all(&frames).unwrap();
 }
 
 #[test]
