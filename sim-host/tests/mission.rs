@@ -114,6 +114,12 @@ fn a_door_closing_ahead_of_the_robot_causes_a_replan_not_a_collision() {
         "no replan after the door closed at {close_at} s: {:?}",
         report.events
     );
+    // Seen as soon as the laser shows the closed door across the path.
+    assert!(
+        replans_after[0].time_s <= close_at + 5.0,
+        "first replan {:?}, door closed at {close_at} s",
+        replans_after[0]
+    );
     assert_eq!(report.collisions(), 0, "the robot hit something");
     let blocked_door = runner.world().is_blocked_at(door);
     assert!(blocked_door, "the door did close");
