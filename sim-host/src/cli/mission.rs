@@ -47,7 +47,8 @@ pub struct Args {
     /// Seed of every random choice (slip, laser noise, decisions).
     #[arg(long, default_value = "25")]
     pub seed: String,
-    /// Energy at the start [steps: 1 m of travel or 45° of rotation].
+    /// Energy at the start [steps: 1 m of travel or 45° of rotation] (default: the core
+    /// mission's, 500).
     #[arg(long)]
     pub battery: Option<String>,
     /// Start pose in the map frame: X Y [THETA] [m, m, rad] (default 1 m east and 1 m north of
