@@ -8,4 +8,6 @@ pub mod faults;
 pub mod laser;
 pub mod movingai;
 pub mod physics;
+pub mod render;
+pub mod runner;
 pub mod world;

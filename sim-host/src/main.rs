@@ -16,19 +16,42 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run a whole exploration mission in simulated time (one or several robots).
+    Mission(cli::mission::Args),
     /// Run the optimizers on standard test functions.
     Optimize(cli::optimize::Args),
     /// Solve a Moving AI path-finding benchmark with Papillon's A*.
     Plan(cli::plan::Args),
     /// Serve an emulated P3-DX microcontroller and LMS1xx laser over a simulated world.
     Serve(cli::serve::Args),
+    /// Score a saved robot map (ROS map_server YAML + PGM) against a world's ground truth.
+    Score(cli::score::Args),
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if e.use_stderr() => {
+            // One line: clap's first line, without its "error: " prefix.
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or("bad arguments");
+            eprintln!(
+                "papillon-sim: {}",
+                first.strip_prefix("error: ").unwrap_or(first)
+            );
+            return ExitCode::from(2);
+        }
+        Err(e) => {
+            // --help and --version.
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+    };
     match cli.command {
+        Command::Mission(args) => cli::mission::run(args),
         Command::Optimize(args) => cli::optimize::run(args),
         Command::Plan(args) => cli::plan::run(args),
         Command::Serve(args) => cli::serve::run(args),
+        Command::Score(args) => cli::score::run(args),
     }
 }

@@ -4,11 +4,14 @@
 //! [`GridGeometry`] (map frame: x east, y north, cell (0, 0) at the
 //! south-west corner, row 0 south), with a name and the robot's start pose. Worlds come from the
 //! built-in designs ([`builtin`]) or from files ([`World::load`]): the thesis's CSV format
-//! ([`csv`]) and plain PGM/PNG images ([`image`]). Ground truth for scoring lives in [`truth`].
+//! ([`csv`]), plain PGM/PNG images ([`image`]), Moving AI `.map` grids ([`movingai`]) and ROS
+//! map_server YAML + PGM maps ([`rosmap`]). Ground truth for scoring lives in [`truth`].
 
 pub mod builtin;
 pub mod csv;
 pub mod image;
+pub mod movingai;
+pub mod rosmap;
 pub mod truth;
 
 use std::fmt;
@@ -42,12 +45,11 @@ pub enum WorldError {
         /// Its extension (without the dot).
         extension: String,
     },
-    /// The format is recognised but its loader is not wired into world loading yet.
-    NotYetSupported {
-        /// The file.
-        path: String,
-        /// The format's name.
-        format: &'static str,
+    /// A Moving AI or ROS map file is malformed; the message names the file (and line or
+    /// byte where known) and what is wrong.
+    File {
+        /// The reader's message.
+        message: String,
     },
     /// The file could not be read.
     Io {
@@ -97,12 +99,7 @@ impl fmt::Display for WorldError {
                 f,
                 "{path}: unsupported map format '.{extension}' (expected .csv, .png, .pgm, .map or .yaml)"
             ),
-            WorldError::NotYetSupported { path, format } => {
-                write!(
-                    f,
-                    "{path}: {format} maps are not yet supported by the simulator"
-                )
-            }
+            WorldError::File { message } => f.write_str(message),
             WorldError::Io { path, message } => write!(f, "{path}: cannot read: {message}"),
             WorldError::Csv {
                 path,
@@ -184,8 +181,9 @@ impl World {
     /// - `empty`, `house`, `factory`, `lab`: the built-in designs ([`builtin`]);
     /// - `*.csv`: the thesis's CSV format ([`csv`]), upsampled to `resolution_m`;
     /// - `*.png`, `*.pgm`: a plain image, one pixel per cell of `resolution_m` ([`image`]);
-    /// - `*.map` (Moving AI) and `*.yaml` (ROS map_server): recognised, but not yet wired in
-    ///   ([`WorldError::NotYetSupported`]).
+    /// - `*.map`: a Moving AI grid, one character per cell of `resolution_m` ([`movingai`]);
+    /// - `*.yaml`, `*.yml`: a ROS map_server map, at its own resolution and origin
+    ///   ([`rosmap`]; `resolution_m` is not used).
     pub fn load(spec: &str, resolution_m: f32) -> Result<Self, WorldError> {
         let resolution_m = check_resolution(resolution_m)?;
         if let Some(world) = builtin::by_name(spec, resolution_m) {
@@ -200,14 +198,8 @@ impl World {
         match extension.to_ascii_lowercase().as_str() {
             "csv" => csv::load(path, resolution_m),
             "png" | "pgm" => image::load(path, resolution_m),
-            "map" => Err(WorldError::NotYetSupported {
-                path: spec.to_string(),
-                format: "Moving AI .map",
-            }),
-            "yaml" | "yml" => Err(WorldError::NotYetSupported {
-                path: spec.to_string(),
-                format: "ROS map_server .yaml",
-            }),
+            "map" => movingai::load(path, resolution_m),
+            "yaml" | "yml" => rosmap::load(path),
             other => Err(WorldError::UnsupportedFormat {
                 path: spec.to_string(),
                 extension: other.to_string(),
@@ -374,10 +366,9 @@ mod tests {
         let e = World::load("nowhere", 0.1).unwrap_err();
         assert!(e.to_string().contains("unknown world 'nowhere'"), "{e}");
         let e = World::load("maps/x.map", 0.1).unwrap_err();
-        assert!(matches!(e, WorldError::NotYetSupported { .. }));
-        assert!(e.to_string().contains("maps/x.map"), "{e}");
+        assert!(e.to_string().starts_with("maps/x.map: cannot read"), "{e}");
         let e = World::load("a.yaml", 0.1).unwrap_err();
-        assert!(e.to_string().contains("not yet supported"), "{e}");
+        assert!(e.to_string().starts_with("a.yaml: "), "{e}");
         let e = World::load("a.bmp", 0.1).unwrap_err();
         assert!(e.to_string().contains("'.bmp'"), "{e}");
         let e = World::load("house", 0.0).unwrap_err();
