@@ -5,6 +5,7 @@
 //! pumped by [`runtime`]. Layers, bottom up:
 //! - [`link`]: byte links (serial, TCP, in-memory) and reconnection with back-off;
 //! - [`arcos`]: what the ARCOS session needs from the wire codec;
+//! - [`codec`]: the session codecs over `crate::wire`;
 //! - [`robot`]: the ARCOS client session (handshake, CONFIG check, HOSTBAUD, keep-alive, safe
 //!   stop);
 //! - [`laser`]: the LMS1xx client session;
@@ -12,6 +13,7 @@
 //! - [`runtime`]: `papillon run` and `papillon probe`.
 
 pub mod arcos;
+pub mod codec;
 pub mod laser;
 pub mod link;
 pub mod persist;

@@ -24,16 +24,17 @@ use super::link::{Backoff, TcpLink, connect_with_backoff, open_robot_link};
 use super::persist::{MapImage, MissionState, PersistError, STATE_VERSION, StateStore, Telemetry};
 use super::robot::{ArcosClient, Fault, MotionLimits, SessionError, SessionOptions};
 use crate::config::{BoardConfig, LaserModel};
+use crate::control::odometry::ArcosOdometry;
 use crate::sensor::Scan;
 
-/// INTEGRATION POINT 1: the ARCOS codec of `crate::wire::arcos` (not merged yet).
+/// The ARCOS codec of `crate::wire::arcos`.
 pub fn arcos_codec() -> Option<Box<dyn ArcosCodec>> {
-    None
+    Some(Box::new(super::codec::WireArcos::default()))
 }
 
-/// INTEGRATION POINT 1: the CoLa-A codec of `crate::wire::lms1xx` (not merged yet).
+/// The CoLa-A codec of `crate::wire::lms1xx`.
 pub fn laser_codec() -> Option<Box<dyn LaserCodec>> {
-    None
+    Some(Box::new(super::codec::WireLms1xx::default()))
 }
 
 /// INTEGRATION POINT 2: the mission state machine for a board, resumed from `resume` if given.
@@ -565,12 +566,14 @@ pub async fn probe_with(
         )?;
     }
     writeln!(out, "baud: {:?}", client.baud_switch())?;
+    let mut odometry = ArcosOdometry::new();
     let status = next_status(&mut client, Duration::from_secs(2)).await?;
     match status {
         Some(s) => writeln!(
             out,
-            "status: battery {:.1} V, pose counters x {} mm, y {} mm, th {} units, motors {}, e-stop {}",
+            "status: battery {:.1} V, pose {} (counters x {}, y {}, th {}), motors {}, e-stop {}",
             s.battery_v(),
+            pose_text(odometry.update(s.x_pos, s.y_pos, s.th_pos)),
             s.x_pos,
             s.y_pos,
             s.th_pos,
@@ -593,25 +596,42 @@ pub async fn probe_with(
                 rot_accel_deg_s2: 60,
             })
             .await?;
+        let start = odometry.pose_odom();
         for side in 0..4 {
-            drive_for(&mut client, 100, 0, Duration::from_secs(5)).await?;
-            drive_for(&mut client, 0, 30, Duration::from_secs(3)).await?;
+            drive_for(&mut client, &mut odometry, 100, 0, Duration::from_secs(5)).await?;
+            drive_for(&mut client, &mut odometry, 0, 30, Duration::from_secs(3)).await?;
             if let Some(s) = next_status(&mut client, Duration::from_secs(1)).await? {
+                let pose = odometry.update(s.x_pos, s.y_pos, s.th_pos);
                 writeln!(
                     out,
-                    "square side {}: x {} mm, y {} mm, th {} units",
+                    "square side {}: odometry {}",
                     side + 1,
-                    s.x_pos,
-                    s.y_pos,
-                    s.th_pos
+                    pose_text(pose)
                 )?;
             }
         }
+        let end = odometry.pose_odom();
+        writeln!(
+            out,
+            "square: driven {:.2} m, closure error {:.0} mm",
+            odometry.distance_travelled_m(),
+            libm::hypotf(end.x - start.x, end.y - start.y) * 1000.0
+        )?;
     }
     let stats = client.stop_and_close().await?;
     writeln!(out, "link: {}", stats.codec)?;
     writeln!(out, "disconnected: motors disabled, session closed")?;
     Ok(())
+}
+
+/// An odometry pose as the probe prints it.
+fn pose_text(p: crate::geometry::Pose2) -> String {
+    format!(
+        "x {:.0} mm, y {:.0} mm, heading {:.1} deg",
+        p.x * 1000.0,
+        p.y * 1000.0,
+        p.theta.to_degrees()
+    )
 }
 
 async fn next_status(
@@ -631,6 +651,7 @@ async fn next_status(
 /// the loop is alive), then stops.
 async fn drive_for(
     client: &mut ArcosClient,
+    odometry: &mut ArcosOdometry,
     speed_mm_s: i16,
     turn_deg_s: i16,
     duration: Duration,
@@ -638,9 +659,12 @@ async fn drive_for(
     let end = Instant::now() + duration;
     while Instant::now() < end {
         client.drive(speed_mm_s, turn_deg_s).await?;
-        let _ = client
-            .next_event((Instant::now() + Duration::from_millis(200)).min(end))
-            .await?;
+        let resend = (Instant::now() + Duration::from_millis(200)).min(end);
+        while let Some(ev) = client.next_event(resend).await? {
+            if let super::robot::RobotEvent::Status { status: s, .. } = ev {
+                odometry.update(s.x_pos, s.y_pos, s.th_pos);
+            }
+        }
     }
     client.drive(0, 0).await?;
     Ok(())
@@ -688,8 +712,8 @@ mod tests {
                 resume: false,
             },
             || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
-            laser_codec,
-            mission_driver,
+            || None,
+            |_, _| None,
             std::future::pending(),
         )
         .await
@@ -732,8 +756,8 @@ mod tests {
                 resume: true,
             },
             || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
-            laser_codec,
-            mission_driver,
+            || None,
+            |_, _| None,
             std::future::pending(),
         )
         .await
@@ -751,9 +775,9 @@ mod tests {
                 log_dir: dir.clone(),
                 resume: false,
             },
-            arcos_codec,
-            laser_codec,
-            mission_driver,
+            || None,
+            || None,
+            |_, _| None,
             std::future::pending(),
         )
         .await
