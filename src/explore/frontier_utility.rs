@@ -64,9 +64,9 @@ impl<const N: usize, const C: usize, const F: usize> core::fmt::Debug
 
 /// Half-width of the window whose known-cell count decides when a blacklist entry lapses
 /// \[m\].
-const WINDOW_HALF_M: f32 = 1.0;
+pub(crate) const WINDOW_HALF_M: f32 = 1.0;
 
-fn known_around<const N: usize>(grid: &OccupancyGrid<N>, p: Point2) -> u32 {
+pub(crate) fn known_around<const N: usize>(grid: &OccupancyGrid<N>, p: Point2) -> u32 {
     let g = grid.geometry();
     let c = g.cell_at_unchecked(p);
     let r = (WINDOW_HALF_M / g.resolution_m) as i32;

@@ -1,1 +1,389 @@
-//! (in progress)
+//! The mission state machine: one per robot, sans-IO, `no_std`, no allocation.
+//!
+//! A [`Mission`] is fed time, odometry with the robot's flags ([`Mission::on_odometry`]),
+//! laser scans ([`Mission::on_scan`], integrated into the [`SharedMap`]) and, optionally, the
+//! coverage the caller measures ([`Mission::set_coverage`]). Once per control period
+//! [`Mission::step`] returns the command to send (always through the
+//! [`SafetyMonitor`](crate::control::safety::SafetyMonitor), so always within
+//! [`MissionConfig::limits`]) and what happened ([`MissionEvent`]s).
+//!
+//! # States
+//!
+//! ```text
+//!  Starting ──(odometry + first scan)──► Deciding ──(Go)──► Rotating ⇄ Driving
+//!                                            ▲   │                 │
+//!               (arrived, or too many        │   └─(Done / battery)─┼──► Done(reason)
+//!                replans for one decision) ──┘                     │
+//!  Replanning ◄──(obstacle ahead, contact after back-off, path cut)─┘
+//!  Yielding   ◄──(another robot in the way) ──(wait, step aside)──► Replanning
+//!  Fault(reason) ◄──(e-stop, motors off, stale inputs: from any state) ──(cleared)──► Replanning
+//! ```
+//!
+//! - **Starting**: commands zero until the first odometry (which fixes the map-from-odom
+//!   transform at the start pose) and the first scan integrated.
+//! - **Deciding**: a decision by the configured selector ([`SelectorKind`]), computed inside
+//!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` ends the mission with
+//!   [`DoneReason::NothingReachable`]; `NoFeasibleTarget` with the battery low ends it with
+//!   [`DoneReason::BatteryExhausted`].
+//! - **Rotating / Driving**: the [`WaypointFollower`](crate::control::follower::WaypointFollower)
+//!   turns in place then drives to each waypoint ([`MissionEvent::WaypointReached`]).
+//!   After every scan the remaining segments are checked against the traversability layer;
+//!   an Occupied or inflated cell across them (a door that closed) means a replan.
+//! - **Replanning**: a fresh path from the current pose to the decision's remaining targets.
+//!   Caused by the safety monitor (obstacle ahead: the return is added to the map; contact or
+//!   stall: once the monitor has backed off), by a cut path, or by the end of a fault. A
+//!   decision that needed more than [`MissionConfig::max_replans_per_decision`] replans, or
+//!   whose targets can no longer be reached, is dropped: its target is blacklisted and the
+//!   mission decides again.
+//! - **Yielding**: the thing in the way is another robot (its mark on the shared map is at
+//!   the obstacle). The robot with the higher id waits [`MissionConfig::yield_wait_s`], then
+//!   replans around; if no way around exists it steps out of the other robot's path and waits
+//!   there until it has passed. The lower id replans at once (and, while the other robot
+//!   still blocks the only way, waits for it to step aside). This is the thesis's "solve
+//!   conflict" routine.
+//! - **Done(reason)**: coverage target reached, battery exhausted, or nothing reachable left.
+//! - **Fault(reason)**: e-stop, motors disabled, stale odometry or scan: zero velocity. When
+//!   it clears the mission replans from the current pose; the old path is never resumed.
+//!
+//! Energy: the battery starts at [`MissionConfig::battery_steps`] and decreases with the
+//! motion actually driven, measured on odometry, 1 m or 45° per step
+//! ([`crate::units::steps`]); at the reserve the mission is done.
+//!
+//! Events: at most [`MAX_EVENTS`] per step; on overflow the oldest are kept and the number
+//! dropped is counted in [`MissionStats::events_dropped`].
+
+mod machine;
+mod shared;
+
+#[cfg(all(test, feature = "std"))]
+mod tests;
+
+pub use machine::Mission;
+pub use shared::{
+    MAX_FRONTIERS, MAX_ROBOTS, MAX_SHARED_WAYPOINTS, RobotMark, SharedMap, Workspace,
+};
+
+use crate::control::command::{Limits, RobotCommand};
+use crate::control::follower::{FollowerConfig, FollowerError};
+use crate::control::safety::SafetyConfig;
+use crate::explore::{DecideError, ExploreConfig, MAX_TARGETS};
+use crate::geometry::Point2;
+use crate::grid::{GridError, LogOddsBounds};
+use crate::optim::Method;
+use crate::planner::{TraversabilityConfig, TraversabilityError};
+use crate::sensor::{IntegrationError, LaserConfig, SensorModel};
+
+/// Most events one step reports.
+pub const MAX_EVENTS: usize = 8;
+
+/// Which target selector decides.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SelectorKind {
+    /// A population optimizer on the energy-constrained objective (xBOA in the thesis).
+    Optimized(Method),
+    /// Yamauchi's nearest frontier.
+    NearestFrontier,
+    /// explore_lite's frontier utility, with a blacklist of places the robot failed to reach.
+    FrontierUtility,
+}
+
+/// Everything a mission needs, plain data. `Default` is the thesis set-up: xBOA, population
+/// 5, 30 generations, k = 1, coverage target 0.99, P3-DX limits, the thesis laser.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MissionConfig {
+    /// The target selector.
+    pub selector: SelectorKind,
+    /// Decision settings (k, reserve, population, generations, ...).
+    pub explore: ExploreConfig,
+    /// Energy at the start \[steps\].
+    pub battery_steps: f32,
+    /// Coverage (0..=1) at which the mission is done, when the caller reports coverage.
+    pub coverage_target: f32,
+    /// The laser.
+    pub laser: LaserConfig,
+    /// The inverse sensor model.
+    pub sensor: SensorModel,
+    /// Log-odds saturation of the shared grid.
+    pub grid_bounds: LogOddsBounds,
+    /// Inflation and Unknown policy of the planning layer.
+    pub traversability: TraversabilityConfig,
+    /// Path follower tuning.
+    pub follower: FollowerConfig,
+    /// Safety distances and timeouts.
+    pub safety: SafetyConfig,
+    /// Motion limits every command is clamped to.
+    pub limits: Limits,
+    /// How long the robot with the higher id waits when another robot blocks it \[s\].
+    pub yield_wait_s: f32,
+    /// Replans one decision may need before it is dropped and the mission decides again.
+    pub max_replans_per_decision: u32,
+    /// Without progress toward the current waypoint for this long, the path counts as blocked
+    /// \[s\].
+    pub stuck_timeout_s: f32,
+    /// Decisions in a row that may fail (no feasible target, every frontier blacklisted)
+    /// before the mission gives up.
+    pub max_failed_decisions: u32,
+    /// Below this much energy above the reserve, a decision without a feasible target ends
+    /// the mission with [`DoneReason::BatteryExhausted`] \[steps\].
+    pub low_battery_steps: f32,
+    /// Compute the next decision while driving, from the end of the current path, once less
+    /// than [`Self::decide_ahead_m`] of it is left.
+    pub decide_while_driving: bool,
+    /// Remaining path length below which the next decision is computed ahead \[m\].
+    pub decide_ahead_m: f32,
+}
+
+impl Default for MissionConfig {
+    fn default() -> Self {
+        Self {
+            selector: SelectorKind::Optimized(Method::Xboa),
+            explore: ExploreConfig::default(),
+            battery_steps: 500.0,
+            coverage_target: 0.99,
+            laser: LaserConfig::thesis(),
+            sensor: SensorModel::default(),
+            grid_bounds: LogOddsBounds::default(),
+            traversability: TraversabilityConfig::default(),
+            follower: FollowerConfig::default(),
+            safety: SafetyConfig::default(),
+            limits: Limits::p3dx_exploration(),
+            yield_wait_s: 3.0,
+            max_replans_per_decision: 5,
+            stuck_timeout_s: 20.0,
+            max_failed_decisions: 8,
+            low_battery_steps: 10.0,
+            decide_while_driving: false,
+            decide_ahead_m: 0.6,
+        }
+    }
+}
+
+impl MissionConfig {
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), MissionError> {
+        let bad = |field: &'static str, value: f32| Err(MissionError::BadConfig { field, value });
+        let finite_non_negative = [
+            ("battery_steps", self.battery_steps),
+            ("yield_wait_s", self.yield_wait_s),
+            ("low_battery_steps", self.low_battery_steps),
+            ("decide_ahead_m", self.decide_ahead_m),
+            ("explore.reserve_steps", self.explore.reserve_steps),
+        ];
+        for (field, value) in finite_non_negative {
+            if !(value.is_finite() && value >= 0.0) {
+                return bad(field, value);
+            }
+        }
+        if !(self.coverage_target > 0.0 && self.coverage_target <= 1.0) {
+            return bad("coverage_target", self.coverage_target);
+        }
+        if !(self.stuck_timeout_s.is_finite() && self.stuck_timeout_s > 0.0) {
+            return bad("stuck_timeout_s", self.stuck_timeout_s);
+        }
+        if self.explore.targets == 0 || self.explore.targets > MAX_TARGETS {
+            return bad("explore.targets", self.explore.targets as f32);
+        }
+        if self.explore.population < 2 {
+            return bad("explore.population", self.explore.population as f32);
+        }
+        self.sensor.validate().map_err(MissionError::Sensor)?;
+        Ok(())
+    }
+}
+
+/// What the mission is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MissionState {
+    /// Waiting for the first odometry and scan.
+    Starting,
+    /// About to decide where to go.
+    Deciding,
+    /// Turning in place toward a waypoint.
+    Rotating,
+    /// Driving toward a waypoint.
+    Driving,
+    /// About to plan a fresh path to the current targets.
+    Replanning,
+    /// Waiting for, or stepping out of the way of, another robot.
+    Yielding,
+    /// Finished.
+    Done(DoneReason),
+    /// Stopped by a fault.
+    Fault(FaultReason),
+}
+
+/// Why a mission ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DoneReason {
+    /// The coverage target was reached.
+    CoverageReached,
+    /// The battery (minus the reserve) is used up, or too low for any feasible target.
+    BatteryExhausted,
+    /// No Unknown cell is reachable any more.
+    NothingReachable,
+}
+
+/// Why the robot is stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FaultReason {
+    /// The robot's emergency stop is engaged.
+    EmergencyStop,
+    /// The robot's motors are disabled.
+    MotorsDisabled,
+    /// Odometry or scans stopped arriving.
+    StaleInputs,
+}
+
+/// Why a path was planned again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ReplanCause {
+    /// The laser saw an obstacle in the direction of travel.
+    ObstacleAhead,
+    /// A bumper or a stalled wheel (after backing off).
+    Contact,
+    /// New Occupied or inflated cells cut the remaining path.
+    PathBlocked,
+    /// No progress toward the waypoint for [`MissionConfig::stuck_timeout_s`].
+    Stuck,
+    /// A fault cleared.
+    FaultCleared,
+    /// Another robot was in the way.
+    Robot,
+}
+
+/// Something the caller may log or count.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MissionEvent {
+    /// A decision was made.
+    Decided {
+        /// Targets, in visiting order, map frame \[m\].
+        targets: heapless::Vec<Point2, MAX_TARGETS>,
+        /// Planned path length \[m\].
+        path_length_m: f32,
+        /// Unknown cells predicted to become known \[cells\].
+        predicted_gain_cells: u32,
+        /// Planned energy \[steps\].
+        energy_steps: f32,
+        /// Objective evaluations used.
+        evaluations: u32,
+    },
+    /// Waypoint `index` of the current path was reached.
+    WaypointReached {
+        /// Index into [`Mission::path`].
+        index: usize,
+    },
+    /// A fresh path to the current targets was planned.
+    Replanned {
+        /// Why.
+        cause: ReplanCause,
+    },
+    /// The robot gives way to another robot.
+    Yielding {
+        /// `true` while it waits for the robot ahead; `false` when it steps aside.
+        to_robot_ahead: bool,
+    },
+    /// A fault stopped the robot.
+    Fault(FaultReason),
+    /// The fault cleared; the mission replans.
+    FaultCleared,
+    /// The mission ended.
+    Done(DoneReason),
+}
+
+/// Counters over the mission.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MissionStats {
+    /// Decisions made.
+    pub decisions: u32,
+    /// Decisions that failed (no feasible target, all blacklisted, planning errors).
+    pub failed_decisions: u32,
+    /// Objective evaluations over all decisions.
+    pub fitness_evals: u64,
+    /// Replans.
+    pub replans: u32,
+    /// Times the robot gave way to another.
+    pub yields: u32,
+    /// Faults.
+    pub faults: u32,
+    /// Waypoints reached.
+    pub waypoints_reached: u32,
+    /// Energy used \[steps\].
+    pub steps: f32,
+    /// Distance driven, from odometry \[m\].
+    pub distance_m: f32,
+    /// Control periods stepped.
+    pub periods: u64,
+    /// Time with a zero command while the mission was running (not Done) \[s\].
+    pub stopped_s: f32,
+    /// Events dropped because a step had more than [`MAX_EVENTS`].
+    pub events_dropped: u32,
+    /// Targets given up (blacklisted).
+    pub abandoned_targets: u32,
+    /// Decisions computed ahead while driving, and how many of them were used.
+    pub decisions_ahead: u32,
+    /// Decisions computed ahead that were used.
+    pub decisions_ahead_used: u32,
+}
+
+/// The result of one control period.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepOutput {
+    /// The command to send, always within the configured limits.
+    pub command: RobotCommand,
+    /// What happened (oldest first).
+    pub events: heapless::Vec<MissionEvent, MAX_EVENTS>,
+}
+
+/// Errors of the mission layer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum MissionError {
+    /// A configuration value is out of range.
+    BadConfig {
+        /// The field.
+        field: &'static str,
+        /// The value given.
+        value: f32,
+    },
+    /// The grid could not be built.
+    Grid(GridError),
+    /// The traversability layer could not be built.
+    Map(TraversabilityError),
+    /// The follower refused its configuration.
+    Follower(FollowerError),
+    /// The sensor model or laser is invalid, or the scan could not be integrated.
+    Sensor(IntegrationError),
+    /// More robots than [`MAX_ROBOTS`] share the map.
+    TooManyRobots {
+        /// The capacity.
+        capacity: usize,
+    },
+    /// A value passed in is not finite.
+    NotFinite {
+        /// What it was.
+        what: &'static str,
+    },
+    /// A decision failed for a reason that retrying cannot fix.
+    Decide(DecideError),
+}
+
+impl core::fmt::Display for MissionError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            MissionError::BadConfig { field, value } => {
+                write!(f, "mission config {field} = {value} is out of range")
+            }
+            MissionError::Grid(e) => write!(f, "shared grid: {e}"),
+            MissionError::Map(e) => write!(f, "traversability layer: {e}"),
+            MissionError::Follower(e) => write!(f, "path follower: {e}"),
+            MissionError::Sensor(e) => write!(f, "scan integration: {e}"),
+            MissionError::TooManyRobots { capacity } => {
+                write!(f, "at most {capacity} robots can share one map")
+            }
+            MissionError::NotFinite { what } => write!(f, "{what} is not finite"),
+            MissionError::Decide(e) => write!(f, "decision: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for MissionError {}

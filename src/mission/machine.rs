@@ -1,0 +1,1308 @@
+//! The per-robot mission state machine (see the [module documentation](super) for the states
+//! and transitions).
+
+use core::time::Duration;
+
+use crate::control::Time;
+use crate::control::command::MotionCommand;
+use crate::control::follower::{Controller, FollowStatus, MAX_WAYPOINTS, WaypointFollower};
+use crate::control::odometry::MapFromOdom;
+use crate::control::safety::{RobotFlags, SafetyEvent, SafetyInputs, SafetyMonitor, SafetyState};
+use crate::explore::frontier_utility::{MAX_BLACKLIST, known_around};
+use crate::explore::{
+    CandidateStatus, DecideError, Decision, DecisionRequest, ExploreConfig, FrontierUtility,
+    MAX_TARGETS, NearestFrontier, Optimized, Outcome, TargetSelector,
+};
+use crate::geometry::{Point2, Pose2, normalize_angle};
+use crate::grid::{Cell, CellClass};
+use crate::math;
+use crate::planner::waypoints::supercover;
+use crate::sensor::{Scan, integrate_scan};
+use crate::units;
+
+use super::shared::{RobotMark, SharedMap, Workspace};
+use super::{
+    DoneReason, FaultReason, MAX_EVENTS, MissionConfig, MissionError, MissionEvent, MissionState,
+    MissionStats, ReplanCause, SelectorKind, StepOutput,
+};
+
+/// Poses remembered along the way, for clearing the robot's own trail on the shared map.
+const TRAIL_LEN: usize = 12;
+/// Spacing of the remembered poses \[m\].
+const TRAIL_SPACING_M: f32 = 0.1;
+/// A blacklisted place covers targets within this distance \[m\].
+const BLACKLIST_RADIUS_M: f32 = 0.5;
+/// An obstacle this close to another robot's mark is that robot \[m\].
+const ROBOT_MATCH_M: f32 = 0.6;
+/// Marks older than this are ignored when telling robots from walls.
+const MARK_MAX_AGE: Duration = Duration::from_secs(2);
+/// Search for a passable start cell up to this far from the robot \[m\].
+const START_SNAP_M: f32 = 0.6;
+/// A place to step aside to keeps this far from the other robot's path \[m\].
+const ASIDE_CLEARANCE_M: f32 = 0.8;
+/// ... and this far from the other robot itself \[m\].
+const ASIDE_DISTANCE_M: f32 = 1.2;
+/// A robot waiting for another to step aside retries its plan this often \[s\].
+const RETRY_S: f32 = 1.0;
+/// Progress toward a waypoint smaller than this does not count \[m\].
+const PROGRESS_M: f32 = 0.05;
+
+/// What a yielding robot is doing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Yield {
+    /// Higher id: waiting before replanning around the robot ahead.
+    Waiting { other: u8, until: Time },
+    /// Higher id: driving out of the other robot's path.
+    SteppingAside { other: u8, since: Time },
+    /// Higher id: standing aside until the other robot has passed.
+    Clearing { other: u8, since: Time },
+    /// Lower id: no way past the other robot; retrying until it steps aside.
+    Holding {
+        other: u8,
+        retry_at: Time,
+        give_up_at: Time,
+    },
+}
+
+/// A decision computed ahead, from the end of the current path.
+#[derive(Clone, Debug)]
+struct Ahead {
+    decision: Decision,
+}
+
+/// One robot's mission.
+pub struct Mission<const N: usize> {
+    id: u8,
+    config: MissionConfig,
+    start_map: Pose2,
+    state: MissionState,
+    map_from_odom: Option<MapFromOdom>,
+    pose_odom: Pose2,
+    pose_map: Pose2,
+    flags: RobotFlags,
+    odometry_time: Option<Time>,
+    scan: Scan,
+    scan_time: Option<Time>,
+    scans_integrated: u32,
+    coverage: Option<f32>,
+    follower: WaypointFollower,
+    monitor: SafetyMonitor,
+    battery_steps: f32,
+    stats: MissionStats,
+    /// Targets of the current decision still to reach, in order.
+    targets: heapless::Vec<Point2, MAX_TARGETS>,
+    /// Targets given by [`Mission::go_to`], planned at the next decision.
+    goal: Option<heapless::Vec<Point2, MAX_TARGETS>>,
+    replans_this_decision: u32,
+    failed_in_row: u32,
+    replan_cause: ReplanCause,
+    /// A robot involved in the conflict being resolved.
+    conflict_robot: Option<u8>,
+    yielding: Option<Yield>,
+    /// A scan arrived since the path was last checked.
+    path_dirty: bool,
+    /// The plan was made after the last hold; acknowledge the monitor when it allows.
+    ack_pending: bool,
+    plan_time: Option<Time>,
+    progress_index: usize,
+    progress_best_m: f32,
+    progress_time: Time,
+    blacklist: heapless::Vec<(Point2, u32), MAX_BLACKLIST>,
+    ahead: Option<Ahead>,
+    trail: heapless::Deque<Point2, TRAIL_LEN>,
+    last_step: Option<Time>,
+}
+
+impl<const N: usize> core::fmt::Debug for Mission<N> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Mission")
+            .field("id", &self.id)
+            .field("state", &self.state)
+            .field("pose_map", &self.pose_map)
+            .field("battery_steps", &self.battery_steps)
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Events of one step: pushes past the capacity keep the oldest and count the rest.
+struct Events<'s> {
+    list: heapless::Vec<MissionEvent, MAX_EVENTS>,
+    stats: &'s mut MissionStats,
+}
+
+impl Events<'_> {
+    fn push(&mut self, e: MissionEvent) {
+        if self.list.push(e).is_err() {
+            self.stats.events_dropped += 1;
+        }
+    }
+}
+
+impl<const N: usize> Mission<N> {
+    /// A mission for robot `id` (lower ids have priority in conflicts), starting at
+    /// `start_map` in the map frame.
+    pub fn new(id: u8, config: MissionConfig, start_map: Pose2) -> Result<Self, MissionError> {
+        config.validate()?;
+        if !(start_map.x.is_finite() && start_map.y.is_finite() && start_map.theta.is_finite()) {
+            return Err(MissionError::NotFinite { what: "start pose" });
+        }
+        let follower = WaypointFollower::new(config.follower).map_err(MissionError::Follower)?;
+        let monitor = SafetyMonitor::new(config.safety, config.limits);
+        Ok(Self {
+            id,
+            battery_steps: config.battery_steps,
+            start_map,
+            state: MissionState::Starting,
+            map_from_odom: None,
+            pose_odom: Pose2::default(),
+            pose_map: start_map,
+            flags: RobotFlags::nominal(),
+            odometry_time: None,
+            scan: Scan::new(),
+            scan_time: None,
+            scans_integrated: 0,
+            coverage: None,
+            follower,
+            monitor,
+            stats: MissionStats::default(),
+            targets: heapless::Vec::new(),
+            goal: None,
+            replans_this_decision: 0,
+            failed_in_row: 0,
+            replan_cause: ReplanCause::ObstacleAhead,
+            conflict_robot: None,
+            yielding: None,
+            path_dirty: false,
+            ack_pending: false,
+            plan_time: None,
+            progress_index: 0,
+            progress_best_m: f32::INFINITY,
+            progress_time: Time::ZERO,
+            blacklist: heapless::Vec::new(),
+            ahead: None,
+            trail: heapless::Deque::new(),
+            last_step: None,
+            config,
+        })
+    }
+
+    /// The robot's id.
+    pub fn id(&self) -> u8 {
+        self.id
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &MissionConfig {
+        &self.config
+    }
+
+    /// Latest odometry (`odom` frame, as the robot reports it) and robot flags. The first
+    /// reading is aligned to the start pose.
+    pub fn on_odometry(&mut self, now: Time, pose_odom: Pose2, flags: RobotFlags) {
+        if !(pose_odom.x.is_finite() && pose_odom.y.is_finite() && pose_odom.theta.is_finite()) {
+            // A corrupt reading is no reading: the inputs go stale.
+            self.flags = flags;
+            return;
+        }
+        let transform = *self
+            .map_from_odom
+            .get_or_insert_with(|| MapFromOdom::from_start(self.start_map, pose_odom));
+        if self.odometry_time.is_some() {
+            let d = self.pose_odom.position().distance(pose_odom.position());
+            let turn = math::abs(normalize_angle(pose_odom.theta - self.pose_odom.theta));
+            let used = units::steps(d, turn);
+            self.battery_steps = (self.battery_steps - used).max(0.0);
+            self.stats.steps += used;
+            self.stats.distance_m += d;
+        }
+        self.pose_odom = pose_odom;
+        self.pose_map = transform.map_pose(pose_odom);
+        self.flags = flags;
+        self.odometry_time = Some(now);
+        let p = self.pose_map.position();
+        if self
+            .trail
+            .back()
+            .is_none_or(|q| q.distance(p) >= TRAIL_SPACING_M)
+        {
+            if self.trail.is_full() {
+                self.trail.pop_front();
+            }
+            let _ = self.trail.push_back(p);
+        }
+    }
+
+    /// A scan taken at `now` from the current pose: integrated into the shared map (before
+    /// the first odometry, at the start pose). Occupied evidence under the robot's own body
+    /// and along its last metre is weakened to a weak Free value: the robot stood there, so
+    /// what another robot's scan saw there was this robot, not a wall.
+    pub fn on_scan(
+        &mut self,
+        now: Time,
+        scan: &Scan,
+        map: &mut SharedMap<N>,
+    ) -> Result<(), MissionError> {
+        integrate_scan(
+            &mut map.grid,
+            scan,
+            self.pose_map,
+            &self.config.laser,
+            &self.config.sensor,
+            &mut map.trav,
+        )
+        .map_err(MissionError::Sensor)?;
+        self.clear_own_trail(map);
+        self.scan.clone_from(scan);
+        self.scan_time = Some(now);
+        self.scans_integrated += 1;
+        self.path_dirty = true;
+        self.publish(now, map)
+    }
+
+    /// Coverage measured by the caller (0..=1); the mission is done once it reaches the
+    /// target. Without it the mission ends only when nothing reachable is unknown or the
+    /// battery is out.
+    pub fn set_coverage(&mut self, coverage: f32) {
+        if coverage.is_finite() {
+            self.coverage = Some(coverage);
+        }
+    }
+
+    /// Sends the robot to `targets` (map frame \[m\], in order) instead of the next
+    /// exploration decision; once there it goes back to exploring.
+    pub fn go_to(&mut self, targets: &[Point2]) -> Result<(), MissionError> {
+        if targets.is_empty() || targets.len() > MAX_TARGETS {
+            return Err(MissionError::BadConfig {
+                field: "go_to targets",
+                value: targets.len() as f32,
+            });
+        }
+        if targets
+            .iter()
+            .any(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
+            return Err(MissionError::NotFinite {
+                what: "go_to target",
+            });
+        }
+        let mut goal = heapless::Vec::new();
+        let _ = goal.extend_from_slice(targets);
+        self.goal = Some(goal);
+        if matches!(
+            self.state,
+            MissionState::Rotating | MissionState::Driving | MissionState::Replanning
+        ) {
+            self.follower.clear();
+            self.state = MissionState::Deciding;
+        }
+        Ok(())
+    }
+
+    /// What the mission is doing.
+    pub fn state(&self) -> MissionState {
+        self.state
+    }
+
+    /// The current map-frame pose estimate.
+    pub fn pose_map(&self) -> Pose2 {
+        self.pose_map
+    }
+
+    /// The current waypoints (map frame \[m\]).
+    pub fn path(&self) -> &[Point2] {
+        self.follower.path()
+    }
+
+    /// The targets of the current decision still to reach.
+    pub fn targets(&self) -> &[Point2] {
+        &self.targets
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> &MissionStats {
+        &self.stats
+    }
+
+    /// Energy left \[steps\].
+    pub fn battery_steps(&self) -> f32 {
+        self.battery_steps
+    }
+
+    /// The safety monitor (read only).
+    pub fn monitor(&self) -> &SafetyMonitor {
+        &self.monitor
+    }
+
+    /// One control period at `now`. Decisions are computed here when needed.
+    pub fn step<R: rand_core::Rng>(
+        &mut self,
+        now: Time,
+        map: &mut SharedMap<N>,
+        ws: &mut Workspace<N>,
+        rng: &mut R,
+    ) -> StepOutput {
+        let mut stats = self.stats;
+        let mut events = Events {
+            list: heapless::Vec::new(),
+            stats: &mut stats,
+        };
+        events.stats.periods += 1;
+        let dt_s = self.last_step.map_or(0.0, |t| now.secs_since(t));
+        self.last_step = Some(now);
+        if self.ack_pending && self.monitor.acknowledge_replan().is_ok() {
+            self.ack_pending = false;
+        }
+
+        let proposed = self.run(now, map, ws, rng, &mut events);
+
+        let inputs = SafetyInputs {
+            pose_odom: self.pose_odom,
+            odometry_time: self.odometry_time,
+            scan: self.scan_time.map(|_| &self.scan),
+            scan_time: self.scan_time,
+            laser: &self.config.laser,
+            flags: self.flags,
+        };
+        let (command, safety) = self.monitor.filter(now, proposed, &inputs);
+        if let Some(event) = safety {
+            self.on_safety(now, event, map, &mut events);
+        }
+        let moving = command
+            .velocity()
+            .is_some_and(|v| v.as_motion() != MotionCommand::ZERO);
+        if !moving && !matches!(self.state, MissionState::Done(_)) {
+            events.stats.stopped_s += dt_s;
+        }
+        let list = events.list;
+        self.stats = stats;
+        // The map only rejects a ninth robot; that robot is simply not seen by the others'
+        // conflict rule (it still appears in their scans).
+        let _ = self.publish(now, map);
+        StepOutput {
+            command,
+            events: list,
+        }
+    }
+
+    /// The state machine proper: the follower's proposal for this period.
+    fn run<R: rand_core::Rng>(
+        &mut self,
+        now: Time,
+        map: &mut SharedMap<N>,
+        ws: &mut Workspace<N>,
+        rng: &mut R,
+        events: &mut Events<'_>,
+    ) -> MotionCommand {
+        if let MissionState::Done(_) = self.state {
+            return MotionCommand::ZERO;
+        }
+        if self.state == MissionState::Starting {
+            if self.map_from_odom.is_none() || self.scans_integrated == 0 {
+                return MotionCommand::ZERO;
+            }
+            self.state = MissionState::Deciding;
+        }
+        // Faults first: zero velocity, forget the path.
+        if let Some(reason) = self.fault_now(now) {
+            if self.state != MissionState::Fault(reason) {
+                if !matches!(self.state, MissionState::Fault(_)) {
+                    events.stats.faults += 1;
+                }
+                events.push(MissionEvent::Fault(reason));
+                self.state = MissionState::Fault(reason);
+            }
+            self.follower.clear();
+            self.ahead = None;
+            self.yielding = None;
+            self.ack_pending = false;
+            return MotionCommand::ZERO;
+        }
+        if let MissionState::Fault(_) = self.state {
+            events.push(MissionEvent::FaultCleared);
+            self.enter_replanning(ReplanCause::FaultCleared);
+        }
+        // The end of the mission.
+        if self.battery_steps <= self.config.explore.reserve_steps {
+            return self.finish(DoneReason::BatteryExhausted, events);
+        }
+        if self
+            .coverage
+            .is_some_and(|c| c >= self.config.coverage_target)
+        {
+            return self.finish(DoneReason::CoverageReached, events);
+        }
+        // Up to a few transitions in one period, so that arriving and deciding, or replanning
+        // and driving, do not cost a period each.
+        for _ in 0..4 {
+            match self.state {
+                MissionState::Deciding => {
+                    if !self.decide(now, map, ws, rng, events) {
+                        return MotionCommand::ZERO;
+                    }
+                }
+                MissionState::Replanning => {
+                    if matches!(self.monitor.state(), SafetyState::BackingOff { .. }) {
+                        return MotionCommand::ZERO;
+                    }
+                    self.replan(now, map, ws, events);
+                }
+                MissionState::Yielding => match self.yield_step(now, map, ws, events) {
+                    Some(cmd) => return cmd,
+                    None => continue,
+                },
+                MissionState::Rotating | MissionState::Driving => {
+                    match self.follow(now, map, ws, rng, events) {
+                        Some(cmd) => return cmd,
+                        None => continue,
+                    }
+                }
+                _ => return MotionCommand::ZERO,
+            }
+        }
+        MotionCommand::ZERO
+    }
+
+    fn finish(&mut self, reason: DoneReason, events: &mut Events<'_>) -> MotionCommand {
+        self.state = MissionState::Done(reason);
+        self.follower.clear();
+        self.targets.clear();
+        self.ahead = None;
+        self.yielding = None;
+        events.push(MissionEvent::Done(reason));
+        MotionCommand::ZERO
+    }
+
+    /// The fault in force, if any: e-stop, motors disabled, stale inputs.
+    fn fault_now(&self, now: Time) -> Option<FaultReason> {
+        if self.flags.estop {
+            return Some(FaultReason::EmergencyStop);
+        }
+        if !self.flags.motors_enabled {
+            return Some(FaultReason::MotorsDisabled);
+        }
+        let max_age = self.config.safety.max_input_age;
+        let fresh = |t: Option<Time>| t.is_some_and(|t| now.saturating_since(t) <= max_age);
+        if !(fresh(self.odometry_time) && fresh(self.scan_time)) {
+            return Some(FaultReason::StaleInputs);
+        }
+        None
+    }
+
+    fn enter_replanning(&mut self, cause: ReplanCause) {
+        self.follower.clear();
+        self.ahead = None;
+        self.replan_cause = cause;
+        self.state = MissionState::Replanning;
+    }
+
+    /// Reacts to what the safety monitor did this period.
+    fn on_safety(
+        &mut self,
+        now: Time,
+        event: SafetyEvent,
+        map: &mut SharedMap<N>,
+        events: &mut Events<'_>,
+    ) {
+        let running = matches!(
+            self.state,
+            MissionState::Rotating | MissionState::Driving | MissionState::Replanning
+        );
+        match event {
+            SafetyEvent::ObstacleAhead { point_base_m, .. } => {
+                let p = self.pose_map.transform_point(point_base_m);
+                self.mark_occupied(map, p);
+                if let Some(Yield::SteppingAside { other, .. }) = self.yielding {
+                    self.follower.clear();
+                    self.yielding = Some(Yield::Waiting {
+                        other,
+                        until: now + secs(self.config.yield_wait_s),
+                    });
+                    return;
+                }
+                if running {
+                    match self.robot_at(map, now, p) {
+                        Some(other) => self.begin_conflict(now, other, events),
+                        None => self.enter_replanning(ReplanCause::ObstacleAhead),
+                    }
+                }
+            }
+            SafetyEvent::Contact {
+                front_bumper,
+                rear_bumper,
+                ..
+            } => {
+                let fp = self.config.safety.footprint;
+                let res = map.grid.geometry().resolution_m;
+                if front_bumper {
+                    let p = self
+                        .pose_map
+                        .transform_point(Point2::new(fp.front_m + 0.5 * res, 0.0));
+                    self.mark_occupied(map, p);
+                }
+                if rear_bumper {
+                    let p = self
+                        .pose_map
+                        .transform_point(Point2::new(-fp.rear_m - 0.5 * res, 0.0));
+                    self.mark_occupied(map, p);
+                }
+                self.yielding = None;
+                if !matches!(self.state, MissionState::Done(_) | MissionState::Fault(_)) {
+                    self.enter_replanning(ReplanCause::Contact);
+                }
+            }
+            SafetyEvent::RequiresReplan { .. } => {
+                if self.plan_time == Some(now) {
+                    // The plan was made this very period, after the cause: it is fresh.
+                    self.ack_pending = true;
+                } else if matches!(self.state, MissionState::Rotating | MissionState::Driving) {
+                    self.enter_replanning(self.replan_cause);
+                }
+            }
+            SafetyEvent::InputsStale { .. } | SafetyEvent::Fault { .. } => {
+                // `run` reports these faults itself; the monitor saw them at the same time.
+                self.follower.clear();
+            }
+        }
+    }
+
+    /// Which other robot, if any, stands at map point `p`.
+    fn robot_at(&self, map: &SharedMap<N>, now: Time, p: Point2) -> Option<u8> {
+        map.robots
+            .iter()
+            .filter(|m| m.id != self.id && now.saturating_since(m.time) <= MARK_MAX_AGE)
+            .find(|m| m.pose.position().distance(p) <= ROBOT_MATCH_M)
+            .map(|m| m.id)
+    }
+
+    /// Another robot blocks the way: the higher id waits, the lower replans at once.
+    fn begin_conflict(&mut self, now: Time, other: u8, events: &mut Events<'_>) {
+        self.follower.clear();
+        self.ahead = None;
+        self.conflict_robot = Some(other);
+        if self.id > other {
+            events.stats.yields += 1;
+            events.push(MissionEvent::Yielding {
+                to_robot_ahead: true,
+            });
+            self.yielding = Some(Yield::Waiting {
+                other,
+                until: now + secs(self.config.yield_wait_s),
+            });
+            self.state = MissionState::Yielding;
+        } else {
+            self.enter_replanning(ReplanCause::Robot);
+        }
+    }
+
+    /// Sets the cell holding map point `p` Occupied (an obstacle the laser or a bumper found).
+    fn mark_occupied(&self, map: &mut SharedMap<N>, p: Point2) {
+        if let Some(i) = map
+            .grid
+            .geometry()
+            .cell_at(p)
+            .and_then(|c| map.grid.geometry().index(c))
+        {
+            map.grid.set_class(i, CellClass::Occupied, &mut map.trav);
+        }
+    }
+
+    /// Weakens any Occupied evidence under the robot's body and along its recent trail: the
+    /// robot stood there, so another robot's scan saw this robot, not a wall.
+    fn clear_own_trail(&self, map: &mut SharedMap<N>) {
+        let geom = *map.grid.geometry();
+        let r = self.config.safety.footprint.radius_m + 0.5 * geom.resolution_m;
+        let span = math::ceil(r / geom.resolution_m) as i32;
+        let weak_free = self.config.sensor.free_log_odds;
+        let here = self.pose_map.position();
+        for p in core::iter::once(here).chain(self.trail.iter().copied()) {
+            let c = geom.cell_at_unchecked(p);
+            for row in c.row - span..=c.row + span {
+                for col in c.col - span..=c.col + span {
+                    let cell = Cell::new(col, row);
+                    let Some(i) = geom.index(cell) else { continue };
+                    if geom.cell_center(cell).distance(p) > r {
+                        continue;
+                    }
+                    if map.grid.log_odds_at(i) > weak_free {
+                        map.grid.set_log_odds(i, weak_free, &mut map.trav);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Writes this robot's mark (pose and remaining path) on the shared map.
+    fn publish(&self, now: Time, map: &mut SharedMap<N>) -> Result<(), MissionError> {
+        let path = self.follower.path();
+        let from = self.follower.current_index().min(path.len());
+        let remaining: &[Point2] = if from < path.len() {
+            &path[from..]
+        } else {
+            &self.targets
+        };
+        map.mark(self.id, self.pose_map, now, remaining)
+    }
+
+    /// The decision request from `pose`, with the start moved onto the nearest passable cell
+    /// if the robot's own cell is inflated.
+    fn start_pose(&self, map: &SharedMap<N>, pose: Pose2) -> Pose2 {
+        let geom = *map.trav.geometry();
+        let c = geom.cell_at_unchecked(pose.position());
+        if map.trav.is_passable(c) {
+            return pose;
+        }
+        let span = math::ceil(START_SNAP_M / geom.resolution_m) as i32;
+        let mut best: Option<(f32, Cell)> = None;
+        for row in c.row - span..=c.row + span {
+            for col in c.col - span..=c.col + span {
+                let cell = Cell::new(col, row);
+                if !map.trav.is_passable(cell) {
+                    continue;
+                }
+                let d = geom.cell_center(cell).distance(pose.position());
+                if d <= START_SNAP_M && best.is_none_or(|(b, _)| d < b) {
+                    best = Some((d, cell));
+                }
+            }
+        }
+        match best {
+            Some((_, cell)) => {
+                let p = geom.cell_center(cell);
+                Pose2::new(p.x, p.y, pose.theta)
+            }
+            None => pose,
+        }
+    }
+
+    fn explore_config(&self) -> ExploreConfig {
+        self.config.explore
+    }
+
+    /// Runs the configured selector from `pose`.
+    fn run_selector<R: rand_core::Rng>(
+        &self,
+        pose: Pose2,
+        map: &SharedMap<N>,
+        ws: &mut Workspace<N>,
+        rng: &mut R,
+    ) -> Result<Outcome, DecideError> {
+        let req = DecisionRequest {
+            grid: &map.grid,
+            trav: &map.trav,
+            pose: self.start_pose(map, pose),
+            battery_steps: self.battery_steps,
+            laser: &self.config.laser,
+        };
+        let config = self.explore_config();
+        let (mut objective, frontier) = ws.parts();
+        match self.config.selector {
+            SelectorKind::Optimized(method) => {
+                Optimized::new(method, config, &mut objective).decide(&req, rng)
+            }
+            SelectorKind::NearestFrontier => {
+                NearestFrontier::new(config, &mut objective, frontier).decide(&req, rng)
+            }
+            SelectorKind::FrontierUtility => {
+                let mut s = FrontierUtility::new(config, &mut objective, frontier);
+                s.blacklist_radius_m = BLACKLIST_RADIUS_M;
+                for &(p, _) in &self.blacklist {
+                    s.blacklist(&map.grid, p)?;
+                }
+                s.decide(&req, rng)
+            }
+        }
+    }
+
+    /// Plans a path from `pose` through `targets` on the current map.
+    fn plan_to(
+        &self,
+        pose: Pose2,
+        targets: &[Point2],
+        map: &SharedMap<N>,
+        ws: &mut Workspace<N>,
+    ) -> Result<heapless::Vec<Point2, MAX_WAYPOINTS>, CandidateStatus> {
+        let req = DecisionRequest {
+            grid: &map.grid,
+            trav: &map.trav,
+            pose: self.start_pose(map, pose),
+            battery_steps: self.battery_steps,
+            laser: &self.config.laser,
+        };
+        let config = ExploreConfig {
+            targets: targets.len().clamp(1, MAX_TARGETS),
+            // A replan must only fit the battery, not keep the reserve a new decision keeps.
+            reserve_steps: 0.0,
+            ..self.config.explore
+        };
+        let (mut objective, _) = ws.parts();
+        objective
+            .prepare(&req, &config)
+            .map_err(|_| CandidateStatus::Unreachable)?;
+        let eval = objective.evaluate_targets(&req, targets);
+        if eval.status != CandidateStatus::Feasible {
+            return Err(eval.status);
+        }
+        let mut out = heapless::Vec::new();
+        let _ = out.extend_from_slice(objective.waypoints());
+        Ok(out)
+    }
+
+    /// Starts following `waypoints`; the first is dropped when the robot already stands on
+    /// it.
+    fn start_path(&mut self, now: Time, waypoints: &[Point2]) -> bool {
+        let tol = self.config.follower.position_tolerance_m;
+        let skip = waypoints.len() > 1 && waypoints[0].distance(self.pose_map.position()) <= tol;
+        let path = if skip { &waypoints[1..] } else { waypoints };
+        if self.follower.set_path(path).is_err() {
+            return false;
+        }
+        self.state = MissionState::Rotating;
+        self.plan_time = Some(now);
+        self.progress_index = usize::MAX;
+        self.path_dirty = false;
+        self.ack_pending = self.monitor.acknowledge_replan().is_err();
+        true
+    }
+
+    /// A decision (or the pending go-to goal). Returns whether the robot now has a path (or
+    /// the mission ended); `false`: try again next period.
+    fn decide<R: rand_core::Rng>(
+        &mut self,
+        now: Time,
+        map: &mut SharedMap<N>,
+        ws: &mut Workspace<N>,
+        rng: &mut R,
+        events: &mut Events<'_>,
+    ) -> bool {
+        self.yielding = None;
+        self.conflict_robot = None;
+        // Blacklist entries lapse once the map around them changed.
+        self.blacklist
+            .retain(|&(p, known)| known_around(&map.grid, p) == known);
+        if let Some(goal) = self.goal.take() {
+            return match self.plan_to(self.pose_map, &goal, map, ws) {
+                Ok(waypoints) => {
+                    let length = polyline_length(self.pose_map.position(), &waypoints);
+                    let decision = Decision {
+                        targets: goal,
+                        waypoints,
+                        path_length_m: length,
+                        predicted_gain_cells: 0,
+                        energy_steps: units::steps(length, 0.0),
+                        evaluations: 0,
+                        history: heapless::Vec::new(),
+                    };
+                    self.adopt(now, &decision, events)
+                }
+                Err(_) => {
+                    // Keep the goal and retry: another robot may be in the way.
+                    self.goal = Some(goal);
+                    self.failed(events)
+                }
+            };
+        }
+        // A decision computed ahead, if its path is still clear.
+        if let Some(ahead) = self.ahead.take() {
+            let mut d = ahead.decision;
+            if let Some(first) = d.waypoints.first_mut() {
+                *first = self.pose_map.position();
+            }
+            if first_blocked(
+                map,
+                self.pose_map.position(),
+                &d.waypoints,
+                self.clear_radius(),
+            )
+            .is_none()
+            {
+                events.stats.decisions_ahead_used += 1;
+                return self.adopt(now, &d, events);
+            }
+        }
+        let outcome = self.run_selector(self.pose_map, map, ws, rng);
+        match outcome {
+            Ok(Outcome::Go(d)) => {
+                let last = d.targets.last().copied();
+                let listed = self.config.selector != SelectorKind::FrontierUtility
+                    && last.is_some_and(|t| self.is_blacklisted(t));
+                if listed {
+                    return self.failed(events);
+                }
+                events.stats.fitness_evals += u64::from(d.evaluations);
+                self.adopt(now, &d, events)
+            }
+            Ok(Outcome::Done) => {
+                self.finish(DoneReason::NothingReachable, events);
+                true
+            }
+            Err(DecideError::NoFeasibleTarget { .. })
+                if self.battery_steps - self.config.explore.reserve_steps
+                    < self.config.low_battery_steps =>
+            {
+                self.finish(DoneReason::BatteryExhausted, events);
+                true
+            }
+            Err(DecideError::AllBlacklisted { .. }) => {
+                if self.failed_in_row + 1 >= self.config.max_failed_decisions {
+                    // Every frontier left is one the robot failed to reach.
+                    self.finish(DoneReason::NothingReachable, events);
+                    return true;
+                }
+                self.failed(events)
+            }
+            Err(_) => self.failed(events),
+        }
+    }
+
+    /// Counts a failed decision; after too many in a row the mission ends.
+    fn failed(&mut self, events: &mut Events<'_>) -> bool {
+        events.stats.failed_decisions += 1;
+        self.failed_in_row += 1;
+        if self.failed_in_row >= self.config.max_failed_decisions {
+            let low = self.battery_steps - self.config.explore.reserve_steps
+                < self.config.low_battery_steps;
+            let reason = if low {
+                DoneReason::BatteryExhausted
+            } else {
+                DoneReason::NothingReachable
+            };
+            self.finish(reason, events);
+            return true;
+        }
+        self.state = MissionState::Deciding;
+        false
+    }
+
+    fn adopt(&mut self, now: Time, d: &Decision, events: &mut Events<'_>) -> bool {
+        if !self.start_path(now, &d.waypoints) {
+            return self.failed(events);
+        }
+        self.targets.clear();
+        let _ = self.targets.extend_from_slice(&d.targets);
+        self.replans_this_decision = 0;
+        self.failed_in_row = 0;
+        events.stats.decisions += 1;
+        events.push(MissionEvent::Decided {
+            targets: d.targets.clone(),
+            path_length_m: d.path_length_m,
+            predicted_gain_cells: d.predicted_gain_cells,
+            energy_steps: d.energy_steps,
+            evaluations: d.evaluations,
+        });
+        true
+    }
+
+    fn is_blacklisted(&self, p: Point2) -> bool {
+        self.blacklist
+            .iter()
+            .any(|&(q, _)| q.distance(p) <= BLACKLIST_RADIUS_M)
+    }
+
+    /// Gives up the current targets: blacklists the last one and decides again.
+    fn abandon(&mut self, map: &SharedMap<N>, events: &mut Events<'_>) {
+        if let Some(&t) = self.targets.last() {
+            if self.blacklist.is_full() {
+                self.blacklist.remove(0);
+            }
+            let _ = self.blacklist.push((t, known_around(&map.grid, t)));
+            events.stats.abandoned_targets += 1;
+        }
+        self.targets.clear();
+        self.follower.clear();
+        self.ahead = None;
+        self.state = MissionState::Deciding;
+    }
+
+    /// A fresh path to the remaining targets from the current pose.
+    fn replan(
+        &mut self,
+        now: Time,
+        map: &mut SharedMap<N>,
+        ws: &mut Workspace<N>,
+        events: &mut Events<'_>,
+    ) {
+        if self.targets.is_empty() {
+            self.state = MissionState::Deciding;
+            return;
+        }
+        self.replans_this_decision += 1;
+        if self.replans_this_decision > self.config.max_replans_per_decision {
+            self.abandon(map, events);
+            return;
+        }
+        let targets = self.targets.clone();
+        match self.plan_to(self.pose_map, &targets, map, ws) {
+            Ok(waypoints) if self.start_path(now, &waypoints) => {
+                events.stats.replans += 1;
+                events.push(MissionEvent::Replanned {
+                    cause: self.replan_cause,
+                });
+                self.conflict_robot = None;
+            }
+            _ => {
+                // No way to the targets. If a robot is what blocks it, wait for it to step
+                // aside; else give the targets up.
+                if let Some(other) = self.conflict_robot.filter(|&o| o > self.id) {
+                    self.yielding = Some(Yield::Holding {
+                        other,
+                        retry_at: now + secs(RETRY_S),
+                        give_up_at: now + secs(4.0 * self.config.yield_wait_s + 10.0),
+                    });
+                    events.push(MissionEvent::Yielding {
+                        to_robot_ahead: true,
+                    });
+                    self.state = MissionState::Yielding;
+                    return;
+                }
+                self.abandon(map, events);
+            }
+        }
+    }
+
+    /// One period of yielding; `None` when the state changed and the machine should go on.
+    fn yield_step(
+        &mut self,
+        now: Time,
+        map: &mut SharedMap<N>,
+        ws: &mut Workspace<N>,
+        events: &mut Events<'_>,
+    ) -> Option<MotionCommand> {
+        let Some(y) = self.yielding else {
+            self.enter_replanning(ReplanCause::Robot);
+            return None;
+        };
+        match y {
+            Yield::Waiting { other, until } => {
+                if now < until {
+                    return Some(MotionCommand::ZERO);
+                }
+                // Around the other robot, if there is a way.
+                if let Ok(waypoints) = self.plan_to(self.pose_map, &self.targets.clone(), map, ws)
+                    && !self.targets.is_empty()
+                    && self.start_path(now, &waypoints)
+                {
+                    self.yielding = None;
+                    self.conflict_robot = None;
+                    events.stats.replans += 1;
+                    events.push(MissionEvent::Replanned {
+                        cause: ReplanCause::Robot,
+                    });
+                    return None;
+                }
+                // No way around: step out of its path.
+                let mark = map.robot(other).cloned();
+                let aside = mark.and_then(|m| self.place_aside(&m, map, ws));
+                match aside {
+                    Some(waypoints) if self.start_path(now, &waypoints) => {
+                        self.state = MissionState::Yielding;
+                        self.yielding = Some(Yield::SteppingAside { other, since: now });
+                        events.push(MissionEvent::Yielding {
+                            to_robot_ahead: false,
+                        });
+                        None
+                    }
+                    _ => {
+                        // Nowhere to go: wait some more, the other robot may move.
+                        self.yielding = Some(Yield::Waiting {
+                            other,
+                            until: now + secs(self.config.yield_wait_s),
+                        });
+                        self.replans_this_decision += 1;
+                        if self.replans_this_decision > self.config.max_replans_per_decision {
+                            self.yielding = None;
+                            self.abandon(map, events);
+                            return None;
+                        }
+                        Some(MotionCommand::ZERO)
+                    }
+                }
+            }
+            Yield::SteppingAside { other, since } => {
+                let (cmd, status) = self.follower.update(now, self.pose_map);
+                let timeout = secs(self.config.stuck_timeout_s);
+                if status == FollowStatus::Arrived || now.saturating_since(since) > timeout {
+                    self.follower.clear();
+                    self.yielding = Some(Yield::Clearing { other, since: now });
+                    return Some(MotionCommand::ZERO);
+                }
+                Some(cmd)
+            }
+            Yield::Clearing { other, since } => {
+                let passed = map.robot(other).is_none_or(|m| {
+                    let here = self.pose_map.position();
+                    m.pose.position().distance(here) >= ASIDE_DISTANCE_M
+                        && distance_to_path(here, m) >= ASIDE_CLEARANCE_M
+                });
+                let timeout =
+                    now.saturating_since(since) > secs(4.0 * self.config.yield_wait_s + 10.0);
+                if (passed && now.saturating_since(since) > secs(self.config.yield_wait_s))
+                    || timeout
+                {
+                    self.yielding = None;
+                    self.replans_this_decision = 0;
+                    self.enter_replanning(ReplanCause::Robot);
+                    return None;
+                }
+                Some(MotionCommand::ZERO)
+            }
+            Yield::Holding {
+                other,
+                retry_at,
+                give_up_at,
+            } => {
+                if now >= give_up_at {
+                    self.yielding = None;
+                    self.abandon(map, events);
+                    return None;
+                }
+                if now < retry_at {
+                    return Some(MotionCommand::ZERO);
+                }
+                let targets = self.targets.clone();
+                match self.plan_to(self.pose_map, &targets, map, ws) {
+                    Ok(waypoints) if self.start_path(now, &waypoints) => {
+                        self.yielding = None;
+                        self.conflict_robot = None;
+                        events.stats.replans += 1;
+                        events.push(MissionEvent::Replanned {
+                            cause: ReplanCause::Robot,
+                        });
+                        None
+                    }
+                    _ => {
+                        self.yielding = Some(Yield::Holding {
+                            other,
+                            retry_at: now + secs(RETRY_S),
+                            give_up_at,
+                        });
+                        Some(MotionCommand::ZERO)
+                    }
+                }
+            }
+        }
+    }
+
+    /// A path to the nearest reachable place out of `other`'s way: at least
+    /// `ASIDE_CLEARANCE_M` from its remaining path and `ASIDE_DISTANCE_M` from it.
+    fn place_aside(
+        &self,
+        other: &RobotMark,
+        map: &SharedMap<N>,
+        ws: &mut Workspace<N>,
+    ) -> Option<heapless::Vec<Point2, MAX_WAYPOINTS>> {
+        let start = self.start_pose(map, self.pose_map);
+        let req = DecisionRequest {
+            grid: &map.grid,
+            trav: &map.trav,
+            pose: start,
+            battery_steps: self.battery_steps,
+            laser: &self.config.laser,
+        };
+        let config = ExploreConfig {
+            targets: 1,
+            reserve_steps: 0.0,
+            ..self.config.explore
+        };
+        let (mut objective, _) = ws.parts();
+        objective.prepare(&req, &config).ok()?;
+        let geom = *map.grid.geometry();
+        let mut best: Option<(f32, Point2)> = None;
+        for i in 0..geom.cell_count() {
+            let cell = geom.cell(i);
+            let Some(d) = objective.field().distance_to(cell) else {
+                continue;
+            };
+            if best.is_some_and(|(b, _)| d >= b) || map.grid.class(i) != CellClass::Free {
+                continue;
+            }
+            let p = geom.cell_center(cell);
+            if p.distance(other.pose.position()) >= ASIDE_DISTANCE_M
+                && distance_to_path(p, other) >= ASIDE_CLEARANCE_M
+            {
+                best = Some((d, p));
+            }
+        }
+        let (_, target) = best?;
+        let eval = objective.evaluate_targets(&req, &[target]);
+        if eval.status != CandidateStatus::Feasible {
+            return None;
+        }
+        let mut out = heapless::Vec::new();
+        let _ = out.extend_from_slice(objective.waypoints());
+        Some(out)
+    }
+
+    fn clear_radius(&self) -> f32 {
+        self.config.safety.footprint.radius_m + 0.1
+    }
+
+    /// One period of path following; `None` when the state changed.
+    fn follow<R: rand_core::Rng>(
+        &mut self,
+        now: Time,
+        map: &mut SharedMap<N>,
+        ws: &mut Workspace<N>,
+        rng: &mut R,
+        events: &mut Events<'_>,
+    ) -> Option<MotionCommand> {
+        let here = self.pose_map.position();
+        // New obstacles across the remaining path (a door that closed, another robot).
+        if self.path_dirty {
+            self.path_dirty = false;
+            let from = self
+                .follower
+                .current_index()
+                .min(self.follower.path().len());
+            let remaining = &self.follower.path()[from..];
+            if let Some(p) = first_blocked(map, here, remaining, self.clear_radius()) {
+                match self.robot_at(map, now, p) {
+                    Some(other) => self.begin_conflict(now, other, events),
+                    None => self.enter_replanning(ReplanCause::PathBlocked),
+                }
+                return None;
+            }
+        }
+        // Progress toward the current waypoint.
+        let index = self.follower.current_index();
+        let dist = self
+            .follower
+            .current_waypoint()
+            .map_or(0.0, |w| w.distance(here));
+        if index != self.progress_index || dist < self.progress_best_m - PROGRESS_M {
+            self.progress_index = index;
+            self.progress_best_m = dist;
+            self.progress_time = now;
+        } else if now.saturating_since(self.progress_time) > secs(self.config.stuck_timeout_s) {
+            self.enter_replanning(ReplanCause::Stuck);
+            return None;
+        }
+        // The next decision, computed ahead near the end of the path.
+        if self.config.decide_while_driving
+            && self.ahead.is_none()
+            && self.goal.is_none()
+            && self.state == MissionState::Driving
+        {
+            let path = self.follower.path();
+            let from = self.follower.current_index().min(path.len());
+            let remaining = polyline_length(here, &path[from..]);
+            if remaining <= self.config.decide_ahead_m && path.len() >= 1 {
+                let end = path[path.len() - 1];
+                let before = if path.len() >= 2 {
+                    path[path.len() - 2]
+                } else {
+                    here
+                };
+                let heading = if before.distance(end) > 1e-3 {
+                    before.bearing_to(end)
+                } else {
+                    self.pose_map.theta
+                };
+                let pose = Pose2::new(end.x, end.y, heading);
+                if let Ok(Outcome::Go(d)) = self.run_selector(pose, map, ws, rng) {
+                    events.stats.decisions_ahead += 1;
+                    events.stats.fitness_evals += u64::from(d.evaluations);
+                    self.ahead = Some(Ahead { decision: d });
+                }
+            }
+        }
+        let (cmd, status) = self.follower.update(now, self.pose_map);
+        match status {
+            FollowStatus::WaypointReached(i) => {
+                events.stats.waypoints_reached += 1;
+                events.push(MissionEvent::WaypointReached { index: i });
+                let w = self.follower.path()[i];
+                if self.targets.first().is_some_and(|t| t.distance(w) < 1e-3) {
+                    self.targets.remove(0);
+                }
+            }
+            FollowStatus::Arrived => {
+                let last = self.follower.path().len().saturating_sub(1);
+                events.stats.waypoints_reached += 1;
+                events.push(MissionEvent::WaypointReached { index: last });
+                self.targets.clear();
+                self.follower.clear();
+                self.state = MissionState::Deciding;
+                return None;
+            }
+            FollowStatus::Rotating => self.state = MissionState::Rotating,
+            FollowStatus::Idle => {
+                self.state = MissionState::Deciding;
+                return None;
+            }
+            _ => self.state = MissionState::Driving,
+        }
+        Some(cmd)
+    }
+}
+
+fn secs(s: f32) -> Duration {
+    Duration::from_secs_f32(s.max(0.0))
+}
+
+/// Length of the polyline from `from` through `points` \[m\].
+fn polyline_length(from: Point2, points: &[Point2]) -> f32 {
+    let mut last = from;
+    let mut sum = 0.0;
+    for &p in points {
+        sum += last.distance(p);
+        last = p;
+    }
+    sum
+}
+
+/// Distance from `p` to the other robot's pose-and-path polyline \[m\].
+fn distance_to_path(p: Point2, other: &RobotMark) -> f32 {
+    let mut best = p.distance(other.pose.position());
+    let mut a = other.pose.position();
+    for &b in &other.path {
+        best = best.min(distance_to_segment(p, a, b));
+        a = b;
+    }
+    best
+}
+
+fn distance_to_segment(p: Point2, a: Point2, b: Point2) -> f32 {
+    let (dx, dy) = (b.x - a.x, b.y - a.y);
+    let len2 = dx * dx + dy * dy;
+    if len2 <= 1e-12 {
+        return p.distance(a);
+    }
+    let t = (((p.x - a.x) * dx + (p.y - a.y) * dy) / len2).clamp(0.0, 1.0);
+    p.distance(Point2::new(a.x + t * dx, a.y + t * dy))
+}
+
+/// The first blocked (Occupied or inflated) cell along the path from `here` through
+/// `waypoints`, ignoring cells within `clear_radius_m` of the robot (its own surroundings,
+/// which the safety monitor watches). Returns the cell's centre.
+fn first_blocked<const N: usize>(
+    map: &SharedMap<N>,
+    here: Point2,
+    waypoints: &[Point2],
+    clear_radius_m: f32,
+) -> Option<Point2> {
+    let geom = *map.trav.geometry();
+    let mut from = here;
+    for &to in waypoints {
+        let a = geom.cell_at_unchecked(from);
+        let b = geom.cell_at_unchecked(to);
+        let mut hit = None;
+        supercover(a, b, |c| {
+            let centre = geom.cell_center(c);
+            if centre.distance(here) <= clear_radius_m || !geom.contains(c) {
+                return true;
+            }
+            if map.trav.is_passable(c) {
+                true
+            } else {
+                hit = Some(centre);
+                false
+            }
+        });
+        if hit.is_some() {
+            return hit;
+        }
+        from = to;
+    }
+    None
+}
