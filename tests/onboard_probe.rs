@@ -86,17 +86,28 @@ fn probe_drive_runs_a_square_and_reports_the_odometry() {
     );
     let text = stdout_of(&out);
     assert_identity_and_status(&text);
-    let sides: Vec<&str> = text.lines().filter(|l| l.starts_with("square side")).collect();
+    let sides: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("square side"))
+        .collect();
     assert_eq!(sides.len(), 4, "{text}");
     // 0.5 m sides, 90° turns (counter-clockwise): the corners of a square.
-    let corners = [(500.0, 0.0, 90.0), (500.0, 500.0, 180.0), (0.0, 500.0, -90.0), (0.0, 0.0, 0.0)];
+    let corners = [
+        (500.0, 0.0, 90.0),
+        (500.0, 500.0, 180.0),
+        (0.0, 500.0, -90.0),
+        (0.0, 0.0, 0.0),
+    ];
     for (line, (cx, cy, ch)) in sides.iter().zip(corners) {
         let (x, y, h) = pose_after(line, "odometry ");
         assert!((x - cx).abs() < 80.0 && (y - cy).abs() < 80.0, "{line}");
         let dh = (h - ch + 540.0).rem_euclid(360.0) - 180.0;
         assert!(dh.abs() < 15.0, "{line}");
     }
-    let summary = text.lines().find(|l| l.starts_with("square: driven")).unwrap();
+    let summary = text
+        .lines()
+        .find(|l| l.starts_with("square: driven"))
+        .unwrap();
     let driven: f32 = summary.split_whitespace().nth(2).unwrap().parse().unwrap();
     assert!((driven - 2.0).abs() < 0.2, "{summary}");
     std::fs::remove_dir_all(&dir).unwrap();

@@ -9,6 +9,7 @@
 //! - [`robot`]: the ARCOS client session (handshake, CONFIG check, HOSTBAUD, keep-alive, safe
 //!   stop);
 //! - [`laser`]: the LMS1xx client session;
+//! - [`mission`]: the core mission on its own thread, as the runtime's mission driver;
 //! - [`persist`]: atomic saving and loading of the mission state, telemetry;
 //! - [`runtime`]: `papillon run` and `papillon probe`.
 
@@ -16,6 +17,7 @@ pub mod arcos;
 pub mod codec;
 pub mod laser;
 pub mod link;
+pub mod mission;
 pub mod persist;
 pub mod robot;
 pub mod runtime;

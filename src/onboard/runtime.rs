@@ -37,12 +37,25 @@ pub fn laser_codec() -> Option<Box<dyn LaserCodec>> {
     Some(Box::new(super::codec::WireLms1xx::default()))
 }
 
-/// INTEGRATION POINT 2: the mission state machine for a board, resumed from `resume` if given.
+/// The core mission for a board ([`super::mission::CoreMission`]), resumed from `resume` if
+/// given. An error names the board field (or the saved state) that prevents it.
 pub fn mission_driver(
-    _board: &BoardConfig,
-    _resume: Option<&(MissionState, Option<MapImage>)>,
-) -> Option<Box<dyn MissionDriver>> {
-    None
+    board: &BoardConfig,
+    resume: Option<&(MissionState, Option<MapImage>)>,
+) -> Result<Option<Box<dyn MissionDriver>>, String> {
+    let mission = super::mission::CoreMission::new(board, resume)?;
+    Ok(Some(Box::new(mission)))
+}
+
+/// A telemetry line a mission wants written (`{"t_s", "kind", ...fields}`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TelemetryRecord {
+    /// Mission time \[s\].
+    pub t_s: f64,
+    /// The record's kind (`decision`, `replan`, `done`, ...).
+    pub kind: &'static str,
+    /// Its fields (a JSON object).
+    pub fields: serde_json::Value,
 }
 
 /// What the mission asks the robot to do after a step.
@@ -77,6 +90,10 @@ pub trait MissionDriver: Send {
     fn step(&mut self, t_s: f64) -> MissionCommand;
     /// The state to save.
     fn snapshot(&self) -> (MissionState, Option<MapImage>);
+    /// Telemetry lines produced since the last call (decisions with their compute time...).
+    fn take_telemetry(&mut self) -> Vec<TelemetryRecord> {
+        Vec::new()
+    }
 }
 
 /// Errors of `papillon run` / `probe`.
@@ -95,6 +112,8 @@ pub enum RuntimeError {
     Persist(PersistError),
     /// `--resume` found no saved mission.
     NothingToResume(PathBuf),
+    /// The mission could not be set up (names the board field or the saved state).
+    Mission(String),
 }
 
 impl std::fmt::Display for RuntimeError {
@@ -108,6 +127,7 @@ impl std::fmt::Display for RuntimeError {
             RuntimeError::Session(e) => write!(f, "{e}"),
             RuntimeError::Laser(e) => write!(f, "{e}"),
             RuntimeError::Persist(e) => write!(f, "{e}"),
+            RuntimeError::Mission(e) => write!(f, "{e}"),
             RuntimeError::NothingToResume(dir) => {
                 write!(f, "--resume: no saved mission in {}", dir.display())
             }
@@ -247,7 +267,7 @@ pub async fn run_with(
     make_mission: impl FnOnce(
         &BoardConfig,
         Option<&(MissionState, Option<MapImage>)>,
-    ) -> Option<Box<dyn MissionDriver>>,
+    ) -> Result<Option<Box<dyn MissionDriver>>, String>,
     shutdown: impl std::future::Future<Output = ()>,
 ) -> Result<RunOutcome, RuntimeError> {
     let board = &options.board;
@@ -271,7 +291,13 @@ pub async fn run_with(
     let mut shutdown = std::pin::pin!(shutdown);
     let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
     let mut client = connect_robot(board, codec).await?;
-    let mission = make_mission(board, resumed.as_ref());
+    let mission = match make_mission(board, resumed.as_ref()) {
+        Ok(m) => m,
+        Err(e) => {
+            let _ = client.stop_and_close().await;
+            return Err(RuntimeError::Mission(e));
+        }
+    };
     let outcome = match mission {
         None => {
             // INTEGRATION POINT 2: no mission in this build. Check the laser start-up too
@@ -475,6 +501,9 @@ pub async fn pump(
             stop_for(client, mission, telemetry, t(now), Fault::StaleScan).await?;
         } else if client.fault().is_some() && mission.replanned() {
             client.clear_fault();
+        }
+        for r in mission.take_telemetry() {
+            telemetry.record(r.t_s, r.kind, r.fields)?;
         }
         match mission.step(t(now)) {
             MissionCommand::Done => return Ok(RunOutcome::Finished),
@@ -713,7 +742,7 @@ mod tests {
             },
             || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
             || None,
-            |_, _| None,
+            |_, _| Ok(None),
             std::future::pending(),
         )
         .await
@@ -757,7 +786,7 @@ mod tests {
             },
             || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
             || None,
-            |_, _| None,
+            |_, _| Ok(None),
             std::future::pending(),
         )
         .await
@@ -777,7 +806,7 @@ mod tests {
             },
             || None,
             || None,
-            |_, _| None,
+            |_, _| Ok(None),
             std::future::pending(),
         )
         .await
@@ -1166,11 +1195,11 @@ mod reconnect_tests {
             || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
             || Some(Box::new(ByteCodec::default()) as Box<dyn LaserCodec>),
             |_, _| {
-                Some(Box::new(Mission {
+                Ok(Some(Box::new(Mission {
                     faults: Vec::new(),
                     fault_at: None,
                     now_s: 0.0,
-                }) as Box<dyn MissionDriver>)
+                }) as Box<dyn MissionDriver>))
             },
             std::future::pending(),
         )

@@ -24,7 +24,14 @@ pub fn sim_binary() -> &'static Path {
             Some(p) => p.to_string(),
         };
         let status = Command::new(env!("CARGO"))
-            .args(["build", "--quiet", "-p", "papillon-sim", "--bin", "papillon-sim"])
+            .args([
+                "build",
+                "--quiet",
+                "-p",
+                "papillon-sim",
+                "--bin",
+                "papillon-sim",
+            ])
             .args(["--profile", &profile])
             .env("CARGO_TARGET_DIR", target)
             .current_dir(env!("CARGO_MANIFEST_DIR"))
