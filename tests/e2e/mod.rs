@@ -187,3 +187,149 @@ pub fn papillon(args: &[&str], cwd: &Path) -> Child {
         .spawn()
         .expect("start papillon")
 }
+
+/// A loopback TCP relay between `papillon` and an endpoint of the simulator, to cut a link or
+/// pause one direction, and to watch the robot's status packets on their way.
+pub struct Relay {
+    /// The address `papillon` connects to.
+    pub addr: String,
+    state: std::sync::Arc<RelayState>,
+}
+
+#[derive(Default)]
+struct RelayState {
+    /// While set, connections are closed and new ones refused.
+    cut: std::sync::atomic::AtomicBool,
+    /// While set, bytes from the simulator are dropped (the link stays up).
+    mute: std::sync::atomic::AtomicBool,
+    /// Bumped at each cut, so that open connections notice it.
+    generation: std::sync::atomic::AtomicU64,
+    /// (time, left wheel, right wheel, motors enabled) of each status packet relayed.
+    statuses: std::sync::Mutex<Vec<(Instant, i16, i16, bool)>>,
+}
+
+impl Relay {
+    /// Relays connections on a free loopback port to `target`; with `watch_arcos`, status
+    /// packets from the simulator are decoded and logged.
+    pub fn start(target: &str, watch_arcos: bool) -> Self {
+        use std::sync::atomic::Ordering;
+        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap().to_string();
+        let state = std::sync::Arc::new(RelayState::default());
+        let target = target.to_string();
+        let st = std::sync::Arc::clone(&state);
+        std::thread::spawn(move || {
+            for client in listener.incoming().flatten() {
+                if st.cut.load(Ordering::SeqCst) {
+                    drop(client);
+                    continue;
+                }
+                let Ok(server) = std::net::TcpStream::connect(&target) else {
+                    continue;
+                };
+                let generation = st.generation.load(Ordering::SeqCst);
+                for (from, to, downstream) in [
+                    (
+                        client.try_clone().unwrap(),
+                        server.try_clone().unwrap(),
+                        false,
+                    ),
+                    (server, client, true),
+                ] {
+                    let st = std::sync::Arc::clone(&st);
+                    let watch = downstream && watch_arcos;
+                    std::thread::spawn(move || pump(from, to, downstream, watch, generation, &st));
+                }
+            }
+        });
+        Self { addr, state }
+    }
+
+    /// Cuts the link (both directions closed, reconnections refused) until [`Relay::restore`].
+    pub fn cut(&self) {
+        use std::sync::atomic::Ordering;
+        self.state.cut.store(true, Ordering::SeqCst);
+        self.state.generation.fetch_add(1, Ordering::SeqCst);
+    }
+
+    /// Accepts connections again.
+    pub fn restore(&self) {
+        self.state
+            .cut
+            .store(false, std::sync::atomic::Ordering::SeqCst);
+    }
+
+    /// Drops (`true`) or relays (`false`) what the simulator sends.
+    pub fn mute(&self, on: bool) {
+        self.state
+            .mute
+            .store(on, std::sync::atomic::Ordering::SeqCst);
+    }
+
+    /// The status packets relayed so far: (time, left and right wheel velocities \[mm/s\],
+    /// motors enabled).
+    pub fn statuses(&self) -> Vec<(Instant, i16, i16, bool)> {
+        self.state.statuses.lock().unwrap().clone()
+    }
+}
+
+fn pump(
+    mut from: std::net::TcpStream,
+    mut to: std::net::TcpStream,
+    downstream: bool,
+    watch: bool,
+    generation: u64,
+    st: &RelayState,
+) {
+    use papillon::wire::arcos::{FrameDecoder, ServerPacket};
+    use std::io::Write;
+    use std::sync::atomic::Ordering;
+    let _ = from.set_read_timeout(Some(Duration::from_millis(20)));
+    let mut decoder = FrameDecoder::new();
+    let mut buf = [0u8; 4096];
+    loop {
+        if st.generation.load(Ordering::SeqCst) != generation {
+            let _ = from.shutdown(std::net::Shutdown::Both);
+            let _ = to.shutdown(std::net::Shutdown::Both);
+            return;
+        }
+        let n = match from.read(&mut buf) {
+            Ok(0) => {
+                let _ = to.shutdown(std::net::Shutdown::Both);
+                return;
+            }
+            Ok(n) => n,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                continue;
+            }
+            Err(_) => {
+                let _ = to.shutdown(std::net::Shutdown::Both);
+                return;
+            }
+        };
+        if watch {
+            let mut input = &buf[..n];
+            while let Some(frame) = decoder.decode(&mut input) {
+                if let Ok(ServerPacket::Status(s)) = ServerPacket::parse(&frame) {
+                    st.statuses.lock().unwrap().push((
+                        Instant::now(),
+                        s.left_vel_mm_s,
+                        s.right_vel_mm_s,
+                        s.motors_enabled(),
+                    ));
+                }
+            }
+        }
+        if downstream && st.mute.load(Ordering::SeqCst) {
+            continue;
+        }
+        if to.write_all(&buf[..n]).is_err() {
+            return;
+        }
+    }
+}
