@@ -6,9 +6,9 @@
 //! ([`CoreMission`]) only posts inputs and picks up results, never waits for the thread:
 //! - status packets become odometry ([`ArcosOdometry`] over the SIP's XPOS/YPOS/THPOS) and
 //!   [`RobotFlags`] (STALL AND BUMPERS, FLAGS);
-//! - scans are integrated into the shared map (when several scans queued up while the thread
-//!   was deciding, only the newest before each status packet is integrated: the robot stood
-//!   still meanwhile);
+//! - scans are integrated into the shared map, the first one after each status packet and
+//!   only if it came within [`SCAN_WINDOW_S`] (or one laser period) of it: a scan is placed
+//!   at the latest odometry pose, and a stale pose smears the map while the robot turns;
 //! - the mission steps once per control period ([`CONTROL_PERIOD_S`], the P3-DX's SIP cycle);
 //!   each new command is handed to the runtime once; between periods the runtime is told to
 //!   hold (nothing re-sent, so a slow serial link is not flooded). If the thread has produced
@@ -56,6 +56,9 @@ pub const GRID_CELLS: usize = 1 << 18;
 pub const CONTROL_PERIOD_S: f64 = 0.1;
 /// With no new command for this long after a moving one, the runtime is told to stop \[s\].
 pub const BUSY_STOP_S: f64 = 0.3;
+/// A scan is integrated only if it arrives within this long after a status packet (or one
+/// laser period, if longer) \[s\].
+pub const SCAN_WINDOW_S: f64 = 0.04;
 /// The state to save is published at least this often \[s of mission time\].
 pub const PUBLISH_EVERY_S: f64 = 1.0;
 /// After `--resume`, odometry within this distance of the saved odometry counts as continued
@@ -222,6 +225,8 @@ impl CoreMission {
             force_fault: false,
             last_flags: RobotFlags::nominal(),
             last_status_s: 0.0,
+            scan_taken: false,
+            scan_window_s: SCAN_WINDOW_S.max(1.0 / f64::from(board.laser.rate_hz.max(1.0))),
             trajectory_step_m: 0.1,
         };
         std::thread::Builder::new()
@@ -337,6 +342,10 @@ struct Worker {
     force_fault: bool,
     last_flags: RobotFlags,
     last_status_s: f64,
+    /// A scan was integrated since the last status packet.
+    scan_taken: bool,
+    /// How soon after a status packet a scan must arrive to be integrated \[s\].
+    scan_window_s: f64,
     trajectory_step_m: f32,
 }
 
@@ -345,17 +354,7 @@ impl Worker {
         while let Ok(first) = rx.recv() {
             let mut batch = vec![first];
             batch.extend(rx.try_iter());
-            // Of scans queued back to back, only the newest is integrated.
-            let superseded: Vec<bool> = (0..batch.len())
-                .map(|i| {
-                    matches!(batch[i], Input::Scan(..))
-                        && matches!(batch.get(i + 1), Some(Input::Scan(..)))
-                })
-                .collect();
-            for (input, superseded) in batch.into_iter().zip(superseded) {
-                if superseded {
-                    continue;
-                }
+            for input in batch {
                 if let Err(e) = self.handle(input) {
                     lock(&self.out).error = Some(e);
                     return;
@@ -375,6 +374,7 @@ impl Worker {
                     .update(status.x_pos, status.y_pos, status.th_pos);
                 self.last_flags = RobotFlags::from_sip(status.stall_bumpers, status.flags);
                 self.last_status_s = t_s;
+                self.scan_taken = false;
                 let start = self.start_pose(pose_odom);
                 let mission = match &mut self.mission {
                     Some(m) => m,
@@ -391,6 +391,14 @@ impl Worker {
                 mission.on_odometry(time(t_s), pose_odom, flags);
             }
             Input::Scan(t_s, scan) => {
+                // Only the first scan after each status packet is integrated, and only if it
+                // came soon after it: a scan is placed at the latest odometry pose, so the
+                // older that pose, the more a turning robot smears the map.
+                let fresh = t_s - self.last_status_s <= self.scan_window_s;
+                if self.scan_taken || !fresh {
+                    return Ok(());
+                }
+                self.scan_taken = true;
                 if let Some(m) = &mut self.mission {
                     m.on_scan(time(t_s), &scan, &mut self.map)
                         .map_err(|e| format!("scan integration: {e}"))?;
