@@ -21,6 +21,7 @@ use tokio::time::Instant;
 use super::arcos::{ArcosCodec, RobotStatus};
 use super::laser::{LaserCodec, Lms1xxClient};
 use super::link::{Backoff, TcpLink, connect_with_backoff, open_robot_link};
+use super::lms200::Lms200Client;
 use super::persist::{MapImage, MissionState, PersistError, STATE_VERSION, StateStore, Telemetry};
 use super::robot::{ArcosClient, Fault, MotionLimits, SessionError, SessionOptions};
 use crate::config::{BoardConfig, LaserModel};
@@ -224,11 +225,40 @@ pub async fn connect_robot(
     Ok(client)
 }
 
+/// A laser session: an LMS1xx over TCP or an LMS200 over a serial port.
+pub enum LaserClient {
+    /// SICK LMS1xx, CoLa-A over TCP.
+    Lms1xx(Lms1xxClient),
+    /// SICK LMS200 over RS-232.
+    Lms200(Lms200Client),
+}
+
+impl LaserClient {
+    /// The next scan and its arrival time, or `None` at `deadline`.
+    pub async fn next_scan(
+        &mut self,
+        deadline: Instant,
+    ) -> Result<Option<(Instant, Scan)>, super::laser::LaserError> {
+        match self {
+            LaserClient::Lms1xx(c) => c.next_scan(deadline).await,
+            LaserClient::Lms200(c) => c.next_scan(deadline).await,
+        }
+    }
+
+    /// Stops the scans and closes the link.
+    pub async fn close(self) -> Result<(), super::laser::LaserError> {
+        match self {
+            LaserClient::Lms1xx(c) => c.close().await,
+            LaserClient::Lms200(c) => c.close().await,
+        }
+    }
+}
+
 /// Connects the laser the board names.
 pub async fn connect_laser(
     board: &BoardConfig,
     codec: Box<dyn LaserCodec>,
-) -> Result<Lms1xxClient, RuntimeError> {
+) -> Result<LaserClient, RuntimeError> {
     match board.laser_model() {
         Some(LaserModel::Lms1xx) => {
             let addr = board
@@ -245,11 +275,32 @@ pub async fn connect_laser(
             .await?;
             Lms1xxClient::connect(Box::new(link), codec, board.laser_config())
                 .await
+                .map(LaserClient::Lms1xx)
                 .map_err(RuntimeError::Laser)
         }
-        // INTEGRATION POINT 1: the LMS200 session (serial link at 9600 baud, then the
-        // board's speed) awaits `crate::wire::lms200`.
-        _ => Err(RuntimeError::NoCodec("LMS200")),
+        _ => {
+            let port = board
+                .laser
+                .port
+                .as_ref()
+                .map(|p| p.as_str().to_string())
+                .ok_or_else(|| {
+                    RuntimeError::Laser(super::laser::LaserError::Lms200(
+                        "$.laser.port: the serial device of the LMS200 is missing".into(),
+                    ))
+                })?;
+            let baud = board.laser.baud.unwrap_or(super::lms200::POWER_UP_BAUD);
+            let link = connect_with_backoff(
+                Backoff::default(),
+                || open_robot_link(None, &port, super::lms200::POWER_UP_BAUD),
+                |attempt, e| tracing::warn!(attempt, error = %e, "laser not available, retrying"),
+            )
+            .await?;
+            Lms200Client::connect(link, board.laser_config(), baud)
+                .await
+                .map(LaserClient::Lms200)
+                .map_err(RuntimeError::Laser)
+        }
     }
 }
 
@@ -428,7 +479,7 @@ pub struct Records<'a> {
 pub async fn pump(
     board: &BoardConfig,
     client: &mut ArcosClient,
-    laser: &mut Lms1xxClient,
+    laser: &mut LaserClient,
     mission: &mut dyn MissionDriver,
     records: Records<'_>,
     epoch: Instant,
@@ -913,7 +964,7 @@ mod pump_tests {
 
     struct Rig {
         client: ArcosClient,
-        laser: Lms1xxClient,
+        laser: LaserClient,
         log: CommandLog,
         board: BoardConfig,
         store: StateStore,
@@ -944,13 +995,15 @@ mod pump_tests {
         tokio::spawn(streaming_laser(lpeer, Duration::from_millis(100), dropout));
         let mut laser_config = board.laser_config();
         laser_config.beam_count = 3;
-        let laser = Lms1xxClient::connect(
-            Box::new(llink),
-            Box::new(ByteCodec::default()),
-            laser_config,
-        )
-        .await
-        .unwrap();
+        let laser = LaserClient::Lms1xx(
+            Lms1xxClient::connect(
+                Box::new(llink),
+                Box::new(ByteCodec::default()),
+                laser_config,
+            )
+            .await
+            .unwrap(),
+        );
         let dir = std::env::temp_dir().join(format!("papillon-pump-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         Rig {
