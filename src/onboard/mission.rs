@@ -9,8 +9,9 @@
 //! - scans are integrated into the shared map, the first one after each status packet and
 //!   only if it came within [`SCAN_WINDOW_S`] (or one laser period) of it: a scan is placed
 //!   at the latest odometry pose, and a stale pose smears the map while the robot turns;
-//! - the mission steps once per control period ([`CONTROL_PERIOD_S`], the P3-DX's SIP cycle);
-//!   each new command is handed to the runtime once; between periods the runtime is told to
+//! - the mission steps right after each status packet (at most every [`MIN_STEP_S`], at least
+//!   every [`STEP_FALLBACK_S`]), so a command is computed from the freshest pose; each new
+//!   command is handed to the runtime once; between periods the runtime is told to
 //!   hold (nothing re-sent, so a slow serial link is not flooded). If the thread has produced
 //!   no command for [`BUSY_STOP_S`] while the last one moved the robot, the runtime is told to
 //!   stop: a stale velocity is never kept;
@@ -52,8 +53,11 @@ use crate::sensor::Scan;
 
 /// Cells the onboard grid can hold (512 x 512: 51 m square at 10 cm).
 pub const GRID_CELLS: usize = 1 << 18;
-/// The mission's control period \[s\] (the P3-DX sends a status packet every 100 ms).
-pub const CONTROL_PERIOD_S: f64 = 0.1;
+/// The mission steps after each status packet (the P3-DX sends one every 100 ms), at most
+/// this often \[s\]...
+pub const MIN_STEP_S: f64 = 0.05;
+/// ...and at least this often, status packets or not \[s\].
+pub const STEP_FALLBACK_S: f64 = 0.15;
 /// With no new command for this long after a moving one, the runtime is told to stop \[s\].
 pub const BUSY_STOP_S: f64 = 0.3;
 /// A scan is integrated only if it arrives within this long after a status packet (or one
@@ -168,11 +172,16 @@ struct Published {
 pub struct CoreMission {
     tx: Sender<Input>,
     out: Arc<Mutex<Published>>,
-    next_step_s: f64,
+    /// When the last step was asked for \[s\].
+    step_sent_s: f64,
+    /// A status packet arrived since then.
+    status_pending: bool,
     commands_seen: u64,
     last_command_s: f64,
     last_moving: bool,
     fault_at_s: Option<f64>,
+    /// The latest time `step` was called with \[s\].
+    last_step_s: f64,
     done: bool,
 }
 
@@ -186,7 +195,12 @@ impl CoreMission {
         board: &BoardConfig,
         resume: Option<&(SavedState, Option<MapImage>)>,
     ) -> Result<Self, String> {
-        let config = mission_config(board)?;
+        let mut config = mission_config(board)?;
+        if let Some((state, _)) = resume {
+            // The energy used before the restart is gone for good.
+            config.battery_steps =
+                (config.battery_steps - state.counters.energy_used_steps).max(0.0);
+        }
         let geometry = grid_geometry(board)?;
         let mut map = Map::new_boxed(geometry, &config).map_err(|e| format!("$.grid: {e}"))?;
         let mut saved = SavedState {
@@ -236,11 +250,13 @@ impl CoreMission {
         Ok(Self {
             tx,
             out,
-            next_step_s: 0.0,
+            step_sent_s: f64::NEG_INFINITY,
+            status_pending: false,
             commands_seen: 0,
             last_command_s: 0.0,
             last_moving: false,
             fault_at_s: None,
+            last_step_s: 0.0,
             done: false,
         })
     }
@@ -248,6 +264,7 @@ impl CoreMission {
 
 impl MissionDriver for CoreMission {
     fn on_status(&mut self, t_s: f64, status: &RobotStatus) {
+        self.status_pending = true;
         let _ = self.tx.send(Input::Status(t_s, *status));
     }
 
@@ -256,7 +273,8 @@ impl MissionDriver for CoreMission {
     }
 
     fn on_fault(&mut self, t_s: f64, _fault: Fault) {
-        self.fault_at_s = Some(t_s);
+        // Only a plan made after the fault counts (the runtime may pass an older time).
+        self.fault_at_s = Some(t_s.max(self.last_step_s));
         let _ = self.tx.send(Input::Fault);
     }
 
@@ -271,8 +289,14 @@ impl MissionDriver for CoreMission {
         if self.done {
             return MissionCommand::Done;
         }
-        if t_s >= self.next_step_s {
-            self.next_step_s = t_s + CONTROL_PERIOD_S;
+        self.last_step_s = self.last_step_s.max(t_s);
+        // Step right after each status packet (the freshest pose, the least delay between
+        // measuring and commanding), or every STEP_FALLBACK_S without one (so the mission
+        // notices stale inputs).
+        let since = t_s - self.step_sent_s;
+        if (self.status_pending && since >= MIN_STEP_S) || since >= STEP_FALLBACK_S {
+            self.status_pending = false;
+            self.step_sent_s = t_s;
             let _ = self.tx.send(Input::Step(t_s));
         }
         let (command, commands) = {

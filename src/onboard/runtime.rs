@@ -304,6 +304,46 @@ pub async fn connect_laser(
     }
 }
 
+/// Whether a failed (re)connection may succeed if tried again: the link or the session
+/// broke, as opposed to a robot or a board that does not fit.
+fn worth_retrying(e: &RuntimeError) -> bool {
+    match e {
+        RuntimeError::Link(_) | RuntimeError::Laser(_) => true,
+        RuntimeError::Session(s) => matches!(
+            s,
+            SessionError::Io(_)
+                | SessionError::Closed
+                | SessionError::HandshakeFailed { .. }
+                | SessionError::NoConfig
+                | SessionError::MicrocontrollerReset { .. }
+        ),
+        _ => false,
+    }
+}
+
+/// Runs `connect` (link and session start-up) until it succeeds, with the default back-off
+/// between attempts: a link that comes back may still drop the first sessions (a robot
+/// rebooting, a bridge reconnecting).
+async fn retry_session<T, F, Fut>(what: &str, mut connect: F) -> Result<T, RuntimeError>
+where
+    F: FnMut() -> Fut,
+    Fut: std::future::Future<Output = Result<T, RuntimeError>>,
+{
+    let policy = Backoff::default();
+    let mut attempt = 1;
+    loop {
+        match connect().await {
+            Ok(c) => return Ok(c),
+            Err(e) if worth_retrying(&e) && attempt < policy.max_attempts => {
+                tracing::warn!(attempt, error = %e, "{what} session not re-established, retrying");
+                tokio::time::sleep(policy.delay(attempt)).await;
+                attempt += 1;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+}
+
 /// Link losses `run` recovers from (reconnecting with back-off each time) before giving up.
 pub const MAX_RECONNECTS: u32 = 20;
 
@@ -430,14 +470,20 @@ pub async fn run_with(
                 )?;
                 let reconnect = async {
                     if robot_lost {
-                        let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
-                        client = connect_robot(board, codec).await?;
+                        client = retry_session("robot", || async {
+                            let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
+                            connect_robot(board, codec).await
+                        })
+                        .await?;
                         // Motion stays refused until the mission has re-planned.
                         client.halt(Fault::Link).await?;
                     } else {
                         let _ = client.halt(Fault::Link).await;
-                        let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
-                        laser_client = connect_laser(board, codec).await?;
+                        laser_client = retry_session("laser", || async {
+                            let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
+                            connect_laser(board, codec).await
+                        })
+                        .await?;
                     }
                     Ok::<(), RuntimeError>(())
                 };
