@@ -317,3 +317,31 @@ fn a_mission_survives_corruption_a_laser_dropout_and_a_link_cut() {
     assert!(bad > 0, "corruption reached the decoder");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The manual check of the user guide: the same mission on the 24 m x 24 m `house`. Run with
+/// `cargo test -p papillon --test onboard_mission -- --ignored --nocapture house`; it prints the
+/// coverage and the durations.
+#[test]
+#[ignore = "manual check: a house mission takes many minutes"]
+fn house_mission_manual_check() {
+    let sim = Sim::start("house", None, &[]);
+    let dir = temp_dir("mission-house");
+    let log = dir.join("log");
+    let began = Instant::now();
+    let out = wait_bounded(
+        run(&sim.arcos_tcp(), &sim.laser(), &log, false),
+        Duration::from_secs(3600),
+    );
+    assert_exit_0(&out);
+    let (state, map) = saved(&log);
+    let house = World::load("house", MAP_RESOLUTION_M).unwrap();
+    eprintln!(
+        "house mission: coverage {:.1} % in {:.0} s wall, {:.0} s mission time, {} decisions, {:.1} m, finished {}",
+        coverage(&house, &map) * 100.0,
+        began.elapsed().as_secs_f64(),
+        state.mission_time_s,
+        state.counters.decisions,
+        state.counters.distance_m,
+        state.finished
+    );
+}
