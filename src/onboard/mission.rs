@@ -129,7 +129,10 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
         whole(r.rot_accel_deg_s2),
         whole(r.rot_accel_deg_s2),
     );
-    config.traversability.robot_radius_m = r.radius_m;
+    // Plan with the safety distance on top of the radius: a path the safety monitor would
+    // refuse (a return inside `obstacle_stop_m` of the robot's edge) is never planned, so the
+    // robot does not stop and re-plan the same path again and again.
+    config.traversability.robot_radius_m = r.radius_m + board.safety.obstacle_stop_m;
     let f = &mut config.follower;
     f.cruise_speed_mm_s = f.cruise_speed_mm_s.min(r.max_speed_mm_s);
     f.max_turn_rate_deg_s = f.max_turn_rate_deg_s.min(r.max_turn_rate_deg_s);
