@@ -190,21 +190,12 @@ fn answered_request(reply: &Reply) -> Option<LaserRequest> {
 }
 
 /// The LMS1xx client codec over [`crate::wire::lms1xx`].
+#[derive(Default)]
 pub struct WireLms1xx {
     decoder: Box<ColaDecoder>,
     /// The last request sent: an `sFA` refusal answers it.
     last_request: Option<LaserRequest>,
     bad_telegrams: u64,
-}
-
-impl Default for WireLms1xx {
-    fn default() -> Self {
-        Self {
-            decoder: Box::default(),
-            last_request: None,
-            bad_telegrams: 0,
-        }
-    }
 }
 
 impl WireLms1xx {
@@ -243,10 +234,7 @@ impl LaserCodec for WireLms1xx {
 
     fn decode(&mut self, bytes: &[u8], laser: &LaserConfig, out: &mut Vec<LaserReply>) {
         let mut input = bytes;
-        loop {
-            let Some(payload) = self.decoder.decode(&mut input) else {
-                break;
-            };
+        while let Some(payload) = self.decoder.decode(&mut input) {
             // Copy out: the decoder's buffer is borrowed until the next call.
             let payload = payload.to_vec();
             match self.reply(&payload, laser) {

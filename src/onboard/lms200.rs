@@ -70,7 +70,7 @@ pub struct Lms200Client {
 enum Reply {
     Ack,
     Nack,
-    Telegram(Response),
+    Telegram(Box<Response>),
     Bad,
 }
 
@@ -155,10 +155,12 @@ impl Lms200Client {
                 Some(Reply::Nack) => {
                     return Err(LaserError::Lms200("the LMS200 answered NACK".into()));
                 }
-                Some(Reply::Telegram(Response::MeasuredValues(_)))
-                | Some(Reply::Ack)
-                | Some(Reply::Bad) => {}
-                Some(Reply::Telegram(r)) => return Ok(r),
+                Some(Reply::Ack) | Some(Reply::Bad) => {}
+                Some(Reply::Telegram(r)) => {
+                    if !matches!(*r, Response::MeasuredValues(_)) {
+                        return Ok(*r);
+                    }
+                }
             }
         }
     }
@@ -188,7 +190,7 @@ impl Lms200Client {
                     Event::Ack => Reply::Ack,
                     Event::Nack => Reply::Nack,
                     Event::Telegram(t) => match Response::parse(&t) {
-                        Ok(r) => Reply::Telegram(r),
+                        Ok(r) => Reply::Telegram(Box::new(r)),
                         Err(_) => Reply::Bad,
                     },
                 });
@@ -204,7 +206,10 @@ impl Lms200Client {
         loop {
             match self.next(deadline).await? {
                 None => return Ok(None),
-                Some(Reply::Telegram(Response::MeasuredValues(m))) => {
+                Some(Reply::Telegram(r)) => {
+                    let Response::MeasuredValues(m) = *r else {
+                        continue;
+                    };
                     let mut scan = Scan::new();
                     if m.to_scan(
                         self.variant.first_angle_rad(),
