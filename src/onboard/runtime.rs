@@ -540,6 +540,7 @@ pub async fn pump(
     let mut last_status = start;
     let mut last_scan = start;
     let mut next_save = start + save_every;
+    let mut in_contact = false;
     loop {
         let now = Instant::now();
         // The signal is checked between events (at least every `tick`), never by cancelling
@@ -558,15 +559,19 @@ pub async fn pump(
         if let Some(super::robot::RobotEvent::Status { at, status }) = event {
             last_status = at;
             mission.on_status(t(at), &status);
-            let fault = if status.estop() {
-                Some(Fault::EStop)
-            } else if status.stalled() || status.bumped() {
-                Some(Fault::Contact)
-            } else {
-                None
-            };
-            if let Some(f) = fault {
-                stop_for(client, mission, telemetry, t(at), f).await?;
+            // A wheel stall or a bumper is the mission's to handle: its safety monitor stops
+            // and backs off before re-planning (a stop here would cut that back-off short).
+            let contact = status.stalled() || status.bumped();
+            if contact && !in_contact {
+                telemetry.record(
+                    t(at),
+                    "contact",
+                    serde_json::json!({"stall_bumpers": status.stall_bumpers}),
+                )?;
+            }
+            in_contact = contact;
+            if status.estop() {
+                stop_for(client, mission, telemetry, t(at), Fault::EStop).await?;
             }
         }
         match laser
