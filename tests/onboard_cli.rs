@@ -33,7 +33,7 @@ fn shipped_boards_check_ok() {
 fn every_problem_is_printed_with_its_path_and_exit_is_1() {
     let text = std::fs::read_to_string(board("sim.json"))
         .unwrap()
-        .replace("\"population\": 20", "\"population\": 200")
+        .replace("\"population\": 5", "\"population\": 200")
         .replace("\"baud\": 9600", "\"baud\": 1234");
     let p = temp_file("bad.json", &text);
     let out = Command::new(BIN)

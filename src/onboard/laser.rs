@@ -9,8 +9,7 @@
 //! **integration point:** an adapter `impl LaserCodec` over `wire::lms1xx::{Request, Reply,
 //! ColaDecoder, ScanTelegram, check_reply}` (the reply check maps to
 //! [`LaserReply::Refused`], the scan conversion to [`LaserReply::Scan`]), returned by
-//! [`super::runtime::laser_codec`]. The LMS200 (serial) session awaits the same for
-//! `wire::lms200`; its link is [`super::link::SerialLink`] at 9600 baud.
+//! [`super::runtime::laser_codec`]. The LMS200 (serial) session is [`super::lms200`].
 
 use std::fmt;
 use std::io;
@@ -106,6 +105,8 @@ pub enum LaserError {
     },
     /// The laser never became ready (last STlms state).
     NotReady(u8),
+    /// The LMS200 start-up failed (what went wrong, or the board field that prevents it).
+    Lms200(String),
 }
 
 impl fmt::Display for LaserError {
@@ -117,6 +118,7 @@ impl fmt::Display for LaserError {
             LaserError::Refused { request, detail } => {
                 write!(f, "the laser refused {request:?}: {detail}")
             }
+            LaserError::Lms200(what) => write!(f, "LMS200: {what}"),
             LaserError::NotReady(s) => write!(
                 f,
                 "the laser did not become ready for measurement (state {s}, expected 7)"

@@ -5,15 +5,20 @@
 //! pumped by [`runtime`]. Layers, bottom up:
 //! - [`link`]: byte links (serial, TCP, in-memory) and reconnection with back-off;
 //! - [`arcos`]: what the ARCOS session needs from the wire codec;
+//! - [`codec`]: the session codecs over `crate::wire`;
 //! - [`robot`]: the ARCOS client session (handshake, CONFIG check, HOSTBAUD, keep-alive, safe
 //!   stop);
-//! - [`laser`]: the LMS1xx client session;
+//! - [`laser`]: the LMS1xx client session; [`lms200`]: the LMS200 one;
+//! - [`mission`]: the core mission on its own thread, as the runtime's mission driver;
 //! - [`persist`]: atomic saving and loading of the mission state, telemetry;
 //! - [`runtime`]: `papillon run` and `papillon probe`.
 
 pub mod arcos;
+pub mod codec;
 pub mod laser;
 pub mod link;
+pub mod lms200;
+pub mod mission;
 pub mod persist;
 pub mod robot;
 pub mod runtime;

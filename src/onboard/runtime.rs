@@ -21,27 +21,42 @@ use tokio::time::Instant;
 use super::arcos::{ArcosCodec, RobotStatus};
 use super::laser::{LaserCodec, Lms1xxClient};
 use super::link::{Backoff, TcpLink, connect_with_backoff, open_robot_link};
+use super::lms200::Lms200Client;
 use super::persist::{MapImage, MissionState, PersistError, STATE_VERSION, StateStore, Telemetry};
 use super::robot::{ArcosClient, Fault, MotionLimits, SessionError, SessionOptions};
 use crate::config::{BoardConfig, LaserModel};
+use crate::control::odometry::ArcosOdometry;
 use crate::sensor::Scan;
 
-/// INTEGRATION POINT 1: the ARCOS codec of `crate::wire::arcos` (not merged yet).
+/// The ARCOS codec of `crate::wire::arcos`.
 pub fn arcos_codec() -> Option<Box<dyn ArcosCodec>> {
-    None
+    Some(Box::new(super::codec::WireArcos::default()))
 }
 
-/// INTEGRATION POINT 1: the CoLa-A codec of `crate::wire::lms1xx` (not merged yet).
+/// The CoLa-A codec of `crate::wire::lms1xx`.
 pub fn laser_codec() -> Option<Box<dyn LaserCodec>> {
-    None
+    Some(Box::new(super::codec::WireLms1xx::default()))
 }
 
-/// INTEGRATION POINT 2: the mission state machine for a board, resumed from `resume` if given.
+/// The core mission for a board ([`super::mission::CoreMission`]), resumed from `resume` if
+/// given. An error names the board field (or the saved state) that prevents it.
 pub fn mission_driver(
-    _board: &BoardConfig,
-    _resume: Option<&(MissionState, Option<MapImage>)>,
-) -> Option<Box<dyn MissionDriver>> {
-    None
+    board: &BoardConfig,
+    resume: Option<&(MissionState, Option<MapImage>)>,
+) -> Result<Option<Box<dyn MissionDriver>>, String> {
+    let mission = super::mission::CoreMission::new(board, resume)?;
+    Ok(Some(Box::new(mission)))
+}
+
+/// A telemetry line a mission wants written (`{"t_s", "kind", ...fields}`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TelemetryRecord {
+    /// Mission time \[s\].
+    pub t_s: f64,
+    /// The record's kind (`decision`, `replan`, `done`, ...).
+    pub kind: &'static str,
+    /// Its fields (a JSON object).
+    pub fields: serde_json::Value,
 }
 
 /// What the mission asks the robot to do after a step.
@@ -76,6 +91,10 @@ pub trait MissionDriver: Send {
     fn step(&mut self, t_s: f64) -> MissionCommand;
     /// The state to save.
     fn snapshot(&self) -> (MissionState, Option<MapImage>);
+    /// Telemetry lines produced since the last call (decisions with their compute time...).
+    fn take_telemetry(&mut self) -> Vec<TelemetryRecord> {
+        Vec::new()
+    }
 }
 
 /// Errors of `papillon run` / `probe`.
@@ -94,6 +113,8 @@ pub enum RuntimeError {
     Persist(PersistError),
     /// `--resume` found no saved mission.
     NothingToResume(PathBuf),
+    /// The mission could not be set up (names the board field or the saved state).
+    Mission(String),
 }
 
 impl std::fmt::Display for RuntimeError {
@@ -107,6 +128,7 @@ impl std::fmt::Display for RuntimeError {
             RuntimeError::Session(e) => write!(f, "{e}"),
             RuntimeError::Laser(e) => write!(f, "{e}"),
             RuntimeError::Persist(e) => write!(f, "{e}"),
+            RuntimeError::Mission(e) => write!(f, "{e}"),
             RuntimeError::NothingToResume(dir) => {
                 write!(f, "--resume: no saved mission in {}", dir.display())
             }
@@ -203,11 +225,40 @@ pub async fn connect_robot(
     Ok(client)
 }
 
+/// A laser session: an LMS1xx over TCP or an LMS200 over a serial port.
+pub enum LaserClient {
+    /// SICK LMS1xx, CoLa-A over TCP.
+    Lms1xx(Lms1xxClient),
+    /// SICK LMS200 over RS-232.
+    Lms200(Lms200Client),
+}
+
+impl LaserClient {
+    /// The next scan and its arrival time, or `None` at `deadline`.
+    pub async fn next_scan(
+        &mut self,
+        deadline: Instant,
+    ) -> Result<Option<(Instant, Scan)>, super::laser::LaserError> {
+        match self {
+            LaserClient::Lms1xx(c) => c.next_scan(deadline).await,
+            LaserClient::Lms200(c) => c.next_scan(deadline).await,
+        }
+    }
+
+    /// Stops the scans and closes the link.
+    pub async fn close(self) -> Result<(), super::laser::LaserError> {
+        match self {
+            LaserClient::Lms1xx(c) => c.close().await,
+            LaserClient::Lms200(c) => c.close().await,
+        }
+    }
+}
+
 /// Connects the laser the board names.
 pub async fn connect_laser(
     board: &BoardConfig,
     codec: Box<dyn LaserCodec>,
-) -> Result<Lms1xxClient, RuntimeError> {
+) -> Result<LaserClient, RuntimeError> {
     match board.laser_model() {
         Some(LaserModel::Lms1xx) => {
             let addr = board
@@ -224,11 +275,72 @@ pub async fn connect_laser(
             .await?;
             Lms1xxClient::connect(Box::new(link), codec, board.laser_config())
                 .await
+                .map(LaserClient::Lms1xx)
                 .map_err(RuntimeError::Laser)
         }
-        // INTEGRATION POINT 1: the LMS200 session (serial link at 9600 baud, then the
-        // board's speed) awaits `crate::wire::lms200`.
-        _ => Err(RuntimeError::NoCodec("LMS200")),
+        _ => {
+            let port = board
+                .laser
+                .port
+                .as_ref()
+                .map(|p| p.as_str().to_string())
+                .ok_or_else(|| {
+                    RuntimeError::Laser(super::laser::LaserError::Lms200(
+                        "$.laser.port: the serial device of the LMS200 is missing".into(),
+                    ))
+                })?;
+            let baud = board.laser.baud.unwrap_or(super::lms200::POWER_UP_BAUD);
+            let link = connect_with_backoff(
+                Backoff::default(),
+                || open_robot_link(None, &port, super::lms200::POWER_UP_BAUD),
+                |attempt, e| tracing::warn!(attempt, error = %e, "laser not available, retrying"),
+            )
+            .await?;
+            Lms200Client::connect(link, board.laser_config(), baud)
+                .await
+                .map(LaserClient::Lms200)
+                .map_err(RuntimeError::Laser)
+        }
+    }
+}
+
+/// Whether a failed (re)connection may succeed if tried again: the link or the session
+/// broke, as opposed to a robot or a board that does not fit.
+fn worth_retrying(e: &RuntimeError) -> bool {
+    match e {
+        RuntimeError::Link(_) | RuntimeError::Laser(_) => true,
+        RuntimeError::Session(s) => matches!(
+            s,
+            SessionError::Io(_)
+                | SessionError::Closed
+                | SessionError::HandshakeFailed { .. }
+                | SessionError::NoConfig
+                | SessionError::MicrocontrollerReset { .. }
+        ),
+        _ => false,
+    }
+}
+
+/// Runs `connect` (link and session start-up) until it succeeds, with the default back-off
+/// between attempts: a link that comes back may still drop the first sessions (a robot
+/// rebooting, a bridge reconnecting).
+async fn retry_session<T, F, Fut>(what: &str, mut connect: F) -> Result<T, RuntimeError>
+where
+    F: FnMut() -> Fut,
+    Fut: std::future::Future<Output = Result<T, RuntimeError>>,
+{
+    let policy = Backoff::default();
+    let mut attempt = 1;
+    loop {
+        match connect().await {
+            Ok(c) => return Ok(c),
+            Err(e) if worth_retrying(&e) && attempt < policy.max_attempts => {
+                tracing::warn!(attempt, error = %e, "{what} session not re-established, retrying");
+                tokio::time::sleep(policy.delay(attempt)).await;
+                attempt += 1;
+            }
+            Err(e) => return Err(e),
+        }
     }
 }
 
@@ -246,7 +358,7 @@ pub async fn run_with(
     make_mission: impl FnOnce(
         &BoardConfig,
         Option<&(MissionState, Option<MapImage>)>,
-    ) -> Option<Box<dyn MissionDriver>>,
+    ) -> Result<Option<Box<dyn MissionDriver>>, String>,
     shutdown: impl std::future::Future<Output = ()>,
 ) -> Result<RunOutcome, RuntimeError> {
     let board = &options.board;
@@ -270,7 +382,13 @@ pub async fn run_with(
     let mut shutdown = std::pin::pin!(shutdown);
     let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
     let mut client = connect_robot(board, codec).await?;
-    let mission = make_mission(board, resumed.as_ref());
+    let mission = match make_mission(board, resumed.as_ref()) {
+        Ok(m) => m,
+        Err(e) => {
+            let _ = client.stop_and_close().await;
+            return Err(RuntimeError::Mission(e));
+        }
+    };
     let outcome = match mission {
         None => {
             // INTEGRATION POINT 2: no mission in this build. Check the laser start-up too
@@ -352,14 +470,20 @@ pub async fn run_with(
                 )?;
                 let reconnect = async {
                     if robot_lost {
-                        let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
-                        client = connect_robot(board, codec).await?;
+                        client = retry_session("robot", || async {
+                            let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
+                            connect_robot(board, codec).await
+                        })
+                        .await?;
                         // Motion stays refused until the mission has re-planned.
                         client.halt(Fault::Link).await?;
                     } else {
                         let _ = client.halt(Fault::Link).await;
-                        let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
-                        laser_client = connect_laser(board, codec).await?;
+                        laser_client = retry_session("laser", || async {
+                            let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
+                            connect_laser(board, codec).await
+                        })
+                        .await?;
                     }
                     Ok::<(), RuntimeError>(())
                 };
@@ -401,7 +525,7 @@ pub struct Records<'a> {
 pub async fn pump(
     board: &BoardConfig,
     client: &mut ArcosClient,
-    laser: &mut Lms1xxClient,
+    laser: &mut LaserClient,
     mission: &mut dyn MissionDriver,
     records: Records<'_>,
     epoch: Instant,
@@ -416,6 +540,7 @@ pub async fn pump(
     let mut last_status = start;
     let mut last_scan = start;
     let mut next_save = start + save_every;
+    let mut in_contact = false;
     loop {
         let now = Instant::now();
         // The signal is checked between events (at least every `tick`), never by cancelling
@@ -434,15 +559,19 @@ pub async fn pump(
         if let Some(super::robot::RobotEvent::Status { at, status }) = event {
             last_status = at;
             mission.on_status(t(at), &status);
-            let fault = if status.estop() {
-                Some(Fault::EStop)
-            } else if status.stalled() || status.bumped() {
-                Some(Fault::Contact)
-            } else {
-                None
-            };
-            if let Some(f) = fault {
-                stop_for(client, mission, telemetry, t(at), f).await?;
+            // A wheel stall or a bumper is the mission's to handle: its safety monitor stops
+            // and backs off before re-planning (a stop here would cut that back-off short).
+            let contact = status.stalled() || status.bumped();
+            if contact && !in_contact {
+                telemetry.record(
+                    t(at),
+                    "contact",
+                    serde_json::json!({"stall_bumpers": status.stall_bumpers}),
+                )?;
+            }
+            in_contact = contact;
+            if status.estop() {
+                stop_for(client, mission, telemetry, t(at), Fault::EStop).await?;
             }
         }
         match laser
@@ -474,6 +603,9 @@ pub async fn pump(
             stop_for(client, mission, telemetry, t(now), Fault::StaleScan).await?;
         } else if client.fault().is_some() && mission.replanned() {
             client.clear_fault();
+        }
+        for r in mission.take_telemetry() {
+            telemetry.record(r.t_s, r.kind, r.fields)?;
         }
         match mission.step(t(now)) {
             MissionCommand::Done => return Ok(RunOutcome::Finished),
@@ -565,12 +697,14 @@ pub async fn probe_with(
         )?;
     }
     writeln!(out, "baud: {:?}", client.baud_switch())?;
+    let mut odometry = ArcosOdometry::new();
     let status = next_status(&mut client, Duration::from_secs(2)).await?;
     match status {
         Some(s) => writeln!(
             out,
-            "status: battery {:.1} V, pose counters x {} mm, y {} mm, th {} units, motors {}, e-stop {}",
+            "status: battery {:.1} V, pose {} (counters x {}, y {}, th {}), motors {}, e-stop {}",
             s.battery_v(),
+            pose_text(odometry.update(s.x_pos, s.y_pos, s.th_pos)),
             s.x_pos,
             s.y_pos,
             s.th_pos,
@@ -593,25 +727,42 @@ pub async fn probe_with(
                 rot_accel_deg_s2: 60,
             })
             .await?;
+        let start = odometry.pose_odom();
         for side in 0..4 {
-            drive_for(&mut client, 100, 0, Duration::from_secs(5)).await?;
-            drive_for(&mut client, 0, 30, Duration::from_secs(3)).await?;
+            drive_for(&mut client, &mut odometry, 100, 0, Duration::from_secs(5)).await?;
+            drive_for(&mut client, &mut odometry, 0, 30, Duration::from_secs(3)).await?;
             if let Some(s) = next_status(&mut client, Duration::from_secs(1)).await? {
+                let pose = odometry.update(s.x_pos, s.y_pos, s.th_pos);
                 writeln!(
                     out,
-                    "square side {}: x {} mm, y {} mm, th {} units",
+                    "square side {}: odometry {}",
                     side + 1,
-                    s.x_pos,
-                    s.y_pos,
-                    s.th_pos
+                    pose_text(pose)
                 )?;
             }
         }
+        let end = odometry.pose_odom();
+        writeln!(
+            out,
+            "square: driven {:.2} m, closure error {:.0} mm",
+            odometry.distance_travelled_m(),
+            libm::hypotf(end.x - start.x, end.y - start.y) * 1000.0
+        )?;
     }
     let stats = client.stop_and_close().await?;
     writeln!(out, "link: {}", stats.codec)?;
     writeln!(out, "disconnected: motors disabled, session closed")?;
     Ok(())
+}
+
+/// An odometry pose as the probe prints it.
+fn pose_text(p: crate::geometry::Pose2) -> String {
+    format!(
+        "x {:.0} mm, y {:.0} mm, heading {:.1} deg",
+        p.x * 1000.0,
+        p.y * 1000.0,
+        p.theta.to_degrees()
+    )
 }
 
 async fn next_status(
@@ -631,6 +782,7 @@ async fn next_status(
 /// the loop is alive), then stops.
 async fn drive_for(
     client: &mut ArcosClient,
+    odometry: &mut ArcosOdometry,
     speed_mm_s: i16,
     turn_deg_s: i16,
     duration: Duration,
@@ -638,9 +790,12 @@ async fn drive_for(
     let end = Instant::now() + duration;
     while Instant::now() < end {
         client.drive(speed_mm_s, turn_deg_s).await?;
-        let _ = client
-            .next_event((Instant::now() + Duration::from_millis(200)).min(end))
-            .await?;
+        let resend = (Instant::now() + Duration::from_millis(200)).min(end);
+        while let Some(ev) = client.next_event(resend).await? {
+            if let super::robot::RobotEvent::Status { status: s, .. } = ev {
+                odometry.update(s.x_pos, s.y_pos, s.th_pos);
+            }
+        }
     }
     client.drive(0, 0).await?;
     Ok(())
@@ -688,8 +843,8 @@ mod tests {
                 resume: false,
             },
             || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
-            laser_codec,
-            mission_driver,
+            || None,
+            |_, _| Ok(None),
             std::future::pending(),
         )
         .await
@@ -732,8 +887,8 @@ mod tests {
                 resume: true,
             },
             || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
-            laser_codec,
-            mission_driver,
+            || None,
+            |_, _| Ok(None),
             std::future::pending(),
         )
         .await
@@ -751,9 +906,9 @@ mod tests {
                 log_dir: dir.clone(),
                 resume: false,
             },
-            arcos_codec,
-            laser_codec,
-            mission_driver,
+            || None,
+            || None,
+            |_, _| Ok(None),
             std::future::pending(),
         )
         .await
@@ -860,7 +1015,7 @@ mod pump_tests {
 
     struct Rig {
         client: ArcosClient,
-        laser: Lms1xxClient,
+        laser: LaserClient,
         log: CommandLog,
         board: BoardConfig,
         store: StateStore,
@@ -891,13 +1046,15 @@ mod pump_tests {
         tokio::spawn(streaming_laser(lpeer, Duration::from_millis(100), dropout));
         let mut laser_config = board.laser_config();
         laser_config.beam_count = 3;
-        let laser = Lms1xxClient::connect(
-            Box::new(llink),
-            Box::new(ByteCodec::default()),
-            laser_config,
-        )
-        .await
-        .unwrap();
+        let laser = LaserClient::Lms1xx(
+            Lms1xxClient::connect(
+                Box::new(llink),
+                Box::new(ByteCodec::default()),
+                laser_config,
+            )
+            .await
+            .unwrap(),
+        );
         let dir = std::env::temp_dir().join(format!("papillon-pump-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         Rig {
@@ -1142,11 +1299,11 @@ mod reconnect_tests {
             || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
             || Some(Box::new(ByteCodec::default()) as Box<dyn LaserCodec>),
             |_, _| {
-                Some(Box::new(Mission {
+                Ok(Some(Box::new(Mission {
                     faults: Vec::new(),
                     fault_at: None,
                     now_s: 0.0,
-                }) as Box<dyn MissionDriver>)
+                }) as Box<dyn MissionDriver>))
             },
             std::future::pending(),
         )

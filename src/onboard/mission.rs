@@ -1,0 +1,666 @@
+//! The core mission ([`crate::mission::Mission`]) behind the runtime's [`MissionDriver`].
+//!
+//! The mission runs on its own thread (a "mission thread"): a decision by a population
+//! optimizer can take seconds, and while it runs the runtime must keep reading status packets
+//! and scans, keep the link alive and watch the stale-data timeouts. The runtime side
+//! ([`CoreMission`]) only posts inputs and picks up results, never waits for the thread:
+//! - status packets become odometry ([`ArcosOdometry`] over the SIP's XPOS/YPOS/THPOS) and
+//!   [`RobotFlags`] (STALL AND BUMPERS, FLAGS);
+//! - scans are integrated into the shared map, the first one after each status packet and
+//!   only if it came within [`SCAN_WINDOW_S`] (or one laser period) of it: a scan is placed
+//!   at the latest odometry pose, and a stale pose smears the map while the robot turns;
+//! - the mission steps right after each status packet (at most every [`MIN_STEP_S`], at least
+//!   every [`STEP_FALLBACK_S`]), so a command is computed from the freshest pose; each new
+//!   command is handed to the runtime once; between periods the runtime is told to
+//!   hold (nothing re-sent, so a slow serial link is not flooded). If the thread has produced
+//!   no command for [`BUSY_STOP_S`] while the last one moved the robot, the runtime is told to
+//!   stop: a stale velocity is never kept;
+//! - a fault the runtime detected (stale data, link loss, e-stop, contact) is passed to the
+//!   core as one period with the motors reported disabled: the core drops its path, and when
+//!   the real flags come back it re-plans from where the robot is. [`MissionDriver::replanned`]
+//!   is true once the core reported that re-plan (`FaultCleared`, `Replanned` or `Decided`)
+//!   for a period after the fault;
+//! - the state to save (map image, poses, trajectory, counters) is published by the thread
+//!   every [`PUBLISH_EVERY_S`] of mission time and at the end.
+//!
+//! Resuming (`--resume`): the saved map is loaded into the grid; the first odometry reading
+//! after the restart is placed with the saved odometry-to-map transform when the robot's
+//! counters continued (a restarted program, the robot untouched: within
+//! [`CONTINUED_ODOMETRY_M`] of the saved odometry), else at the saved map pose (the counters were
+//! reset with the robot).
+
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Instant as WallInstant;
+
+use super::arcos::RobotStatus;
+use super::persist::{Counters, MapImage, MissionState as SavedState, PoseRecord, STATE_VERSION};
+use super::robot::Fault;
+use super::runtime::{MissionCommand, MissionDriver, TelemetryRecord};
+use crate::config::{BoardConfig, Strategy};
+use crate::control::Time;
+use crate::control::command::Limits;
+use crate::control::odometry::{ArcosOdometry, MapFromOdom};
+use crate::control::safety::RobotFlags;
+use crate::geometry::normalize_angle;
+use crate::geometry::{Point2, Pose2};
+use crate::grid::{CellClass, GridGeometry};
+use crate::mission::{
+    DoneReason, Mission, MissionConfig, MissionEvent, SelectorKind, SharedMap, Workspace,
+};
+use crate::optim::Method;
+use crate::sensor::Scan;
+
+/// Cells the onboard grid can hold (512 x 512: 51 m square at 10 cm).
+pub const GRID_CELLS: usize = 1 << 18;
+/// The mission steps after each status packet (the P3-DX sends one every 100 ms), at most
+/// this often \[s\]...
+pub const MIN_STEP_S: f64 = 0.05;
+/// ...and at least this often, status packets or not \[s\].
+pub const STEP_FALLBACK_S: f64 = 0.15;
+/// With no new command for this long after a moving one, the runtime is told to stop \[s\].
+pub const BUSY_STOP_S: f64 = 0.3;
+/// A scan is integrated only if it arrives within this long after a status packet (or one
+/// laser period, if longer) \[s\].
+pub const SCAN_WINDOW_S: f64 = 0.04;
+/// The state to save is published at least this often \[s of mission time\].
+pub const PUBLISH_EVERY_S: f64 = 1.0;
+/// After `--resume`, odometry within this distance of the saved odometry counts as continued
+/// \[m\].
+pub const CONTINUED_ODOMETRY_M: f32 = 3.0;
+/// Trajectory points kept in the saved state (older ones are thinned out).
+pub const MAX_TRAJECTORY: usize = 4000;
+
+type Map = SharedMap<GRID_CELLS>;
+
+/// The grid geometry a board asks for, checked against [`GRID_CELLS`].
+pub fn grid_geometry(board: &BoardConfig) -> Result<GridGeometry, String> {
+    let g = &board.grid;
+    let geometry = GridGeometry::from_extent(
+        g.width_m,
+        g.height_m,
+        g.resolution_m,
+        Point2::new(g.origin_x_m, g.origin_y_m),
+    )
+    .map_err(|e| format!("$.grid: {e}"))?;
+    if geometry.cell_count() > GRID_CELLS {
+        return Err(format!(
+            "$.grid: {} x {} cells, this build holds at most {GRID_CELLS}; use a coarser $.grid.resolution_m or a smaller area",
+            geometry.width, geometry.height
+        ));
+    }
+    Ok(geometry)
+}
+
+/// The core mission configuration of a board.
+pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
+    let m = &board.mission;
+    let selector = match m.method.as_str() {
+        "nearest-frontier" => SelectorKind::NearestFrontier,
+        "frontier-utility" => SelectorKind::FrontierUtility,
+        name => SelectorKind::Optimized(
+            Method::ALL
+                .into_iter()
+                .find(|method| method.name() == name)
+                .ok_or_else(|| format!("$.mission.method: unknown method {name:?}"))?,
+        ),
+    };
+    let mut config = MissionConfig {
+        selector,
+        battery_steps: m.battery_steps,
+        coverage_target: m.coverage_target,
+        laser: board.laser_config(),
+        ..MissionConfig::default()
+    };
+    config.explore.targets = match board.strategy() {
+        Some(Strategy::Long) => usize::from(m.targets).clamp(1, crate::explore::MAX_TARGETS),
+        _ => 1,
+    };
+    config.explore.reserve_steps = m.reserve_steps;
+    config.explore.population = usize::from(m.population);
+    config.explore.max_generations = u32::from(m.generations);
+    let r = &board.robot;
+    let whole = |v: f32| v.round().clamp(0.0, u16::MAX as f32) as u16;
+    config.limits = Limits::new(
+        whole(r.max_speed_mm_s),
+        whole(r.max_turn_rate_deg_s),
+        whole(r.accel_mm_s2),
+        whole(r.decel_mm_s2),
+        whole(r.rot_accel_deg_s2),
+        whole(r.rot_accel_deg_s2),
+    );
+    // Plan with the safety distance on top of the radius: a path the safety monitor would
+    // refuse (a return inside `obstacle_stop_m` of the robot's edge) is never planned, so the
+    // robot does not stop and re-plan the same path again and again.
+    config.traversability.robot_radius_m = r.radius_m + board.safety.obstacle_stop_m;
+    let f = &mut config.follower;
+    f.cruise_speed_mm_s = f.cruise_speed_mm_s.min(r.max_speed_mm_s);
+    f.max_turn_rate_deg_s = f.max_turn_rate_deg_s.min(r.max_turn_rate_deg_s);
+    f.heading_kp = board.pid.heading_kp;
+    f.heading_ki = board.pid.heading_ki;
+    f.heading_kd = board.pid.heading_kd;
+    f.distance_kd = board.pid.distance_kd;
+    let s = &mut config.safety;
+    s.max_input_age = core::time::Duration::from_secs_f32(board.safety.stale_timeout_s);
+    s.min_clearance_m = board.safety.obstacle_stop_m;
+    s.backoff_distance_m = board.safety.back_off_m;
+    config.validate().map_err(|e| format!("$.mission: {e}"))?;
+    Ok(config)
+}
+
+/// An input for the mission thread.
+enum Input {
+    Status(f64, RobotStatus),
+    Scan(f64, Box<Scan>),
+    Fault,
+    Step(f64),
+}
+
+/// What the mission thread publishes.
+#[derive(Default)]
+struct Published {
+    /// Commands produced so far, and the last one.
+    commands: u64,
+    command: Option<MissionCommand>,
+    /// Mission time of the last re-plan the core reported \[s\].
+    last_plan_s: Option<f64>,
+    done: Option<DoneReason>,
+    state: SavedState,
+    map: Option<MapImage>,
+    telemetry: Vec<TelemetryRecord>,
+    error: Option<String>,
+}
+
+/// The core mission on its own thread, as the runtime's [`MissionDriver`].
+pub struct CoreMission {
+    tx: Sender<Input>,
+    out: Arc<Mutex<Published>>,
+    /// When the last step was asked for \[s\].
+    step_sent_s: f64,
+    /// A status packet arrived since then.
+    status_pending: bool,
+    commands_seen: u64,
+    last_command_s: f64,
+    last_moving: bool,
+    fault_at_s: Option<f64>,
+    /// The latest time `step` was called with \[s\].
+    last_step_s: f64,
+    done: bool,
+}
+
+fn lock(m: &Mutex<Published>) -> MutexGuard<'_, Published> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl CoreMission {
+    /// A mission for `board`, resumed from `resume` if given. Errors name the board field.
+    pub fn new(
+        board: &BoardConfig,
+        resume: Option<&(SavedState, Option<MapImage>)>,
+    ) -> Result<Self, String> {
+        let mut config = mission_config(board)?;
+        if let Some((state, _)) = resume {
+            // The energy used before the restart is gone for good.
+            config.battery_steps =
+                (config.battery_steps - state.counters.energy_used_steps).max(0.0);
+        }
+        let geometry = grid_geometry(board)?;
+        let mut map = Map::new_boxed(geometry, &config).map_err(|e| format!("$.grid: {e}"))?;
+        let mut saved = SavedState {
+            version: STATE_VERSION,
+            ..SavedState::default()
+        };
+        if let Some((state, image)) = resume {
+            if let Some(image) = image {
+                image
+                    .apply_to_grid(&mut map.grid)
+                    .map_err(|e| format!("--resume: {e}"))?;
+                map.rebuild_traversability()
+                    .map_err(|e| format!("--resume: {e}"))?;
+            }
+            saved = state.clone();
+            saved.finished = false;
+        }
+        let published = Published {
+            state: saved.clone(),
+            map: Some(MapImage::from_grid(&map.grid)),
+            ..Published::default()
+        };
+        let out = Arc::new(Mutex::new(published));
+        let (tx, rx) = mpsc::channel();
+        let worker = Worker {
+            config,
+            map,
+            ws: Workspace::new_boxed(),
+            rng: crate::random::seeded(board.mission.seed),
+            mission: None,
+            odometry: ArcosOdometry::new(),
+            resume: resume.is_some().then_some(saved.clone()),
+            base: saved,
+            out: Arc::clone(&out),
+            last_publish_s: f64::NEG_INFINITY,
+            force_fault: false,
+            last_flags: RobotFlags::nominal(),
+            last_status_s: 0.0,
+            scan_taken: false,
+            scan_window_s: SCAN_WINDOW_S.max(1.0 / f64::from(board.laser.rate_hz.max(1.0))),
+            trajectory_step_m: 0.1,
+        };
+        std::thread::Builder::new()
+            .name("mission".into())
+            .spawn(move || worker.run(rx))
+            .map_err(|e| format!("cannot start the mission thread: {e}"))?;
+        Ok(Self {
+            tx,
+            out,
+            step_sent_s: f64::NEG_INFINITY,
+            status_pending: false,
+            commands_seen: 0,
+            last_command_s: 0.0,
+            last_moving: false,
+            fault_at_s: None,
+            last_step_s: 0.0,
+            done: false,
+        })
+    }
+}
+
+impl MissionDriver for CoreMission {
+    fn on_status(&mut self, t_s: f64, status: &RobotStatus) {
+        self.status_pending = true;
+        let _ = self.tx.send(Input::Status(t_s, *status));
+    }
+
+    fn on_scan(&mut self, t_s: f64, scan: &Scan) {
+        let _ = self.tx.send(Input::Scan(t_s, Box::new(scan.clone())));
+    }
+
+    fn on_fault(&mut self, t_s: f64, _fault: Fault) {
+        // Only a plan made after the fault counts (the runtime may pass an older time).
+        self.fault_at_s = Some(t_s.max(self.last_step_s));
+        let _ = self.tx.send(Input::Fault);
+    }
+
+    fn replanned(&self) -> bool {
+        match self.fault_at_s {
+            None => true,
+            Some(f) => lock(&self.out).last_plan_s.is_some_and(|p| p >= f),
+        }
+    }
+
+    fn step(&mut self, t_s: f64) -> MissionCommand {
+        if self.done {
+            return MissionCommand::Done;
+        }
+        self.last_step_s = self.last_step_s.max(t_s);
+        // Step right after each status packet (the freshest pose, the least delay between
+        // measuring and commanding), or every STEP_FALLBACK_S without one (so the mission
+        // notices stale inputs).
+        let since = t_s - self.step_sent_s;
+        if (self.status_pending && since >= MIN_STEP_S) || since >= STEP_FALLBACK_S {
+            self.status_pending = false;
+            self.step_sent_s = t_s;
+            let _ = self.tx.send(Input::Step(t_s));
+        }
+        let (command, commands) = {
+            let out = lock(&self.out);
+            if let Some(e) = &out.error {
+                tracing::error!(error = %e, "the mission stopped");
+                self.done = true;
+                return MissionCommand::Done;
+            }
+            if out.done.is_some() {
+                self.done = true;
+                return MissionCommand::Done;
+            }
+            (out.command, out.commands)
+        };
+        if commands > self.commands_seen
+            && let Some(c) = command
+        {
+            self.commands_seen = commands;
+            self.last_command_s = t_s;
+            self.last_moving = !matches!(
+                c,
+                MissionCommand::Drive {
+                    speed_mm_s: 0,
+                    turn_deg_s: 0
+                }
+            );
+            return c;
+        }
+        if self.last_moving && t_s - self.last_command_s > BUSY_STOP_S {
+            // The thread is busy (deciding): never keep driving on an old command.
+            self.last_moving = false;
+            return MissionCommand::Drive {
+                speed_mm_s: 0,
+                turn_deg_s: 0,
+            };
+        }
+        MissionCommand::Hold
+    }
+
+    fn snapshot(&self) -> (SavedState, Option<MapImage>) {
+        let out = lock(&self.out);
+        (out.state.clone(), out.map.clone())
+    }
+
+    fn take_telemetry(&mut self) -> Vec<TelemetryRecord> {
+        std::mem::take(&mut lock(&self.out).telemetry)
+    }
+}
+
+/// The mission thread's state.
+struct Worker {
+    config: MissionConfig,
+    map: Box<Map>,
+    ws: Box<Workspace<GRID_CELLS>>,
+    rng: crate::random::ProjectRng,
+    /// Built at the first status packet (the start pose depends on it when resuming).
+    mission: Option<Mission<GRID_CELLS>>,
+    odometry: ArcosOdometry,
+    /// The saved state when resuming.
+    resume: Option<SavedState>,
+    /// Counters and trajectory carried over from a resumed mission.
+    base: SavedState,
+    out: Arc<Mutex<Published>>,
+    last_publish_s: f64,
+    /// Report the motors disabled for one period (a fault the runtime saw).
+    force_fault: bool,
+    last_flags: RobotFlags,
+    last_status_s: f64,
+    /// A scan was integrated since the last status packet.
+    scan_taken: bool,
+    /// How soon after a status packet a scan must arrive to be integrated \[s\].
+    scan_window_s: f64,
+    trajectory_step_m: f32,
+}
+
+impl Worker {
+    fn run(mut self, rx: Receiver<Input>) {
+        while let Ok(first) = rx.recv() {
+            let mut batch = vec![first];
+            batch.extend(rx.try_iter());
+            for input in batch {
+                if let Err(e) = self.handle(input) {
+                    lock(&self.out).error = Some(e);
+                    return;
+                }
+            }
+            if lock(&self.out).done.is_some() {
+                return;
+            }
+        }
+    }
+
+    fn handle(&mut self, input: Input) -> Result<(), String> {
+        match input {
+            Input::Status(t_s, status) => {
+                let pose_odom = self
+                    .odometry
+                    .update(status.x_pos, status.y_pos, status.th_pos);
+                self.last_flags = RobotFlags::from_sip(status.stall_bumpers, status.flags);
+                self.last_status_s = t_s;
+                self.scan_taken = false;
+                let start = self.start_pose(pose_odom);
+                let mission = match &mut self.mission {
+                    Some(m) => m,
+                    None => {
+                        let m = Mission::new(0, self.config.clone(), start)
+                            .map_err(|e| format!("mission: {e}"))?;
+                        self.mission.insert(m)
+                    }
+                };
+                let mut flags = self.last_flags;
+                if self.force_fault {
+                    flags.motors_enabled = false;
+                }
+                mission.on_odometry(time(t_s), pose_odom, flags);
+            }
+            Input::Scan(t_s, scan) => {
+                // Only the first scan after each status packet is integrated, and only if it
+                // came soon after it: a scan is placed at the latest odometry pose, so the
+                // older that pose, the more a turning robot smears the map.
+                let fresh = t_s - self.last_status_s <= self.scan_window_s;
+                if self.scan_taken || !fresh {
+                    return Ok(());
+                }
+                self.scan_taken = true;
+                if let Some(m) = &mut self.mission {
+                    m.on_scan(time(t_s), &scan, &mut self.map)
+                        .map_err(|e| format!("scan integration: {e}"))?;
+                }
+            }
+            Input::Fault => {
+                self.force_fault = true;
+                if let Some(m) = &mut self.mission {
+                    let mut flags = self.last_flags;
+                    flags.motors_enabled = false;
+                    m.on_odometry(time(self.last_status_s), self.odometry.pose_odom(), flags);
+                }
+            }
+            Input::Step(t_s) => self.step(t_s),
+        }
+        Ok(())
+    }
+
+    /// Where the mission starts, in the map frame, given the first odometry reading.
+    fn start_pose(&self, pose_odom: Pose2) -> Pose2 {
+        let Some(saved) = &self.resume else {
+            return pose_odom;
+        };
+        let saved_map = pose(saved.pose);
+        let saved_odom = pose(saved.odom_pose);
+        // The 15-bit counters wrap every 32.768 m: compare modulo that.
+        let wrap = |d: f32| d - 32.768 * (d / 32.768).round();
+        let dx = wrap(pose_odom.x - saved_odom.x);
+        let dy = wrap(pose_odom.y - saved_odom.y);
+        if libm::hypotf(dx, dy) <= CONTINUED_ODOMETRY_M {
+            let odom_now = Pose2::new(saved_odom.x + dx, saved_odom.y + dy, pose_odom.theta);
+            let transform = MapFromOdom::from_start(saved_map, saved_odom);
+            transform.map_pose(odom_now)
+        } else {
+            saved_map
+        }
+    }
+
+    fn step(&mut self, t_s: f64) {
+        let Some(mission) = &mut self.mission else {
+            return;
+        };
+        let began = WallInstant::now();
+        let output = mission.step(time(t_s), &mut self.map, &mut self.ws, &mut self.rng);
+        let compute_ms = began.elapsed().as_secs_f64() * 1000.0;
+        if self.force_fault {
+            // The core has seen the fault for one period; give it the real flags back.
+            self.force_fault = false;
+            let pose_odom = self.odometry.pose_odom();
+            mission.on_odometry(time(self.last_status_s), pose_odom, self.last_flags);
+        }
+        let mut out = lock(&self.out);
+        for event in &output.events {
+            match event {
+                MissionEvent::Decided {
+                    targets,
+                    path_length_m,
+                    predicted_gain_cells,
+                    evaluations,
+                    ..
+                } => {
+                    out.last_plan_s = Some(t_s);
+                    let first = targets.first().copied().unwrap_or(Point2::new(0.0, 0.0));
+                    out.telemetry.push(TelemetryRecord {
+                        t_s,
+                        kind: "decision",
+                        fields: serde_json::json!({
+                            "target_x_m": first.x,
+                            "target_y_m": first.y,
+                            "targets": targets.len(),
+                            "path_length_m": path_length_m,
+                            "predicted_gain_cells": predicted_gain_cells,
+                            "evaluations": evaluations,
+                            "compute_ms": compute_ms,
+                        }),
+                    });
+                }
+                MissionEvent::Replanned { cause } => {
+                    out.last_plan_s = Some(t_s);
+                    out.telemetry.push(TelemetryRecord {
+                        t_s,
+                        kind: "replan",
+                        fields: serde_json::json!({ "cause": format!("{cause:?}") }),
+                    });
+                }
+                MissionEvent::FaultCleared => {
+                    out.last_plan_s = Some(t_s);
+                }
+                MissionEvent::Fault(reason) => out.telemetry.push(TelemetryRecord {
+                    t_s,
+                    kind: "mission_fault",
+                    fields: serde_json::json!({ "reason": format!("{reason:?}") }),
+                }),
+                MissionEvent::Done(reason) => {
+                    out.done = Some(*reason);
+                    out.telemetry.push(TelemetryRecord {
+                        t_s,
+                        kind: "done",
+                        fields: serde_json::json!({ "reason": format!("{reason:?}") }),
+                    });
+                }
+                _ => {}
+            }
+        }
+        let velocity = output.command.velocity().unwrap_or_default();
+        out.command = Some(MissionCommand::Drive {
+            speed_mm_s: velocity.speed_mm_s(),
+            turn_deg_s: velocity.turn_rate_deg_s(),
+        });
+        out.commands += 1;
+        drop(out);
+        let done = matches!(mission.state(), crate::mission::MissionState::Done(_));
+        if done || t_s - self.last_publish_s >= PUBLISH_EVERY_S {
+            self.last_publish_s = t_s;
+            self.publish(t_s, done);
+        }
+    }
+
+    /// Publishes the state to save.
+    fn publish(&mut self, t_s: f64, finished: bool) {
+        let Some(mission) = &self.mission else {
+            return;
+        };
+        let p = mission.pose_map();
+        let record = PoseRecord {
+            x_m: p.x,
+            y_m: p.y,
+            theta_rad: p.theta,
+        };
+        let last = self.base.trajectory.last().copied();
+        if last.is_none_or(|l| libm::hypotf(l.x_m - p.x, l.y_m - p.y) >= self.trajectory_step_m) {
+            self.base.trajectory.push(record);
+            if self.base.trajectory.len() > MAX_TRAJECTORY {
+                // Keep every other point: the trajectory stays bounded and spans the mission.
+                let thinned = self.base.trajectory.iter().copied().step_by(2).collect();
+                self.base.trajectory = thinned;
+                self.trajectory_step_m *= 2.0;
+            }
+        }
+        let stats = mission.stats();
+        let base = self.base.counters;
+        let o = self.odometry.pose_odom();
+        let state = SavedState {
+            version: STATE_VERSION,
+            mission_time_s: t_s,
+            pose: record,
+            odom_pose: PoseRecord {
+                x_m: o.x,
+                y_m: o.y,
+                theta_rad: o.theta,
+            },
+            trajectory: self.base.trajectory.clone(),
+            counters: Counters {
+                decisions: base.decisions + u64::from(stats.decisions),
+                distance_m: base.distance_m + stats.distance_m,
+                energy_used_steps: base.energy_used_steps + stats.steps,
+                faults: base.faults + u64::from(stats.faults),
+                reconnects: base.reconnects,
+                scans: base.scans,
+            },
+            coverage: known_fraction(&self.map),
+            finished,
+        };
+        let image = MapImage::from_grid(&self.map.grid);
+        let mission_record = TelemetryRecord {
+            t_s,
+            kind: "mission",
+            fields: serde_json::json!({
+                "state": format!("{:?}", mission.state()),
+                "battery_steps": mission.battery_steps(),
+                "decisions": stats.decisions,
+                "failed_decisions": stats.failed_decisions,
+                "replans": stats.replans,
+                "faults": stats.faults,
+                "stopped_s": stats.stopped_s,
+                "safety": format!("{:?}", mission.monitor().state()),
+                "path_waypoints": mission.path().len(),
+            }),
+        };
+        let mut out = lock(&self.out);
+        out.telemetry.push(mission_record);
+        out.state = state;
+        out.map = Some(image);
+    }
+}
+
+/// Fraction of the grid's cells that are known (Free or Occupied): without the world's
+/// truth the onboard program cannot tell how much of the reachable area this is.
+fn known_fraction(map: &Map) -> f32 {
+    let g = map.grid.geometry();
+    let known = (0..g.cell_count())
+        .filter(|&i| map.grid.class(i) != CellClass::Unknown)
+        .count();
+    known as f32 / g.cell_count().max(1) as f32
+}
+
+fn pose(p: PoseRecord) -> Pose2 {
+    Pose2::new(p.x_m, p.y_m, normalize_angle(p.theta_rad))
+}
+
+fn time(t_s: f64) -> Time {
+    Time::from_secs_f64(t_s.max(0.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shipped_boards_make_valid_missions() {
+        for name in ["sim.json", "p3dx-lms1xx.json", "p3dx-lms200.json"] {
+            let path = format!("{}/boards/{name}", env!("CARGO_MANIFEST_DIR"));
+            let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
+            let config = mission_config(&board).unwrap();
+            assert_eq!(
+                config.explore.population,
+                usize::from(board.mission.population)
+            );
+            assert_eq!(config.limits.max_speed_mm_s(), 400);
+            grid_geometry(&board).unwrap();
+        }
+    }
+
+    #[test]
+    fn an_unknown_method_and_an_oversized_grid_name_their_field() {
+        let mut board = BoardConfig::default();
+        board.mission.method = crate::config::Name::new("simplex").unwrap();
+        assert!(
+            mission_config(&board)
+                .unwrap_err()
+                .starts_with("$.mission.method")
+        );
+        let mut board = BoardConfig::default();
+        board.grid.width_m = 100.0;
+        board.grid.height_m = 100.0;
+        assert!(grid_geometry(&board).unwrap_err().starts_with("$.grid"));
+    }
+}
