@@ -16,6 +16,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run an experiment (a sweep of missions) in parallel, or merge its shards.
+    Bench(cli::bench::Args),
     /// Run the optimizers on standard test functions.
     Optimize(cli::optimize::Args),
     /// Solve a Moving AI path-finding benchmark with Papillon's A*.
@@ -29,6 +31,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Bench(args) => cli::bench::run(args),
         Command::Optimize(args) => cli::optimize::run(args),
         Command::Plan(args) => cli::plan::run(args),
         Command::Serve(args) => cli::serve::run(args),
