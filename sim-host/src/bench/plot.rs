@@ -259,15 +259,13 @@ fn draw_pareto<DB: DrawingBackend>(
         } else {
             color.stroke_width(2)
         };
+        let font = (FAMILY, 12).into_font().color(&BLACK);
         chart
-            .draw_series(std::iter::once(Circle::new(p, 6, style)))
-            .map_err(err)?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                s.name.clone(),
-                p,
-                (FAMILY, 12).into_font().color(&BLACK),
-            )))
+            .draw_series(std::iter::once(
+                EmptyElement::at(p)
+                    + Circle::new((0, 0), 6, style)
+                    + Text::new(s.name.clone(), (9, -6), font),
+            ))
             .map_err(err)?;
     }
     root.present().map_err(err)

@@ -333,8 +333,10 @@ impl Sweep {
     }
 }
 
-/// Shard `index` of `count` (0-based): the runs whose index is `index` modulo `count`, so that
-/// every shard gets a share of every map and method.
+/// Shard `index` of `count` (0-based): the runs whose index, scrambled by a fixed bijective
+/// hash, is `index` modulo `count`; the scrambling spreads every map and method over the
+/// shards (a plain modulo would give each shard the same methods whenever `count` divides
+/// the number of methods), so the shards take about the same time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shard {
     /// This shard, 0..count.
@@ -361,8 +363,16 @@ impl Shard {
 
     /// Whether run `index` belongs to this shard.
     pub fn contains(&self, index: usize) -> bool {
-        index % self.count == self.index
+        (scramble(index as u64) % self.count as u64) as usize == self.index
     }
+}
+
+/// SplitMix64's finaliser (Steele, Lea & Flood 2014): a fixed bijection of the run indices.
+fn scramble(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
 }
 
 impl fmt::Display for Shard {
@@ -454,6 +464,19 @@ mod tests {
             }
         }
         assert!(seen.iter().all(|&c| c == 1));
+        // Two shards of a two-method sweep both get both methods.
+        let two = Sweep::from_json(r#"{"maps": ["lab"], "methods": ["a", "b"], "runs": 8}"#, "t")
+            .unwrap();
+        for i in 0..2 {
+            let shard = Shard { index: i, count: 2 };
+            let methods: std::collections::BTreeSet<String> = two
+                .specs()
+                .into_iter()
+                .filter(|s| shard.contains(s.index))
+                .map(|s| s.method)
+                .collect();
+            assert_eq!(methods.len(), 2);
+        }
         assert!(Shard::parse("4/4").is_err());
         assert!(Shard::parse("1").is_err());
         assert!(Shard::parse("a/2").is_err());
