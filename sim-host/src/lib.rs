@@ -9,4 +9,5 @@ pub mod laser;
 pub mod movingai;
 pub mod physics;
 pub mod render;
+pub mod runner;
 pub mod world;

@@ -18,6 +18,8 @@ struct Cli {
 enum Command {
     /// Run an experiment (a sweep of missions) in parallel, or merge its shards.
     Bench(cli::bench::Args),
+    /// Run a whole exploration mission in simulated time (one or several robots).
+    Mission(cli::mission::Args),
     /// Run the optimizers on standard test functions.
     Optimize(cli::optimize::Args),
     /// Solve a Moving AI path-finding benchmark with Papillon's A*.
@@ -29,9 +31,27 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if e.use_stderr() => {
+            // One line: clap's first line, without its "error: " prefix.
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or("bad arguments");
+            eprintln!(
+                "papillon-sim: {}",
+                first.strip_prefix("error: ").unwrap_or(first)
+            );
+            return ExitCode::from(2);
+        }
+        Err(e) => {
+            // --help and --version.
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+    };
     match cli.command {
         Command::Bench(args) => cli::bench::run(args),
+        Command::Mission(args) => cli::mission::run(args),
         Command::Optimize(args) => cli::optimize::run(args),
         Command::Plan(args) => cli::plan::run(args),
         Command::Serve(args) => cli::serve::run(args),

@@ -74,6 +74,15 @@ impl SlipConfig {
             end_of_move_rad: 0.0,
         }
     }
+
+    /// What the thesis saw (Bendahmane 2023): a slide of 1–2 cm along the heading at the end
+    /// of each move (σ = 1.5 cm, mean 1.2 cm), and nothing else.
+    pub const fn thesis() -> Self {
+        Self {
+            end_of_move_m: 0.015,
+            ..Self::none()
+        }
+    }
 }
 
 impl Default for SlipConfig {

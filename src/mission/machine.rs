@@ -20,7 +20,7 @@ use crate::planner::waypoints::supercover;
 use crate::sensor::{Scan, integrate_scan};
 use crate::units;
 
-use super::shared::{RobotMark, SharedMap, Workspace};
+use super::shared::{MAX_SHARED_WAYPOINTS, RobotMark, SharedMap, Workspace};
 use super::{
     DoneReason, FaultReason, MAX_EVENTS, MissionConfig, MissionError, MissionEvent, MissionState,
     MissionStats, ReplanCause, SelectorKind, StepOutput,
@@ -33,7 +33,7 @@ const TRAIL_SPACING_M: f32 = 0.1;
 /// A blacklisted place covers targets within this distance \[m\].
 const BLACKLIST_RADIUS_M: f32 = 0.5;
 /// An obstacle this close to another robot's mark is that robot \[m\].
-const ROBOT_MATCH_M: f32 = 0.6;
+const ROBOT_MATCH_M: f32 = 0.8;
 /// Marks older than this are ignored when telling robots from walls.
 const MARK_MAX_AGE: Duration = Duration::from_secs(2);
 /// Search for a passable start cell up to this far from the robot \[m\].
@@ -44,6 +44,12 @@ const ASIDE_CLEARANCE_M: f32 = 0.8;
 const ASIDE_DISTANCE_M: f32 = 1.2;
 /// A robot waiting for another to step aside retries its plan this often \[s\].
 const RETRY_S: f32 = 1.0;
+/// Most cells lifted off (own body) or stamped on (other robots) the map while planning.
+const MAX_LIFTED: usize = 256;
+/// Other robots within this distance are stamped on the map while planning \[m\].
+const STAMP_RANGE_M: f32 = 3.0;
+/// The robot's body on the map: its turning radius plus this \[m\].
+const BODY_MARGIN_M: f32 = 0.1;
 /// Progress toward a waypoint smaller than this does not count \[m\].
 const PROGRESS_M: f32 = 0.05;
 
@@ -93,6 +99,10 @@ pub struct Mission<const N: usize> {
     targets: heapless::Vec<Point2, MAX_TARGETS>,
     /// Targets given by [`Mission::go_to`], planned at the next decision.
     goal: Option<heapless::Vec<Point2, MAX_TARGETS>>,
+    /// The current targets came from [`Mission::go_to`].
+    goal_active: bool,
+    goal_failures: u32,
+    goal_retry_at: Time,
     replans_this_decision: u32,
     failed_in_row: u32,
     replan_cause: ReplanCause,
@@ -109,6 +119,9 @@ pub struct Mission<const N: usize> {
     progress_time: Time,
     blacklist: heapless::Vec<(Point2, u32), MAX_BLACKLIST>,
     ahead: Option<Ahead>,
+    /// The remaining waypoints of the last path given up (for telling whether a robot is in
+    /// the way, and for publishing while the robot holds).
+    last_path: heapless::Vec<Point2, MAX_SHARED_WAYPOINTS>,
     trail: heapless::Deque<Point2, TRAIL_LEN>,
     last_step: Option<Time>,
 }
@@ -168,6 +181,9 @@ impl<const N: usize> Mission<N> {
             stats: MissionStats::default(),
             targets: heapless::Vec::new(),
             goal: None,
+            goal_active: false,
+            goal_failures: 0,
+            goal_retry_at: Time::ZERO,
             replans_this_decision: 0,
             failed_in_row: 0,
             replan_cause: ReplanCause::ObstacleAhead,
@@ -181,6 +197,7 @@ impl<const N: usize> Mission<N> {
             progress_time: Time::ZERO,
             blacklist: heapless::Vec::new(),
             ahead: None,
+            last_path: heapless::Vec::new(),
             trail: heapless::Deque::new(),
             last_step: None,
             config,
@@ -234,9 +251,9 @@ impl<const N: usize> Mission<N> {
     }
 
     /// A scan taken at `now` from the current pose: integrated into the shared map (before
-    /// the first odometry, at the start pose). Occupied evidence under the robot's own body
-    /// and along its last metre is weakened to a weak Free value: the robot stood there, so
-    /// what another robot's scan saw there was this robot, not a wall.
+    /// the first odometry, at the start pose). Occupied evidence along the robot's last metre
+    /// (not under its current body) is weakened to a weak Free value: the robot stood there,
+    /// so what another robot's scan saw there was this robot, not a wall.
     pub fn on_scan(
         &mut self,
         now: Time,
@@ -289,6 +306,8 @@ impl<const N: usize> Mission<N> {
         let mut goal = heapless::Vec::new();
         let _ = goal.extend_from_slice(targets);
         self.goal = Some(goal);
+        self.goal_failures = 0;
+        self.goal_retry_at = Time::ZERO;
         if matches!(
             self.state,
             MissionState::Rotating | MissionState::Driving | MissionState::Replanning
@@ -354,7 +373,15 @@ impl<const N: usize> Mission<N> {
             self.ack_pending = false;
         }
 
+        // The robot's own body, as other robots' scans put it on the map, must not block its
+        // own plans, and the robots near it block them wherever the scans have got to: both
+        // for the decisions of this period, then the cells are put back.
+        let mut lifted = self.lift_own_body(map);
+        self.stamp_others(map, now, &mut lifted);
         let proposed = self.run(now, map, ws, rng, &mut events);
+        for &(i, value) in lifted.iter().rev() {
+            map.grid.set_log_odds(i, value, &mut map.trav);
+        }
 
         let inputs = SafetyInputs {
             pose_odom: self.pose_odom,
@@ -490,6 +517,7 @@ impl<const N: usize> Mission<N> {
     }
 
     fn enter_replanning(&mut self, cause: ReplanCause) {
+        self.remember_path();
         self.follower.clear();
         self.ahead = None;
         self.replan_cause = cause;
@@ -575,8 +603,59 @@ impl<const N: usize> Mission<N> {
             .map(|m| m.id)
     }
 
+    /// Keeps the remaining waypoints of the path being dropped.
+    fn remember_path(&mut self) {
+        let path = self.follower.path();
+        if path.is_empty() {
+            return;
+        }
+        let from = self.follower.current_index().min(path.len());
+        let n = (path.len() - from).min(MAX_SHARED_WAYPOINTS);
+        self.last_path.clear();
+        let _ = self.last_path.extend_from_slice(&path[from..from + n]);
+    }
+
+    /// Another robot whose mark lies on the way from here along the last path (or straight
+    /// to the targets).
+    fn robot_on_way(&self, map: &SharedMap<N>, now: Time) -> Option<u8> {
+        let here = self.pose_map.position();
+        let way: &[Point2] = if self.last_path.is_empty() {
+            &self.targets
+        } else {
+            &self.last_path
+        };
+        map.robots
+            .iter()
+            .filter(|m| m.id != self.id && now.saturating_since(m.time) <= MARK_MAX_AGE)
+            .find(|m| {
+                let p = m.pose.position();
+                let mut a = here;
+                let mut near = p.distance(a) <= ROBOT_MATCH_M;
+                for &b in way {
+                    near |= distance_to_segment(p, a, b) <= ROBOT_MATCH_M;
+                    a = b;
+                }
+                near
+            })
+            .map(|m| m.id)
+    }
+
+    /// Waits for robot `other` to step aside, retrying the plan every second.
+    fn hold_for(&mut self, now: Time, other: u8, events: &mut Events<'_>) {
+        self.yielding = Some(Yield::Holding {
+            other,
+            retry_at: now + secs(RETRY_S),
+            give_up_at: now + secs(4.0 * self.config.yield_wait_s + 10.0),
+        });
+        events.push(MissionEvent::Yielding {
+            to_robot_ahead: true,
+        });
+        self.state = MissionState::Yielding;
+    }
+
     /// Another robot blocks the way: the higher id waits, the lower replans at once.
     fn begin_conflict(&mut self, now: Time, other: u8, events: &mut Events<'_>) {
+        self.remember_path();
         self.follower.clear();
         self.ahead = None;
         self.conflict_robot = Some(other);
@@ -607,26 +686,102 @@ impl<const N: usize> Mission<N> {
         }
     }
 
-    /// Weakens any Occupied evidence under the robot's body and along its recent trail: the
-    /// robot stood there, so another robot's scan saw this robot, not a wall.
+    /// Weakens any Occupied evidence at the places the robot has just left (its last metre,
+    /// away from where its body is now): it stood there, so what another robot's scan saw
+    /// there was this robot, not a wall. Its current body stays as the others saw it.
     fn clear_own_trail(&self, map: &mut SharedMap<N>) {
         let geom = *map.grid.geometry();
         let r = self.config.safety.footprint.radius_m + 0.5 * geom.resolution_m;
         let span = math::ceil(r / geom.resolution_m) as i32;
         let weak_free = self.config.sensor.free_log_odds;
         let here = self.pose_map.position();
-        for p in core::iter::once(here).chain(self.trail.iter().copied()) {
+        // Never the current body: the other robots must keep seeing it.
+        let keep = r + geom.resolution_m;
+        for p in self.trail.iter().copied() {
+            if p.distance(here) < r {
+                continue;
+            }
             let c = geom.cell_at_unchecked(p);
             for row in c.row - span..=c.row + span {
                 for col in c.col - span..=c.col + span {
                     let cell = Cell::new(col, row);
                     let Some(i) = geom.index(cell) else { continue };
-                    if geom.cell_center(cell).distance(p) > r {
+                    let centre = geom.cell_center(cell);
+                    if centre.distance(p) > r || centre.distance(here) < keep {
                         continue;
                     }
                     if map.grid.log_odds_at(i) > weak_free {
                         map.grid.set_log_odds(i, weak_free, &mut map.trav);
                     }
+                }
+            }
+        }
+    }
+
+    /// Sets every Occupied cell under the robot's body to weak Free evidence; returns the
+    /// cells and their values, for putting them back.
+    fn lift_own_body(&self, map: &mut SharedMap<N>) -> heapless::Vec<(usize, f32), MAX_LIFTED> {
+        let mut lifted = heapless::Vec::new();
+        let geom = *map.grid.geometry();
+        let r = self.config.safety.footprint.radius_m + BODY_MARGIN_M;
+        let span = math::ceil(r / geom.resolution_m) as i32;
+        let here = self.pose_map.position();
+        let c = geom.cell_at_unchecked(here);
+        let weak_free = self.config.sensor.free_log_odds;
+        for row in c.row - span..=c.row + span {
+            for col in c.col - span..=c.col + span {
+                let cell = Cell::new(col, row);
+                let Some(i) = geom.index(cell) else { continue };
+                if geom.cell_center(cell).distance(here) > r
+                    || map.grid.class(i) != CellClass::Occupied
+                {
+                    continue;
+                }
+                if lifted.push((i, map.grid.log_odds_at(i))).is_err() {
+                    return lifted;
+                }
+                map.grid.set_log_odds(i, weak_free, &mut map.trav);
+            }
+        }
+        lifted
+    }
+
+    /// Sets the cells under the other robots nearby (by their marks) Occupied, recording the
+    /// old values in `saved`.
+    fn stamp_others(
+        &self,
+        map: &mut SharedMap<N>,
+        now: Time,
+        saved: &mut heapless::Vec<(usize, f32), MAX_LIFTED>,
+    ) {
+        let geom = *map.grid.geometry();
+        let r = self.config.safety.footprint.radius_m;
+        let span = math::ceil(r / geom.resolution_m) as i32;
+        let here = self.pose_map.position();
+        let occupied = map.grid.bounds().max;
+        for k in 0..map.robots.len() {
+            let m = &map.robots[k];
+            let p = m.pose.position();
+            if m.id == self.id
+                || now.saturating_since(m.time) > MARK_MAX_AGE
+                || p.distance(here) > STAMP_RANGE_M
+            {
+                continue;
+            }
+            let c = geom.cell_at_unchecked(p);
+            for row in c.row - span..=c.row + span {
+                for col in c.col - span..=c.col + span {
+                    let cell = Cell::new(col, row);
+                    let Some(i) = geom.index(cell) else { continue };
+                    if geom.cell_center(cell).distance(p) > r
+                        || map.grid.class(i) == CellClass::Occupied
+                    {
+                        continue;
+                    }
+                    if saved.push((i, map.grid.log_odds_at(i))).is_err() {
+                        return;
+                    }
+                    map.grid.set_log_odds(i, occupied, &mut map.trav);
                 }
             }
         }
@@ -638,6 +793,8 @@ impl<const N: usize> Mission<N> {
         let from = self.follower.current_index().min(path.len());
         let remaining: &[Point2] = if from < path.len() {
             &path[from..]
+        } else if !self.last_path.is_empty() && !self.targets.is_empty() {
+            &self.last_path
         } else {
             &self.targets
         };
@@ -758,6 +915,7 @@ impl<const N: usize> Mission<N> {
             return false;
         }
         self.state = MissionState::Rotating;
+        self.last_path.clear();
         self.plan_time = Some(now);
         self.progress_index = usize::MAX;
         self.path_dirty = false;
@@ -781,6 +939,10 @@ impl<const N: usize> Mission<N> {
         self.blacklist
             .retain(|&(p, known)| known_around(&map.grid, p) == known);
         if let Some(goal) = self.goal.take() {
+            if now < self.goal_retry_at {
+                self.goal = Some(goal);
+                return false;
+            }
             return match self.plan_to(self.pose_map, &goal, map, ws) {
                 Ok(waypoints) => {
                     let length = polyline_length(self.pose_map.position(), &waypoints);
@@ -793,12 +955,29 @@ impl<const N: usize> Mission<N> {
                         evaluations: 0,
                         history: heapless::Vec::new(),
                     };
-                    self.adopt(now, &decision, events)
+                    let ok = self.adopt(now, &decision, events);
+                    self.goal_active = true;
+                    ok
                 }
                 Err(_) => {
-                    // Keep the goal and retry: another robot may be in the way.
-                    self.goal = Some(goal);
-                    self.failed(events)
+                    // Another robot in the way: wait for it, with the goal as targets.
+                    self.targets.clear();
+                    let _ = self.targets.extend_from_slice(&goal);
+                    if let Some(other) = self.robot_on_way(map, now) {
+                        self.goal_active = true;
+                        self.replans_this_decision = 0;
+                        self.hold_for(now, other, events);
+                        return true;
+                    }
+                    self.targets.clear();
+                    // Retry a little later; after too many failures, explore instead.
+                    events.stats.failed_decisions += 1;
+                    self.goal_failures += 1;
+                    if self.goal_failures < self.config.max_failed_decisions {
+                        self.goal = Some(goal);
+                        self.goal_retry_at = now + secs(RETRY_S);
+                    }
+                    false
                 }
             };
         }
@@ -820,6 +999,7 @@ impl<const N: usize> Mission<N> {
                 return self.adopt(now, &d, events);
             }
         }
+        self.goal_active = false;
         let outcome = self.run_selector(self.pose_map, map, ws, rng);
         match outcome {
             Ok(Outcome::Go(d)) => {
@@ -899,9 +1079,16 @@ impl<const N: usize> Mission<N> {
             .any(|&(q, _)| q.distance(p) <= BLACKLIST_RADIUS_M)
     }
 
-    /// Gives up the current targets: blacklists the last one and decides again.
+    /// Gives up the current targets: blacklists the last one and decides again (a go-to
+    /// goal is tried again later instead).
     fn abandon(&mut self, map: &SharedMap<N>, events: &mut Events<'_>) {
-        if let Some(&t) = self.targets.last() {
+        if self.goal_active && !self.targets.is_empty() {
+            self.goal = Some(self.targets.clone());
+            self.goal_failures += 1;
+            if self.goal_failures >= self.config.max_failed_decisions {
+                self.goal = None;
+            }
+        } else if let Some(&t) = self.targets.last() {
             if self.blacklist.is_full() {
                 self.blacklist.remove(0);
             }
@@ -942,17 +1129,22 @@ impl<const N: usize> Mission<N> {
             }
             _ => {
                 // No way to the targets. If a robot is what blocks it, wait for it to step
-                // aside; else give the targets up.
-                if let Some(other) = self.conflict_robot.filter(|&o| o > self.id) {
-                    self.yielding = Some(Yield::Holding {
-                        other,
-                        retry_at: now + secs(RETRY_S),
-                        give_up_at: now + secs(4.0 * self.config.yield_wait_s + 10.0),
-                    });
-                    events.push(MissionEvent::Yielding {
-                        to_robot_ahead: true,
-                    });
-                    self.state = MissionState::Yielding;
+                // aside (a higher id steps aside; a lower id is waited for in the same way,
+                // as it will move on); else give the targets up.
+                let other = self.conflict_robot.or_else(|| self.robot_on_way(map, now));
+                if let Some(other) = other {
+                    self.hold_for(now, other, events);
+                    return;
+                }
+                // A target that turned out to be in a wall is not a failure to reach it.
+                let geom = *map.trav.geometry();
+                let in_wall = self
+                    .targets
+                    .last()
+                    .is_some_and(|&t| !map.trav.is_passable(geom.cell_at_unchecked(t)));
+                if in_wall && !self.goal_active {
+                    self.targets.clear();
+                    self.state = MissionState::Deciding;
                     return;
                 }
                 self.abandon(map, events);

@@ -76,6 +76,11 @@ use crate::sensor::{IntegrationError, LaserConfig, SensorModel};
 /// Most events one step reports.
 pub const MAX_EVENTS: usize = 8;
 
+/// Obstacle inflation the mission plans with by default \[m\]: the P3-DX's turning radius
+/// (0.25 m) plus the safety monitor's turning margin (0.05 m) plus a margin for path
+/// tracking, so that a planned path never leads where the monitor forbids turning in place.
+pub const DEFAULT_PLANNING_RADIUS_M: f32 = 0.38;
+
 /// Which target selector decides.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SelectorKind {
@@ -143,7 +148,10 @@ impl Default for MissionConfig {
             laser: LaserConfig::thesis(),
             sensor: SensorModel::default(),
             grid_bounds: LogOddsBounds::default(),
-            traversability: TraversabilityConfig::default(),
+            traversability: TraversabilityConfig {
+                robot_radius_m: DEFAULT_PLANNING_RADIUS_M,
+                ..TraversabilityConfig::default()
+            },
             follower: FollowerConfig::default(),
             safety: SafetyConfig::default(),
             limits: Limits::p3dx_exploration(),
