@@ -94,7 +94,11 @@ pub fn render_classes(
 }
 
 /// Renders a core occupancy grid with tracks.
-pub fn render_grid<const N: usize>(grid: &OccupancyGrid<N>, tracks: &[Track], scale: u32) -> RgbImage {
+pub fn render_grid<const N: usize>(
+    grid: &OccupancyGrid<N>,
+    tracks: &[Track],
+    scale: u32,
+) -> RgbImage {
     render_classes(grid.geometry(), |i| grid.class(i), tracks, scale)
 }
 

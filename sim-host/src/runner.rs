@@ -58,8 +58,8 @@ const TRACK_SPACING_M: f32 = 0.05;
 /// A seed for stream `stream` of robot `robot`, derived from the run's seed (SplitMix64's
 /// finaliser over the three, Steele, Lea & Flood 2014), so that streams do not overlap.
 pub fn derive_seed(seed: u64, robot: usize, stream: u64) -> u64 {
-    let mut z = seed
-        .wrapping_add(0x9E37_79B9_7F4A_7C15u64.wrapping_mul(1 + robot as u64 * 8 + stream));
+    let mut z =
+        seed.wrapping_add(0x9E37_79B9_7F4A_7C15u64.wrapping_mul(1 + robot as u64 * 8 + stream));
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -427,9 +427,11 @@ impl CoverageCounter {
         let g = *grid.geometry();
         let r = g.resolution_m;
         let c0 = (((p.x - radius_m - g.origin.x) / r).floor() as i64).max(0) as usize;
-        let c1 = (((p.x + radius_m - g.origin.x) / r).ceil() as i64).clamp(0, g.width as i64) as usize;
+        let c1 =
+            (((p.x + radius_m - g.origin.x) / r).ceil() as i64).clamp(0, g.width as i64) as usize;
         let r0 = (((p.y - radius_m - g.origin.y) / r).floor() as i64).max(0) as usize;
-        let r1 = (((p.y + radius_m - g.origin.y) / r).ceil() as i64).clamp(0, g.height as i64) as usize;
+        let r1 =
+            (((p.y + radius_m - g.origin.y) / r).ceil() as i64).clamp(0, g.height as i64) as usize;
         let mask = self.truth.mask();
         for row in r0..r1 {
             for col in c0..c1 {
@@ -786,7 +788,13 @@ impl Runner {
         let mut discs = self.robot_discs();
         discs.extend(self.dynamics.people_discs(self.sim_time_s()));
         let reach = self.config.mission.laser.max_range_m
-            + self.config.mission.laser.mount.position().distance(Point2::default())
+            + self
+                .config
+                .mission
+                .laser
+                .mount
+                .position()
+                .distance(Point2::default())
             + 1.5;
         for (r, body) in self.robots.iter_mut().zip(&self.bodies) {
             let pose = body.true_pose();
@@ -845,8 +853,7 @@ impl Runner {
             }
             r.was_stalled = stalled;
             let p = body.true_pose().position();
-            if r
-                .report
+            if r.report
                 .trajectory
                 .last()
                 .is_none_or(|q| q.distance(p) >= TRACK_SPACING_M)
@@ -961,7 +968,11 @@ mod tests {
         let mut runner = Runner::new(w, Dynamics::new(), cfg).unwrap();
         let report = runner.run().unwrap();
         assert_eq!(report.reason, Some(EndReason::TimeLimit));
-        assert!((report.sim_time_s - 2.0).abs() < 0.11, "{}", report.sim_time_s);
+        assert!(
+            (report.sim_time_s - 2.0).abs() < 0.11,
+            "{}",
+            report.sim_time_s
+        );
         assert!(report.coverage > 0.0, "the first scans are integrated");
         assert_eq!(report.robots.len(), 1);
         assert!(!report.coverage_curve.is_empty());

@@ -99,8 +99,9 @@ fn a_door_closing_ahead_of_the_robot_causes_a_replan_not_a_collision() {
     assert!(close_at < through);
     // Second run, same seed: the door closes as the robot heads for it.
     let (x0, y0, x1, y1) = builtin::LAB_DOOR;
-    let dynamics = Dynamics::new()
-        .with_door(Door::new(&world, x0, y0, x1, y1, DoorState::Open).at(close_at, DoorState::Closed));
+    let dynamics = Dynamics::new().with_door(
+        Door::new(&world, x0, y0, x1, y1, DoorState::Open).at(close_at, DoorState::Closed),
+    );
     let mut runner = Runner::new(world, dynamics, config()).unwrap();
     let report = runner.run().unwrap();
     let replans_after: Vec<_> = report
@@ -114,9 +115,7 @@ fn a_door_closing_ahead_of_the_robot_causes_a_replan_not_a_collision() {
         report.events
     );
     assert_eq!(report.collisions(), 0, "the robot hit something");
-    let blocked_door = runner
-        .world()
-        .is_blocked_at(door);
+    let blocked_door = runner.world().is_blocked_at(door);
     assert!(blocked_door, "the door did close");
     assert!(report.reason.is_some());
 }
@@ -159,7 +158,11 @@ fn json_output_is_one_object_with_every_key() {
         "--png",
         png.to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8(out.stdout).unwrap();
     assert_eq!(text.trim().lines().count(), 1, "{text}");
     let v: serde_json::Value = serde_json::from_str(text.trim()).unwrap();

@@ -67,7 +67,11 @@ pub fn read_sweep_file(dir: &Path) -> Result<SweepFile, String> {
 
 /// Writes `runs.jsonl` (sorted), `results.csv`, `summary.json`, `summary.md` and the plots
 /// of `records` into `dir`; returns the files written.
-pub fn write_outputs(dir: &Path, name: &str, records: &[RunRecord]) -> Result<Vec<PathBuf>, String> {
+pub fn write_outputs(
+    dir: &Path,
+    name: &str,
+    records: &[RunRecord],
+) -> Result<Vec<PathBuf>, String> {
     fs::create_dir_all(dir).map_err(|e| format!("{}: cannot create: {e}", dir.display()))?;
     let write = |file: &str, text: String| -> Result<PathBuf, String> {
         let p = dir.join(file);
@@ -203,7 +207,10 @@ mod tests {
         assert!(!other_half.is_empty());
         assert_eq!(half.missing, other_half);
         // Shards of another sweep are refused.
-        let other = Sweep { runs: 4, ..sweep.clone() };
+        let other = Sweep {
+            runs: 4,
+            ..sweep.clone()
+        };
         let odir = base.join("other");
         write_sweep_file(&odir, &other, Shard::ALL).unwrap();
         write_outputs(&odir, "t", &[]).unwrap();

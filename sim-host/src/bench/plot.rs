@@ -128,9 +128,10 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     (0..points.len())
         .filter(|&i| {
             let (t, c) = points[i];
-            !points.iter().enumerate().any(|(j, &(tj, cj))| {
-                j != i && tj <= t && cj >= c && (tj < t || cj > c)
-            })
+            !points
+                .iter()
+                .enumerate()
+                .any(|(j, &(tj, cj))| j != i && tj <= t && cj >= c && (tj < t || cj > c))
         })
         .collect()
 }
@@ -175,7 +176,10 @@ fn draw_coverage<DB: DrawingBackend>(
         let mut poly: Vec<(f32, f32)> = b.iter().map(|&(x, _, _, hi)| (x, 100.0 * hi)).collect();
         poly.extend(b.iter().rev().map(|&(x, _, lo, _)| (x, 100.0 * lo)));
         chart
-            .draw_series(std::iter::once(Polygon::new(poly, color.mix(0.15).filled())))
+            .draw_series(std::iter::once(Polygon::new(
+                poly,
+                color.mix(0.15).filled(),
+            )))
             .map_err(err)?;
         chart
             .draw_series(LineSeries::new(
@@ -210,7 +214,11 @@ fn draw_pareto<DB: DrawingBackend>(
     let points: Vec<(f64, f64)> = series
         .iter()
         .map(|s| {
-            let times: Vec<f64> = s.runs.iter().flat_map(|r| r.decision_ms.iter().copied()).collect();
+            let times: Vec<f64> = s
+                .runs
+                .iter()
+                .flat_map(|r| r.decision_ms.iter().copied())
+                .collect();
             let t = if times.is_empty() {
                 1e-3
             } else {
@@ -291,12 +299,7 @@ fn draw_convergence<DB: DrawingBackend>(
                 .collect();
             let len = hs.iter().map(|h| h.len()).max()?;
             let mean = (0..len)
-                .map(|g| {
-                    hs.iter()
-                        .map(|h| h[g.min(h.len() - 1)])
-                        .sum::<f32>()
-                        / hs.len() as f32
-                })
+                .map(|g| hs.iter().map(|h| h[g.min(h.len() - 1)]).sum::<f32>() / hs.len() as f32)
                 .collect();
             Some((i, s, mean))
         })
@@ -390,7 +393,13 @@ fn render(
 fn safe(label: &str) -> String {
     label
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect()
 }
 
@@ -431,7 +440,13 @@ mod tests {
 
     #[test]
     fn the_pareto_front_keeps_the_undominated_points() {
-        let pts = [(1.0, 90.0), (2.0, 95.0), (3.0, 94.0), (0.5, 80.0), (2.0, 95.0)];
+        let pts = [
+            (1.0, 90.0),
+            (2.0, 95.0),
+            (3.0, 94.0),
+            (0.5, 80.0),
+            (2.0, 95.0),
+        ];
         // (3, 94) is dominated by (2, 95); the two equal points do not dominate each other.
         assert_eq!(pareto_front(&pts), vec![0, 1, 3, 4]);
     }

@@ -127,7 +127,11 @@ pub fn csv(records: &[RunRecord]) -> String {
         );
         match &r.result {
             Ok(m) => {
-                let per: Vec<String> = m.steps_per_robot.iter().map(|x| format!("{x:.2}")).collect();
+                let per: Vec<String> = m
+                    .steps_per_robot
+                    .iter()
+                    .map(|x| format!("{x:.2}"))
+                    .collect();
                 let _ = writeln!(
                     out,
                     "ok,{:.5},{:.2},{},{},{},{:.3},{:.4},{},{},{},{},{:.3},{:.1},{:.3},{}",

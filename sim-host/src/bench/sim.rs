@@ -70,7 +70,10 @@ pub fn mission_args(spec: &RunSpec) -> Result<Args, String> {
         .map(|m| m.args)
         .map_err(|e| {
             let text = e.to_string();
-            text.lines().next().unwrap_or("bad mission options").to_string()
+            text.lines()
+                .next()
+                .unwrap_or("bad mission options")
+                .to_string()
         })
 }
 

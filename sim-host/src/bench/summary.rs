@@ -114,9 +114,20 @@ pub fn summarize(records: &[RunRecord]) -> Vec<GroupSummary> {
             let col = |f: &dyn Fn(&super::record::RunResult) -> f64| {
                 Stat::of(&ok.iter().map(|m| f(m)).collect::<Vec<_>>())
             };
-            let to90: Vec<f64> = ok.iter().filter_map(|m| m.steps_to(0.90)).map(f64::from).collect();
-            let to99: Vec<f64> = ok.iter().filter_map(|m| m.steps_to(0.99)).map(f64::from).collect();
-            let mut times: Vec<f64> = ok.iter().flat_map(|m| m.decision_ms.iter().copied()).collect();
+            let to90: Vec<f64> = ok
+                .iter()
+                .filter_map(|m| m.steps_to(0.90))
+                .map(f64::from)
+                .collect();
+            let to99: Vec<f64> = ok
+                .iter()
+                .filter_map(|m| m.steps_to(0.99))
+                .map(f64::from)
+                .collect();
+            let mut times: Vec<f64> = ok
+                .iter()
+                .flat_map(|m| m.decision_ms.iter().copied())
+                .collect();
             times.sort_by(f64::total_cmp);
             let mean = if times.is_empty() {
                 None
@@ -278,6 +289,9 @@ mod tests {
         assert_eq!(boa.decision_ms_p99, Some(2.0));
         let md = markdown("t", &groups);
         assert!(md.contains("## lab"));
-        assert!(md.contains("| boa | short (1) | 5 | 1 | 2 | 92.00 | 91.00 | 93.00 | 5.5 | – (0/2) |"), "{md}");
+        assert!(
+            md.contains("| boa | short (1) | 5 | 1 | 2 | 92.00 | 91.00 | 93.00 | 5.5 | – (0/2) |"),
+            "{md}"
+        );
     }
 }

@@ -263,10 +263,7 @@ impl Sweep {
         }
         for s in &self.strategies {
             if s.name != "short" && s.name != "long" {
-                return Err(format!(
-                    "strategy must be short or long, got '{}'",
-                    s.name
-                ));
+                return Err(format!("strategy must be short or long, got '{}'", s.name));
             }
         }
         if !(self.resolution_m.is_finite() && self.resolution_m > 0.0) {
@@ -465,8 +462,11 @@ mod tests {
         }
         assert!(seen.iter().all(|&c| c == 1));
         // Two shards of a two-method sweep both get both methods.
-        let two = Sweep::from_json(r#"{"maps": ["lab"], "methods": ["a", "b"], "runs": 8}"#, "t")
-            .unwrap();
+        let two = Sweep::from_json(
+            r#"{"maps": ["lab"], "methods": ["a", "b"], "runs": 8}"#,
+            "t",
+        )
+        .unwrap();
         for i in 0..2 {
             let shard = Shard { index: i, count: 2 };
             let methods: std::collections::BTreeSet<String> = two
@@ -494,8 +494,11 @@ mod tests {
         assert_eq!(s.populations, vec![5]);
         assert_eq!(s.strategies[0].k(), 3);
         assert_eq!(s.len(), 4);
-        let e = Sweep::from_json(r#"{"maps": ["lab"], "methods": ["xboa"], "rnus": 2}"#, "t.json")
-            .unwrap_err();
+        let e = Sweep::from_json(
+            r#"{"maps": ["lab"], "methods": ["xboa"], "rnus": 2}"#,
+            "t.json",
+        )
+        .unwrap_err();
         assert!(e.starts_with("t.json: bad sweep"), "{e}");
         let e = Sweep::from_json(r#"{"maps": [], "methods": ["xboa"]}"#, "t.json").unwrap_err();
         assert!(e.contains("no maps"), "{e}");
@@ -504,6 +507,9 @@ mod tests {
     #[test]
     fn map_labels_are_names_or_file_stems() {
         assert_eq!(map_label("house"), "house");
-        assert_eq!(map_label("../shared/data/thesis-maps/map-house.csv"), "map-house");
+        assert_eq!(
+            map_label("../shared/data/thesis-maps/map-house.csv"),
+            "map-house"
+        );
     }
 }

@@ -200,7 +200,14 @@ pub fn run(args: Args) -> ExitCode {
     } else {
         ProgressMode::auto()
     };
-    match run_sweep(&sweep, shard, args.jobs, &out, &crate::bench::sim::run, mode) {
+    match run_sweep(
+        &sweep,
+        shard,
+        args.jobs,
+        &out,
+        &crate::bench::sim::run,
+        mode,
+    ) {
         Ok(0) => {
             println!("{}", out.join("summary.md").display());
             ExitCode::SUCCESS

@@ -146,9 +146,7 @@ impl Setup {
                 k
             }
             other => {
-                return Err(format!(
-                    "--strategy: expected short or long, got '{other}'"
-                ));
+                return Err(format!("--strategy: expected short or long, got '{other}'"));
             }
         };
         let seed: u64 = number("--seed", &args.seed, "a whole number")?;
@@ -162,7 +160,9 @@ impl Setup {
         if let Some(b) = &args.battery {
             let b: f32 = number("--battery", b, "a number of steps")?;
             if !(b.is_finite() && b > 0.0) {
-                return Err(format!("--battery: expected a positive number of steps, got {b}"));
+                return Err(format!(
+                    "--battery: expected a positive number of steps, got {b}"
+                ));
             }
             mission.battery_steps = b;
         }
@@ -358,7 +358,11 @@ pub enum Failure {
 
 /// Runs a checked set-up and returns the report, writing one picture per decision into
 /// `frames` and the final picture to `png` when given.
-pub fn execute(setup: &Setup, frames: Option<&Path>, png: Option<&Path>) -> Result<RunReport, Failure> {
+pub fn execute(
+    setup: &Setup,
+    frames: Option<&Path>,
+    png: Option<&Path>,
+) -> Result<RunReport, Failure> {
     let scale = picture_scale(&setup.world);
     let mut runner = Runner::new(setup.world.clone(), Dynamics::new(), setup.run.clone())
         .map_err(|e| Failure::Setup(e.to_string()))?;
@@ -456,7 +460,11 @@ mod tests {
         let m = &s.run.mission;
         assert_eq!(m.selector, SelectorKind::Optimized(Method::Xboa));
         assert_eq!(
-            (m.explore.population, m.explore.max_generations, m.explore.targets),
+            (
+                m.explore.population,
+                m.explore.max_generations,
+                m.explore.targets
+            ),
             (5, 30, 1)
         );
         assert_eq!((s.run.robots, s.run.seed), (1, 25));
@@ -468,30 +476,112 @@ mod tests {
     #[test]
     fn bad_arguments_name_the_option_on_one_line() {
         let cases: Vec<(Args, &str)> = vec![
-            (Args { robots: "0".into(), ..args() }, "--robots:"),
-            (Args { robots: "two".into(), ..args() }, "--robots:"),
-            (Args { method: "xbox".into(), ..args() }, "--method:"),
-            (Args { pop: "1".into(), ..args() }, "--pop:"),
-            (Args { gens: "0".into(), ..args() }, "--gens:"),
-            (Args { strategy: "medium".into(), ..args() }, "--strategy:"),
-            (Args { targets: Some("3".into()), ..args() }, "--targets:"),
             (
-                Args { strategy: "long".into(), targets: Some("9".into()), ..args() },
+                Args {
+                    robots: "0".into(),
+                    ..args()
+                },
+                "--robots:",
+            ),
+            (
+                Args {
+                    robots: "two".into(),
+                    ..args()
+                },
+                "--robots:",
+            ),
+            (
+                Args {
+                    method: "xbox".into(),
+                    ..args()
+                },
+                "--method:",
+            ),
+            (
+                Args {
+                    pop: "1".into(),
+                    ..args()
+                },
+                "--pop:",
+            ),
+            (
+                Args {
+                    gens: "0".into(),
+                    ..args()
+                },
+                "--gens:",
+            ),
+            (
+                Args {
+                    strategy: "medium".into(),
+                    ..args()
+                },
+                "--strategy:",
+            ),
+            (
+                Args {
+                    targets: Some("3".into()),
+                    ..args()
+                },
                 "--targets:",
             ),
-            (Args { seed: "-1".into(), ..args() }, "--seed:"),
-            (Args { slip: "lots".into(), ..args() }, "--slip:"),
-            (Args { battery: Some("0".into()), ..args() }, "--battery:"),
             (
-                Args { start: Some(vec!["0.1".into(), "0.1".into()]), ..args() },
+                Args {
+                    strategy: "long".into(),
+                    targets: Some("9".into()),
+                    ..args()
+                },
+                "--targets:",
+            ),
+            (
+                Args {
+                    seed: "-1".into(),
+                    ..args()
+                },
+                "--seed:",
+            ),
+            (
+                Args {
+                    slip: "lots".into(),
+                    ..args()
+                },
+                "--slip:",
+            ),
+            (
+                Args {
+                    battery: Some("0".into()),
+                    ..args()
+                },
+                "--battery:",
+            ),
+            (
+                Args {
+                    start: Some(vec!["0.1".into(), "0.1".into()]),
+                    ..args()
+                },
                 "--start:",
             ),
             (
-                Args { start: Some(vec!["a".into(), "1".into()]), ..args() },
+                Args {
+                    start: Some(vec!["a".into(), "1".into()]),
+                    ..args()
+                },
                 "--start:",
             ),
-            (Args { map: "nowhere".into(), ..args() }, "unknown world 'nowhere'"),
-            (Args { map: "/no/such.map".into(), ..args() }, "/no/such.map: cannot read"),
+            (
+                Args {
+                    map: "nowhere".into(),
+                    ..args()
+                },
+                "unknown world 'nowhere'",
+            ),
+            (
+                Args {
+                    map: "/no/such.map".into(),
+                    ..args()
+                },
+                "/no/such.map: cannot read",
+            ),
         ];
         for (a, want) in cases {
             let e = Setup::from_args(&a).unwrap_err();

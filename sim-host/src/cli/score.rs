@@ -171,7 +171,13 @@ mod tests {
             cells: world
                 .blocked()
                 .iter()
-                .map(|&b| if b { CellClass::Occupied } else { CellClass::Free })
+                .map(|&b| {
+                    if b {
+                        CellClass::Occupied
+                    } else {
+                        CellClass::Free
+                    }
+                })
                 .collect(),
         }
     }

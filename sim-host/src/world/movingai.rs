@@ -28,8 +28,7 @@ pub fn from_map(map: &MovingAiMap, name: &str, resolution_m: f32) -> Result<Worl
     let mut blocked = vec![false; g.cell_count()];
     for row in 0..map.height {
         for col in 0..map.width {
-            blocked[row * map.width + col] =
-                map.is_cell_blocked(Cell::new(col as i32, row as i32));
+            blocked[row * map.width + col] = map.is_cell_blocked(Cell::new(col as i32, row as i32));
         }
     }
     World::from_blocked(name, g, blocked)
@@ -59,7 +58,9 @@ mod tests {
         let e = load(&p, 0.1).unwrap_err().to_string();
         assert!(e.contains(&format!("{}:6", p.display())), "{e}");
         std::fs::remove_file(&p).unwrap();
-        let e = load(Path::new("/no/such.map"), 0.1).unwrap_err().to_string();
+        let e = load(Path::new("/no/such.map"), 0.1)
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("/no/such.map: cannot read"), "{e}");
     }
 

@@ -65,7 +65,10 @@ mod tests {
         assert!(!w.is_blocked(Cell::new(0, 0)));
         assert!(w.is_blocked(Cell::new(1, 0)));
         assert!(!w.is_blocked(Cell::new(2, 0)));
-        assert_eq!(w.start().position(), papillon::geometry::Point2::new(-1.0, 4.0));
+        assert_eq!(
+            w.start().position(),
+            papillon::geometry::Point2::new(-1.0, 4.0)
+        );
         std::fs::remove_dir_all(dir).unwrap();
     }
 
@@ -83,7 +86,11 @@ mod tests {
     #[test]
     fn errors_name_the_file_and_the_problem() {
         let dir = tmp("c");
-        let y = write(&dir, "image: m.pgm\nresolution: fast\n", b"P2\n1 1\n255\n0\n");
+        let y = write(
+            &dir,
+            "image: m.pgm\nresolution: fast\n",
+            b"P2\n1 1\n255\n0\n",
+        );
         let e = load(&y).unwrap_err().to_string();
         assert!(e.contains("m.yaml:2") && e.contains("resolution"), "{e}");
         let y = write(&dir, YAML, b"P7\n");
