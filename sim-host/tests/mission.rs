@@ -114,6 +114,12 @@ fn a_door_closing_ahead_of_the_robot_causes_a_replan_not_a_collision() {
         "no replan after the door closed at {close_at} s: {:?}",
         report.events
     );
+    // Seen as soon as the laser shows the closed door across the path.
+    assert!(
+        replans_after[0].time_s <= close_at + 5.0,
+        "first replan {:?}, door closed at {close_at} s",
+        replans_after[0]
+    );
     assert_eq!(report.collisions(), 0, "the robot hit something");
     let blocked_door = runner.world().is_blocked_at(door);
     assert!(blocked_door, "the door did close");
@@ -148,6 +154,7 @@ fn sim(args: &[&str]) -> std::process::Output {
 #[test]
 fn json_output_is_one_object_with_every_key() {
     let png = std::env::temp_dir().join(format!("papillon-mission-{}.png", std::process::id()));
+    let frames = std::env::temp_dir().join(format!("papillon-frames-{}", std::process::id()));
     let out = sim(&[
         "mission",
         "--map",
@@ -157,6 +164,8 @@ fn json_output_is_one_object_with_every_key() {
         "--json",
         "--png",
         png.to_str().unwrap(),
+        "--frames",
+        frames.to_str().unwrap(),
     ]);
     assert!(
         out.status.success(),
@@ -200,6 +209,11 @@ fn json_output_is_one_object_with_every_key() {
     // The lab is 80 x 80 cells at 0.1 m, drawn at 4 pixels per cell.
     assert_eq!((img.width(), img.height()), (320, 320));
     std::fs::remove_file(&png).unwrap();
+    // One frame per decision.
+    let written = std::fs::read_dir(&frames).unwrap().count();
+    assert_eq!(written as u64, v["decisions"].as_u64().unwrap());
+    assert!(written > 0);
+    std::fs::remove_dir_all(&frames).unwrap();
 }
 
 #[test]

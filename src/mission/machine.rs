@@ -1,5 +1,5 @@
 //! The per-robot mission state machine (see the [module documentation](super) for the states
-//! and transitions).
+//! and transitions). What concerns several robots on one map is in [`robots`].
 
 use core::time::Duration;
 
@@ -20,55 +20,28 @@ use crate::planner::waypoints::supercover;
 use crate::sensor::{Scan, integrate_scan};
 use crate::units;
 
-use super::shared::{MAX_SHARED_WAYPOINTS, RobotMark, SharedMap, Workspace};
+use super::shared::{MAX_SHARED_WAYPOINTS, SharedMap, Workspace};
+
+mod robots;
+
 use super::{
     DoneReason, FaultReason, MAX_EVENTS, MissionConfig, MissionError, MissionEvent, MissionState,
     MissionStats, ReplanCause, SelectorKind, StepOutput,
 };
+use robots::{TRAIL_LEN, TRAIL_SPACING_M, Yield};
 
-/// Poses remembered along the way, for clearing the robot's own trail on the shared map.
-const TRAIL_LEN: usize = 12;
-/// Spacing of the remembered poses \[m\].
-const TRAIL_SPACING_M: f32 = 0.1;
 /// A blacklisted place covers targets within this distance \[m\].
 const BLACKLIST_RADIUS_M: f32 = 0.5;
-/// An obstacle this close to another robot's mark is that robot \[m\].
-const ROBOT_MATCH_M: f32 = 0.8;
-/// Marks older than this are ignored when telling robots from walls.
-const MARK_MAX_AGE: Duration = Duration::from_secs(2);
 /// Search for a passable start cell up to this far from the robot \[m\].
 const START_SNAP_M: f32 = 0.6;
-/// A place to step aside to keeps this far from the other robot's path \[m\].
-const ASIDE_CLEARANCE_M: f32 = 0.8;
-/// ... and this far from the other robot itself \[m\].
-const ASIDE_DISTANCE_M: f32 = 1.2;
 /// A robot waiting for another to step aside retries its plan this often \[s\].
 const RETRY_S: f32 = 1.0;
-/// Most cells lifted off (own body) or stamped on (other robots) the map while planning.
-const MAX_LIFTED: usize = 256;
-/// Other robots within this distance are stamped on the map while planning \[m\].
-const STAMP_RANGE_M: f32 = 3.0;
-/// The robot's body on the map: its turning radius plus this \[m\].
-const BODY_MARGIN_M: f32 = 0.1;
+/// Bumper contacts remembered.
+const MAX_CONTACTS: usize = 16;
+/// How long a bumper contact is remembered while planning.
+const CONTACT_MEMORY: Duration = Duration::from_secs(120);
 /// Progress toward a waypoint smaller than this does not count \[m\].
 const PROGRESS_M: f32 = 0.05;
-
-/// What a yielding robot is doing.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Yield {
-    /// Higher id: waiting before replanning around the robot ahead.
-    Waiting { other: u8, until: Time },
-    /// Higher id: driving out of the other robot's path.
-    SteppingAside { other: u8, since: Time },
-    /// Higher id: standing aside until the other robot has passed.
-    Clearing { other: u8, since: Time },
-    /// Lower id: no way past the other robot; retrying until it steps aside.
-    Holding {
-        other: u8,
-        retry_at: Time,
-        give_up_at: Time,
-    },
-}
 
 /// A decision computed ahead, from the end of the current path.
 #[derive(Clone, Debug)]
@@ -122,6 +95,9 @@ pub struct Mission<const N: usize> {
     /// The remaining waypoints of the last path given up (for telling whether a robot is in
     /// the way, and for publishing while the robot holds).
     last_path: heapless::Vec<Point2, MAX_SHARED_WAYPOINTS>,
+    /// Where the bumpers found something (a segment across the bumper, map frame) and until
+    /// when it is remembered: obstacles the laser may not see (glass, low objects).
+    contacts: heapless::Deque<(Point2, Point2, Time), MAX_CONTACTS>,
     trail: heapless::Deque<Point2, TRAIL_LEN>,
     last_step: Option<Time>,
 }
@@ -198,6 +174,7 @@ impl<const N: usize> Mission<N> {
             blacklist: heapless::Vec::new(),
             ahead: None,
             last_path: heapless::Vec::new(),
+            contacts: heapless::Deque::new(),
             trail: heapless::Deque::new(),
             last_step: None,
             config,
@@ -254,6 +231,9 @@ impl<const N: usize> Mission<N> {
     /// the first odometry, at the start pose). Occupied evidence along the robot's last metre
     /// (not under its current body) is weakened to a weak Free value: the robot stood there,
     /// so what another robot's scan saw there was this robot, not a wall.
+    ///
+    /// Errors: the scan cannot be integrated (bad sensor model or pose), or this is a ninth
+    /// robot on the map ([`MissionError::TooManyRobots`]; the scan was integrated).
     pub fn on_scan(
         &mut self,
         now: Time,
@@ -562,17 +542,21 @@ impl<const N: usize> Mission<N> {
             } => {
                 let fp = self.config.safety.footprint;
                 let res = map.grid.geometry().resolution_m;
-                if front_bumper {
-                    let p = self
-                        .pose_map
-                        .transform_point(Point2::new(fp.front_m + 0.5 * res, 0.0));
-                    self.mark_occupied(map, p);
-                }
-                if rear_bumper {
-                    let p = self
-                        .pose_map
-                        .transform_point(Point2::new(-fp.rear_m - 0.5 * res, 0.0));
-                    self.mark_occupied(map, p);
+                let half = 0.5 * fp.width_m;
+                for (pressed, x) in [
+                    (front_bumper, fp.front_m + 0.5 * res),
+                    (rear_bumper, -fp.rear_m - 0.5 * res),
+                ] {
+                    if !pressed {
+                        continue;
+                    }
+                    let a = self.pose_map.transform_point(Point2::new(x, -half));
+                    let b = self.pose_map.transform_point(Point2::new(x, half));
+                    self.mark_occupied(map, self.pose_map.transform_point(Point2::new(x, 0.0)));
+                    if self.contacts.is_full() {
+                        self.contacts.pop_front();
+                    }
+                    let _ = self.contacts.push_back((a, b, now + CONTACT_MEMORY));
                 }
                 self.yielding = None;
                 if !matches!(self.state, MissionState::Done(_) | MissionState::Fault(_)) {
@@ -594,15 +578,6 @@ impl<const N: usize> Mission<N> {
         }
     }
 
-    /// Which other robot, if any, stands at map point `p`.
-    fn robot_at(&self, map: &SharedMap<N>, now: Time, p: Point2) -> Option<u8> {
-        map.robots
-            .iter()
-            .filter(|m| m.id != self.id && now.saturating_since(m.time) <= MARK_MAX_AGE)
-            .find(|m| m.pose.position().distance(p) <= ROBOT_MATCH_M)
-            .map(|m| m.id)
-    }
-
     /// Keeps the remaining waypoints of the path being dropped.
     fn remember_path(&mut self) {
         let path = self.follower.path();
@@ -615,65 +590,6 @@ impl<const N: usize> Mission<N> {
         let _ = self.last_path.extend_from_slice(&path[from..from + n]);
     }
 
-    /// Another robot whose mark lies on the way from here along the last path (or straight
-    /// to the targets).
-    fn robot_on_way(&self, map: &SharedMap<N>, now: Time) -> Option<u8> {
-        let here = self.pose_map.position();
-        let way: &[Point2] = if self.last_path.is_empty() {
-            &self.targets
-        } else {
-            &self.last_path
-        };
-        map.robots
-            .iter()
-            .filter(|m| m.id != self.id && now.saturating_since(m.time) <= MARK_MAX_AGE)
-            .find(|m| {
-                let p = m.pose.position();
-                let mut a = here;
-                let mut near = p.distance(a) <= ROBOT_MATCH_M;
-                for &b in way {
-                    near |= distance_to_segment(p, a, b) <= ROBOT_MATCH_M;
-                    a = b;
-                }
-                near
-            })
-            .map(|m| m.id)
-    }
-
-    /// Waits for robot `other` to step aside, retrying the plan every second.
-    fn hold_for(&mut self, now: Time, other: u8, events: &mut Events<'_>) {
-        self.yielding = Some(Yield::Holding {
-            other,
-            retry_at: now + secs(RETRY_S),
-            give_up_at: now + secs(4.0 * self.config.yield_wait_s + 10.0),
-        });
-        events.push(MissionEvent::Yielding {
-            to_robot_ahead: true,
-        });
-        self.state = MissionState::Yielding;
-    }
-
-    /// Another robot blocks the way: the higher id waits, the lower replans at once.
-    fn begin_conflict(&mut self, now: Time, other: u8, events: &mut Events<'_>) {
-        self.remember_path();
-        self.follower.clear();
-        self.ahead = None;
-        self.conflict_robot = Some(other);
-        if self.id > other {
-            events.stats.yields += 1;
-            events.push(MissionEvent::Yielding {
-                to_robot_ahead: true,
-            });
-            self.yielding = Some(Yield::Waiting {
-                other,
-                until: now + secs(self.config.yield_wait_s),
-            });
-            self.state = MissionState::Yielding;
-        } else {
-            self.enter_replanning(ReplanCause::Robot);
-        }
-    }
-
     /// Sets the cell holding map point `p` Occupied (an obstacle the laser or a bumper found).
     fn mark_occupied(&self, map: &mut SharedMap<N>, p: Point2) {
         if let Some(i) = map
@@ -683,107 +599,6 @@ impl<const N: usize> Mission<N> {
             .and_then(|c| map.grid.geometry().index(c))
         {
             map.grid.set_class(i, CellClass::Occupied, &mut map.trav);
-        }
-    }
-
-    /// Weakens any Occupied evidence at the places the robot has just left (its last metre,
-    /// away from where its body is now): it stood there, so what another robot's scan saw
-    /// there was this robot, not a wall. Its current body stays as the others saw it.
-    fn clear_own_trail(&self, map: &mut SharedMap<N>) {
-        let geom = *map.grid.geometry();
-        let r = self.config.safety.footprint.radius_m + 0.5 * geom.resolution_m;
-        let span = math::ceil(r / geom.resolution_m) as i32;
-        let weak_free = self.config.sensor.free_log_odds;
-        let here = self.pose_map.position();
-        // Never the current body: the other robots must keep seeing it.
-        let keep = r + geom.resolution_m;
-        for p in self.trail.iter().copied() {
-            if p.distance(here) < r {
-                continue;
-            }
-            let c = geom.cell_at_unchecked(p);
-            for row in c.row - span..=c.row + span {
-                for col in c.col - span..=c.col + span {
-                    let cell = Cell::new(col, row);
-                    let Some(i) = geom.index(cell) else { continue };
-                    let centre = geom.cell_center(cell);
-                    if centre.distance(p) > r || centre.distance(here) < keep {
-                        continue;
-                    }
-                    if map.grid.log_odds_at(i) > weak_free {
-                        map.grid.set_log_odds(i, weak_free, &mut map.trav);
-                    }
-                }
-            }
-        }
-    }
-
-    /// Sets every Occupied cell under the robot's body to weak Free evidence; returns the
-    /// cells and their values, for putting them back.
-    fn lift_own_body(&self, map: &mut SharedMap<N>) -> heapless::Vec<(usize, f32), MAX_LIFTED> {
-        let mut lifted = heapless::Vec::new();
-        let geom = *map.grid.geometry();
-        let r = self.config.safety.footprint.radius_m + BODY_MARGIN_M;
-        let span = math::ceil(r / geom.resolution_m) as i32;
-        let here = self.pose_map.position();
-        let c = geom.cell_at_unchecked(here);
-        let weak_free = self.config.sensor.free_log_odds;
-        for row in c.row - span..=c.row + span {
-            for col in c.col - span..=c.col + span {
-                let cell = Cell::new(col, row);
-                let Some(i) = geom.index(cell) else { continue };
-                if geom.cell_center(cell).distance(here) > r
-                    || map.grid.class(i) != CellClass::Occupied
-                {
-                    continue;
-                }
-                if lifted.push((i, map.grid.log_odds_at(i))).is_err() {
-                    return lifted;
-                }
-                map.grid.set_log_odds(i, weak_free, &mut map.trav);
-            }
-        }
-        lifted
-    }
-
-    /// Sets the cells under the other robots nearby (by their marks) Occupied, recording the
-    /// old values in `saved`.
-    fn stamp_others(
-        &self,
-        map: &mut SharedMap<N>,
-        now: Time,
-        saved: &mut heapless::Vec<(usize, f32), MAX_LIFTED>,
-    ) {
-        let geom = *map.grid.geometry();
-        let r = self.config.safety.footprint.radius_m;
-        let span = math::ceil(r / geom.resolution_m) as i32;
-        let here = self.pose_map.position();
-        let occupied = map.grid.bounds().max;
-        for k in 0..map.robots.len() {
-            let m = &map.robots[k];
-            let p = m.pose.position();
-            if m.id == self.id
-                || now.saturating_since(m.time) > MARK_MAX_AGE
-                || p.distance(here) > STAMP_RANGE_M
-            {
-                continue;
-            }
-            let c = geom.cell_at_unchecked(p);
-            for row in c.row - span..=c.row + span {
-                for col in c.col - span..=c.col + span {
-                    let cell = Cell::new(col, row);
-                    let Some(i) = geom.index(cell) else { continue };
-                    if geom.cell_center(cell).distance(p) > r
-                        || map.grid.class(i) == CellClass::Occupied
-                    {
-                        continue;
-                    }
-                    if saved.push((i, map.grid.log_odds_at(i))).is_err() {
-                        return;
-                    }
-                    map.grid.set_log_odds(i, occupied, &mut map.trav);
-                }
-            }
         }
     }
 
@@ -1152,179 +967,6 @@ impl<const N: usize> Mission<N> {
         }
     }
 
-    /// One period of yielding; `None` when the state changed and the machine should go on.
-    fn yield_step(
-        &mut self,
-        now: Time,
-        map: &mut SharedMap<N>,
-        ws: &mut Workspace<N>,
-        events: &mut Events<'_>,
-    ) -> Option<MotionCommand> {
-        let Some(y) = self.yielding else {
-            self.enter_replanning(ReplanCause::Robot);
-            return None;
-        };
-        match y {
-            Yield::Waiting { other, until } => {
-                if now < until {
-                    return Some(MotionCommand::ZERO);
-                }
-                // Around the other robot, if there is a way.
-                if let Ok(waypoints) = self.plan_to(self.pose_map, &self.targets.clone(), map, ws)
-                    && !self.targets.is_empty()
-                    && self.start_path(now, &waypoints)
-                {
-                    self.yielding = None;
-                    self.conflict_robot = None;
-                    events.stats.replans += 1;
-                    events.push(MissionEvent::Replanned {
-                        cause: ReplanCause::Robot,
-                    });
-                    return None;
-                }
-                // No way around: step out of its path.
-                let mark = map.robot(other).cloned();
-                let aside = mark.and_then(|m| self.place_aside(&m, map, ws));
-                match aside {
-                    Some(waypoints) if self.start_path(now, &waypoints) => {
-                        self.state = MissionState::Yielding;
-                        self.yielding = Some(Yield::SteppingAside { other, since: now });
-                        events.push(MissionEvent::Yielding {
-                            to_robot_ahead: false,
-                        });
-                        None
-                    }
-                    _ => {
-                        // Nowhere to go: wait some more, the other robot may move.
-                        self.yielding = Some(Yield::Waiting {
-                            other,
-                            until: now + secs(self.config.yield_wait_s),
-                        });
-                        self.replans_this_decision += 1;
-                        if self.replans_this_decision > self.config.max_replans_per_decision {
-                            self.yielding = None;
-                            self.abandon(map, events);
-                            return None;
-                        }
-                        Some(MotionCommand::ZERO)
-                    }
-                }
-            }
-            Yield::SteppingAside { other, since } => {
-                let (cmd, status) = self.follower.update(now, self.pose_map);
-                let timeout = secs(self.config.stuck_timeout_s);
-                if status == FollowStatus::Arrived || now.saturating_since(since) > timeout {
-                    self.follower.clear();
-                    self.yielding = Some(Yield::Clearing { other, since: now });
-                    return Some(MotionCommand::ZERO);
-                }
-                Some(cmd)
-            }
-            Yield::Clearing { other, since } => {
-                let passed = map.robot(other).is_none_or(|m| {
-                    let here = self.pose_map.position();
-                    m.pose.position().distance(here) >= ASIDE_DISTANCE_M
-                        && distance_to_path(here, m) >= ASIDE_CLEARANCE_M
-                });
-                let timeout =
-                    now.saturating_since(since) > secs(4.0 * self.config.yield_wait_s + 10.0);
-                if (passed && now.saturating_since(since) > secs(self.config.yield_wait_s))
-                    || timeout
-                {
-                    self.yielding = None;
-                    self.replans_this_decision = 0;
-                    self.enter_replanning(ReplanCause::Robot);
-                    return None;
-                }
-                Some(MotionCommand::ZERO)
-            }
-            Yield::Holding {
-                other,
-                retry_at,
-                give_up_at,
-            } => {
-                if now >= give_up_at {
-                    self.yielding = None;
-                    self.abandon(map, events);
-                    return None;
-                }
-                if now < retry_at {
-                    return Some(MotionCommand::ZERO);
-                }
-                let targets = self.targets.clone();
-                match self.plan_to(self.pose_map, &targets, map, ws) {
-                    Ok(waypoints) if self.start_path(now, &waypoints) => {
-                        self.yielding = None;
-                        self.conflict_robot = None;
-                        events.stats.replans += 1;
-                        events.push(MissionEvent::Replanned {
-                            cause: ReplanCause::Robot,
-                        });
-                        None
-                    }
-                    _ => {
-                        self.yielding = Some(Yield::Holding {
-                            other,
-                            retry_at: now + secs(RETRY_S),
-                            give_up_at,
-                        });
-                        Some(MotionCommand::ZERO)
-                    }
-                }
-            }
-        }
-    }
-
-    /// A path to the nearest reachable place out of `other`'s way: at least
-    /// `ASIDE_CLEARANCE_M` from its remaining path and `ASIDE_DISTANCE_M` from it.
-    fn place_aside(
-        &self,
-        other: &RobotMark,
-        map: &SharedMap<N>,
-        ws: &mut Workspace<N>,
-    ) -> Option<heapless::Vec<Point2, MAX_WAYPOINTS>> {
-        let start = self.start_pose(map, self.pose_map);
-        let req = DecisionRequest {
-            grid: &map.grid,
-            trav: &map.trav,
-            pose: start,
-            battery_steps: self.battery_steps,
-            laser: &self.config.laser,
-        };
-        let config = ExploreConfig {
-            targets: 1,
-            reserve_steps: 0.0,
-            ..self.config.explore
-        };
-        let (mut objective, _) = ws.parts();
-        objective.prepare(&req, &config).ok()?;
-        let geom = *map.grid.geometry();
-        let mut best: Option<(f32, Point2)> = None;
-        for i in 0..geom.cell_count() {
-            let cell = geom.cell(i);
-            let Some(d) = objective.field().distance_to(cell) else {
-                continue;
-            };
-            if best.is_some_and(|(b, _)| d >= b) || map.grid.class(i) != CellClass::Free {
-                continue;
-            }
-            let p = geom.cell_center(cell);
-            if p.distance(other.pose.position()) >= ASIDE_DISTANCE_M
-                && distance_to_path(p, other) >= ASIDE_CLEARANCE_M
-            {
-                best = Some((d, p));
-            }
-        }
-        let (_, target) = best?;
-        let eval = objective.evaluate_targets(&req, &[target]);
-        if eval.status != CandidateStatus::Feasible {
-            return None;
-        }
-        let mut out = heapless::Vec::new();
-        let _ = out.extend_from_slice(objective.waypoints());
-        Some(out)
-    }
-
     fn clear_radius(&self) -> f32 {
         self.config.safety.footprint.radius_m + 0.1
     }
@@ -1378,7 +1020,7 @@ impl<const N: usize> Mission<N> {
             let path = self.follower.path();
             let from = self.follower.current_index().min(path.len());
             let remaining = polyline_length(here, &path[from..]);
-            if remaining <= self.config.decide_ahead_m && path.len() >= 1 {
+            if remaining <= self.config.decide_ahead_m && !path.is_empty() {
                 let end = path[path.len() - 1];
                 let before = if path.len() >= 2 {
                     path[path.len() - 2]
@@ -1428,8 +1070,9 @@ impl<const N: usize> Mission<N> {
     }
 }
 
+/// `s` seconds as a duration; negative or NaN gives zero, too large the longest duration.
 fn secs(s: f32) -> Duration {
-    Duration::from_secs_f32(s.max(0.0))
+    Duration::try_from_secs_f32(s.max(0.0)).unwrap_or(Duration::MAX)
 }
 
 /// Length of the polyline from `from` through `points` \[m\].
@@ -1441,27 +1084,6 @@ fn polyline_length(from: Point2, points: &[Point2]) -> f32 {
         last = p;
     }
     sum
-}
-
-/// Distance from `p` to the other robot's pose-and-path polyline \[m\].
-fn distance_to_path(p: Point2, other: &RobotMark) -> f32 {
-    let mut best = p.distance(other.pose.position());
-    let mut a = other.pose.position();
-    for &b in &other.path {
-        best = best.min(distance_to_segment(p, a, b));
-        a = b;
-    }
-    best
-}
-
-fn distance_to_segment(p: Point2, a: Point2, b: Point2) -> f32 {
-    let (dx, dy) = (b.x - a.x, b.y - a.y);
-    let len2 = dx * dx + dy * dy;
-    if len2 <= 1e-12 {
-        return p.distance(a);
-    }
-    let t = (((p.x - a.x) * dx + (p.y - a.y) * dy) / len2).clamp(0.0, 1.0);
-    p.distance(Point2::new(a.x + t * dx, a.y + t * dy))
 }
 
 /// The first blocked (Occupied or inflated) cell along the path from `here` through

@@ -280,7 +280,7 @@ pub fn summary(setup: &Setup, report: &RunReport) -> String {
     let mut s = String::new();
     let plural = if setup.run.robots == 1 { "" } else { "s" };
     s += &format!(
-        "mission on {} ({:.1} m x {:.1} m, {} m cells): {}, {} robot{plural}, population {}, {} generations, {}-term (k = {}), battery {} steps, seed {}\n",
+        "mission on {} ({:.1} m x {:.1} m, {} m cells): {}, {} robot{plural}, population {}, {} generations, {}-term (k = {}), battery {} steps, {} slip, seed {}\n",
         setup.world.name(),
         g.width_m(),
         g.height_m(),
@@ -292,6 +292,7 @@ pub fn summary(setup: &Setup, report: &RunReport) -> String {
         setup.strategy,
         m.explore.targets,
         m.battery_steps,
+        setup.slip,
         setup.run.seed
     );
     let speed = if report.wall_time_s > 0.0 {
