@@ -235,3 +235,97 @@ fn bad_arguments_and_maps_exit_2_with_one_line() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("inside an obstacle"), "{err}");
 }
+
+#[test]
+fn start_takes_two_or_three_numbers_and_leaves_the_next_option_alone() {
+    let out = sim(&[
+        "mission",
+        "--map",
+        "lab",
+        "--start",
+        "1.5",
+        "1.5",
+        "--method",
+        "nearest-frontier",
+        "--battery",
+        "5",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["method"], "nearest-frontier");
+    let out = sim(&["mission", "--map", "lab", "--start", "-1", "2", "0.5"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("(-1.00 m, 2.00 m)"), "{err}");
+}
+
+#[test]
+fn score_reads_a_saved_map_and_reports_its_coverage() {
+    use papillon::grid::CellClass;
+    use papillon::mapfile::{MapImage, write_map_image};
+    let world = builtin::house(0.1).unwrap();
+    let dir = std::env::temp_dir().join(format!("papillon-score-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let perfect = MapImage {
+        geometry: *world.geometry(),
+        cells: world
+            .blocked()
+            .iter()
+            .map(|&b| {
+                if b {
+                    CellClass::Occupied
+                } else {
+                    CellClass::Free
+                }
+            })
+            .collect(),
+    };
+    let unknown = MapImage {
+        geometry: *world.geometry(),
+        cells: vec![CellClass::Unknown; world.geometry().cell_count()],
+    };
+    let truth = world.truth();
+    for (name, map, want) in [("perfect", perfect, 1.0), ("unknown", unknown, 0.0)] {
+        let yaml = dir.join(format!("{name}.yaml"));
+        write_map_image(&map, &yaml).unwrap();
+        // The map is drawn in the world's frame: the robot started at (1, 1) in it.
+        let out = sim(&[
+            "score",
+            "--map",
+            "house",
+            "--robot-map",
+            yaml.to_str().unwrap(),
+            "--robot-start",
+            "1",
+            "1",
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["coverage"].as_f64().unwrap(), want, "{name}: {v}");
+        assert_eq!(v["observable_cells"].as_u64().unwrap(), truth.len() as u64);
+        let known = if want == 1.0 { truth.len() as u64 } else { 0 };
+        assert_eq!(v["known_cells"].as_u64().unwrap(), known);
+    }
+    let out = sim(&[
+        "score",
+        "--map",
+        "house",
+        "--robot-map",
+        "/no/such/map.yaml",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("/no/such/map.yaml"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

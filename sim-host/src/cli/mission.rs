@@ -4,6 +4,7 @@
 //! Bad arguments, bad map files and a start inside an obstacle exit with status 2 and one line
 //! on standard error.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -46,12 +47,13 @@ pub struct Args {
     /// Seed of every random choice (slip, laser noise, decisions).
     #[arg(long, default_value = "25")]
     pub seed: String,
-    /// Energy at the start [steps: 1 m of travel or 45° of rotation].
+    /// Energy at the start [steps: 1 m of travel or 45° of rotation] (default: the core
+    /// mission's, 500).
     #[arg(long)]
     pub battery: Option<String>,
     /// Start pose in the map frame: X Y [THETA] [m, m, rad] (default 1 m east and 1 m north of
     /// the map's south-west corner, heading east).
-    #[arg(long, num_args = 2..=3, allow_hyphen_values = true, value_names = ["X", "Y", "THETA"])]
+    #[arg(long, num_args = 2..=3, allow_negative_numbers = true, value_names = ["X", "Y", "THETA"])]
     pub start: Option<Vec<String>>,
     /// Odometry slip of the simulated robots: thesis (a 1.5 cm slide at the end of each move,
     /// what the thesis saw), full (also heading and distance random walks, see
@@ -409,11 +411,13 @@ pub fn run(args: Args) -> ExitCode {
     };
     match execute(&setup, args.frames.as_deref(), args.png.as_deref()) {
         Ok(report) => {
-            if args.json {
-                println!("{}", json_report(&setup, &report));
+            let text = if args.json {
+                json_report(&setup, &report).to_string()
             } else {
-                println!("{}", summary(&setup, &report));
-            }
+                summary(&setup, &report)
+            };
+            // A closed standard output (`| head`) is not an error of the mission.
+            let _ = writeln!(std::io::stdout(), "{text}");
             ExitCode::SUCCESS
         }
         Err(Failure::Setup(e)) => {

@@ -9,6 +9,7 @@
 //! `p` is looked up in the robot map at `robot_start ⊕ world_start⁻¹ ⊕ p`; cells outside the
 //! robot map count as unknown.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -33,11 +34,11 @@ pub struct Args {
     pub resolution: f32,
     /// The robot's start in the world's map frame: X Y [THETA] [m, m, rad] (default: the
     /// world's start, 1 m east and 1 m north of its south-west corner).
-    #[arg(long, num_args = 2..=3, allow_hyphen_values = true, value_names = ["X", "Y", "THETA"])]
+    #[arg(long, num_args = 2..=3, allow_negative_numbers = true, value_names = ["X", "Y", "THETA"])]
     pub start: Option<Vec<f32>>,
     /// The robot's start in the robot map's frame: X Y [THETA] [m, m, rad] (default 0 0 0, the
     /// onboard binary's convention; give the world's start for a map drawn in the world's frame).
-    #[arg(long, num_args = 2..=3, allow_hyphen_values = true, value_names = ["X", "Y", "THETA"])]
+    #[arg(long, num_args = 2..=3, allow_negative_numbers = true, value_names = ["X", "Y", "THETA"])]
     pub robot_start: Option<Vec<f32>>,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -134,23 +135,23 @@ fn execute(args: &Args) -> Result<Score, String> {
 pub fn run(args: Args) -> ExitCode {
     match execute(&args) {
         Ok(s) => {
-            if args.json {
-                println!(
-                    "{}",
-                    serde_json::json!({
-                        "coverage": s.coverage,
-                        "observable_cells": s.observable_cells,
-                        "known_cells": s.known_cells,
-                    })
-                );
+            let text = if args.json {
+                serde_json::json!({
+                    "coverage": s.coverage,
+                    "observable_cells": s.observable_cells,
+                    "known_cells": s.known_cells,
+                })
+                .to_string()
             } else {
-                println!(
+                format!(
                     "coverage {:.2} % ({} of {} observable cells known)",
                     100.0 * s.coverage,
                     s.known_cells,
                     s.observable_cells
-                );
-            }
+                )
+            };
+            // A closed standard output (`| head`) is not an error.
+            let _ = writeln!(std::io::stdout(), "{text}");
             ExitCode::SUCCESS
         }
         Err(e) => {
