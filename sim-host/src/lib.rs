@@ -1,6 +1,7 @@
 //! The host simulator: worlds, physics, laser simulation, emulated hardware, experiments.
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod cli;
 pub mod dynamic;
 pub mod emulator;

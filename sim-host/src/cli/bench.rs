@@ -1,0 +1,252 @@
+//! `papillon-sim bench`: run an experiment (a named one or a JSON sweep) in parallel, or merge
+//! the results of its shards ([`crate::bench`]).
+//!
+//! Bad arguments and unreadable files exit with status 2 and one line on standard error; a
+//! sweep whose runs failed exits with status 1 after writing its outputs.
+
+use std::fs::OpenOptions;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use crate::bench::exec::{ProgressMode, RunFn, execute};
+use crate::bench::sweep::{self, EXPERIMENTS, Shard, Sweep};
+use crate::bench::{self as b, RUNS_FILE};
+
+/// Arguments of `papillon-sim bench`.
+#[derive(clap::Args, Debug, Clone)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct Args {
+    /// Merge shard directories.
+    #[command(subcommand)]
+    pub command: Option<BenchCommand>,
+    /// Named experiment: multi-robot, horizon, methods, population, boa-variants.
+    #[arg(long, conflicts_with = "config")]
+    pub experiment: Option<String>,
+    /// Sweep file (JSON: maps, methods, strategies, populations, robots, runs, generations,
+    /// battery_steps, base_seed, resolution_m).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Runs per combination (default: the sweep's, 10 for the named experiments).
+    #[arg(long)]
+    pub runs: Option<usize>,
+    /// Worker threads (default: one per core).
+    #[arg(long, default_value = "0")]
+    pub jobs: usize,
+    /// Output directory (default: bench-results/NAME).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Run only shard I of N (0 <= I < N): the runs whose index is I modulo N.
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// Replace the sweep's maps (comma-separated built-in names or files).
+    #[arg(long, value_delimiter = ',')]
+    pub maps: Option<Vec<String>>,
+    /// Replace the sweep's battery [steps].
+    #[arg(long)]
+    pub battery: Option<f32>,
+    /// Directory with the thesis's map-empty.csv and map-house.csv, added to the named
+    /// experiments' maps (default: ../shared/data/thesis-maps when it exists).
+    #[arg(long, conflicts_with = "no_thesis_maps")]
+    pub thesis_maps: Option<PathBuf>,
+    /// Do not add the thesis's maps to the named experiments.
+    #[arg(long)]
+    pub no_thesis_maps: bool,
+    /// Print one line per finished run even on a terminal.
+    #[arg(long)]
+    pub plain: bool,
+}
+
+/// Subcommands of `papillon-sim bench`.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum BenchCommand {
+    /// Combine the results of shard directories into one set of outputs.
+    Merge(MergeArgs),
+}
+
+/// Arguments of `papillon-sim bench merge`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct MergeArgs {
+    /// Shard directories (each with sweep.json and runs.jsonl).
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "bench-results/merged")]
+    pub out: PathBuf,
+}
+
+/// The sweep the arguments ask for.
+pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
+    let mut sweep = match (&args.experiment, &args.config) {
+        (Some(name), None) => {
+            let extra = if args.no_thesis_maps {
+                Vec::new()
+            } else if let Some(dir) = &args.thesis_maps {
+                let found = sweep::thesis_maps_in(dir);
+                if found.is_empty() {
+                    return Err(format!(
+                        "--thesis-maps: {} has no map-empty.csv and map-house.csv",
+                        dir.display()
+                    ));
+                }
+                found
+            } else {
+                sweep::find_thesis_maps()
+            };
+            Sweep::named(name, args.runs.unwrap_or(sweep::DEFAULT_RUNS), &extra).ok_or_else(
+                || {
+                    format!(
+                        "--experiment: unknown experiment '{name}', expected one of: {}",
+                        EXPERIMENTS.join(", ")
+                    )
+                },
+            )?
+        }
+        (None, Some(path)) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+            let mut s = Sweep::from_json(&text, &path.display().to_string())?;
+            if s.name.is_empty() {
+                s.name = path
+                    .file_stem()
+                    .and_then(|s| s.to_str())
+                    .unwrap_or("sweep")
+                    .to_string();
+            }
+            if let Some(r) = args.runs {
+                s.runs = r;
+            }
+            s
+        }
+        _ => return Err("give --experiment NAME or --config FILE".into()),
+    };
+    if let Some(maps) = &args.maps {
+        sweep.maps = maps.clone();
+    }
+    if let Some(b) = args.battery {
+        sweep.battery_steps = Some(b);
+    }
+    sweep.check()?;
+    Ok(sweep)
+}
+
+/// Runs the sweep's shard with `run` into `out`; returns the number of failed runs.
+pub fn run_sweep(
+    sweep: &Sweep,
+    shard: Shard,
+    jobs: usize,
+    out: &Path,
+    run: &RunFn,
+    mode: ProgressMode,
+) -> Result<usize, String> {
+    b::write_sweep_file(out, sweep, shard)?;
+    let specs: Vec<_> = sweep
+        .specs()
+        .into_iter()
+        .filter(|s| shard.contains(s.index))
+        .collect();
+    let runs_path = out.join(RUNS_FILE);
+    let file = OpenOptions::new()
+        .create(true)
+        .write(true)
+        .truncate(true)
+        .open(&runs_path)
+        .map_err(|e| format!("{}: cannot write: {e}", runs_path.display()))?;
+    if mode != ProgressMode::Quiet {
+        eprintln!(
+            "bench {}: {} runs (shard {shard} of a sweep of {}), {} worker threads, into {}",
+            sweep.name,
+            specs.len(),
+            sweep.len(),
+            if jobs == 0 {
+                rayon::current_num_threads()
+            } else {
+                jobs
+            },
+            out.display()
+        );
+    }
+    let records = execute(&specs, jobs, run, Some(file), mode)?;
+    b::write_outputs(out, &sweep.name, &records)?;
+    Ok(records.iter().filter(|r| r.result.is_err()).count())
+}
+
+fn fail(msg: &str) -> ExitCode {
+    eprintln!("papillon-sim bench: {msg}");
+    ExitCode::from(2)
+}
+
+/// Runs `papillon-sim bench`.
+pub fn run(args: Args) -> ExitCode {
+    if let Some(BenchCommand::Merge(m)) = &args.command {
+        return merge(m);
+    }
+    let sweep = match sweep_from_args(&args) {
+        Ok(s) => s,
+        Err(e) => return fail(&e),
+    };
+    let shard = match &args.shard {
+        Some(t) => match Shard::parse(t) {
+            Ok(s) => s,
+            Err(e) => return fail(&e),
+        },
+        None => Shard::ALL,
+    };
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("bench-results").join(&sweep.name));
+    let mode = if args.plain {
+        ProgressMode::Lines
+    } else {
+        ProgressMode::auto()
+    };
+    match run_sweep(
+        &sweep,
+        shard,
+        args.jobs,
+        &out,
+        &crate::bench::sim::run,
+        mode,
+    ) {
+        Ok(0) => {
+            println!("{}", out.join("summary.md").display());
+            ExitCode::SUCCESS
+        }
+        Ok(n) => {
+            eprintln!(
+                "papillon-sim bench: {n} runs failed (see the status column of {})",
+                out.join("results.csv").display()
+            );
+            ExitCode::from(1)
+        }
+        Err(e) => fail(&e),
+    }
+}
+
+fn merge(m: &MergeArgs) -> ExitCode {
+    let merged = match b::merge(&m.dirs) {
+        Ok(x) => x,
+        Err(e) => return fail(&e),
+    };
+    if !merged.missing.is_empty() {
+        eprintln!(
+            "papillon-sim bench merge: {} of {} runs missing (first: index {})",
+            merged.missing.len(),
+            merged.sweep.len(),
+            merged.missing[0]
+        );
+    }
+    let result = b::write_sweep_file(&m.out, &merged.sweep, Shard::ALL)
+        .and_then(|_| b::write_outputs(&m.out, &merged.sweep.name, &merged.records));
+    match result {
+        Ok(_) => {
+            println!("{}", m.out.join("summary.md").display());
+            if merged.missing.is_empty() {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(1)
+            }
+        }
+        Err(e) => fail(&e),
+    }
+}
