@@ -28,7 +28,7 @@ use crate::emulator::lms1xx::Lms1xxEmulator;
 use crate::emulator::lms200::Lms200Emulator;
 use crate::faults::DelayLine;
 use crate::laser::LaserSim;
-use crate::physics::{BodyConfig, Disc, RobotBody, advance_all};
+use crate::physics::{BodyConfig, Disc, RobotBody, SlipConfig, advance_all};
 use crate::world::World;
 
 /// Cell size of the served world \[m\].
@@ -198,7 +198,12 @@ fn serve(args: Args) -> Result<(), String> {
     let world = World::load(&args.map, MAP_RESOLUTION_M)
         .map_err(|e| format!("cannot load map {:?}: {e}", args.map))?;
     let n = usize::from(args.robots);
-    let mut config = BodyConfig::default();
+    // The thesis's slip (a slide of about 1.5 cm at the end of each move), as the mission
+    // runner uses: the core has no scan matching, so the full default slip smears its map.
+    let mut config = BodyConfig {
+        slip: SlipConfig::thesis(),
+        ..BodyConfig::default()
+    };
     args.faults.apply_to_body(&mut config);
     let bodies = start_poses(&world, n, config.radius_m)?
         .into_iter()
