@@ -41,7 +41,7 @@ pub struct Args {
     /// Replace the sweep's maps (comma-separated built-in names or files).
     #[arg(long, value_delimiter = ',')]
     pub maps: Option<Vec<String>>,
-    /// Replace the sweep's battery [steps].
+    /// Replace the sweep's battery (steps).
     #[arg(long)]
     pub battery: Option<f32>,
     /// Directory with the thesis's map-empty.csv and map-house.csv, added to the named

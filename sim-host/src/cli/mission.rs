@@ -51,7 +51,7 @@ pub struct Args {
     /// mission's, 500).
     #[arg(long)]
     pub battery: Option<String>,
-    /// Start pose in the map frame: X Y [THETA] [m, m, rad] (default 1 m east and 1 m north of
+    /// Start pose in the map frame: X Y, optionally THETA (m, m, rad; default 1 m east and 1 m north of
     /// the map's south-west corner, heading east).
     #[arg(long, num_args = 2..=3, allow_negative_numbers = true, value_names = ["X", "Y", "THETA"])]
     pub start: Option<Vec<String>>,
@@ -60,7 +60,7 @@ pub struct Args {
     /// docs/simulator.md) or none.
     #[arg(long, default_value = "thesis")]
     pub slip: String,
-    /// Cell size [m] (the map file's own for .yaml).
+    /// Cell size in metres (the map file's own for .yaml).
     #[arg(long, default_value = "0.1")]
     pub resolution: String,
     /// Print one JSON object instead of the summary.

@@ -29,14 +29,14 @@ pub struct Args {
     /// The robot's map to score: a ROS map_server YAML (with its PGM beside it).
     #[arg(long)]
     pub robot_map: PathBuf,
-    /// Cell size for worlds whose file does not give one (built-in, .csv, images, .map) [m].
+    /// Cell size for worlds whose file does not give one (built-in, .csv, images, .map), in metres.
     #[arg(long, default_value_t = 0.1)]
     pub resolution: f32,
-    /// The robot's start in the world's map frame: X Y [THETA] [m, m, rad] (default: the
+    /// The robot's start in the world's map frame: X Y, optionally THETA (m, m, rad; default: the
     /// world's start, 1 m east and 1 m north of its south-west corner).
     #[arg(long, num_args = 2..=3, allow_negative_numbers = true, value_names = ["X", "Y", "THETA"])]
     pub start: Option<Vec<f32>>,
-    /// The robot's start in the robot map's frame: X Y [THETA] [m, m, rad] (default 0 0 0, the
+    /// The robot's start in the robot map's frame: X Y, optionally THETA (m, m, rad; default 0 0 0, the
     /// onboard binary's convention; give the world's start for a map drawn in the world's frame).
     #[arg(long, num_args = 2..=3, allow_negative_numbers = true, value_names = ["X", "Y", "THETA"])]
     pub robot_start: Option<Vec<f32>>,
