@@ -8,56 +8,26 @@
 //! Run: `cargo bench -p papillon --no-default-features --features std --bench explore --
 //! --warm-up-time 1 --measurement-time 3`
 
-use std::path::Path;
+#[path = "../tests/house_fixture/mod.rs"]
+mod house_fixture;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use house_fixture::{DecisionMemory, HouseSnapshot};
 use papillon::explore::{
-    DecisionRequest, ExploreConfig, ExploreObjective, FrontierUtility, NearestFrontier, Optimized,
-    TargetSelector, ViewCache,
+    ExploreConfig, FrontierUtility, NearestFrontier, Optimized, TargetSelector,
 };
 use papillon::frontier::FrontierWorkspace;
-use papillon::geometry::Pose2;
-use papillon::grid::{LogOddsBounds, OccupancyGrid};
-use papillon::mapfile::read_map;
 use papillon::optim::Method;
-use papillon::planner::{AStar, DistanceField, Traversability, TraversabilityConfig};
 use papillon::random::seeded;
-use papillon::sensor::LaserConfig;
-
-const SIDE: usize = 240;
-const CELLS: usize = SIDE * SIDE;
-
-fn snapshot() -> (Box<OccupancyGrid<CELLS>>, Box<Traversability<CELLS>>) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/house-mid-mission.yaml");
-    let map = read_map(&path).expect("House snapshot fixture");
-    let mut grid = OccupancyGrid::<CELLS>::new_boxed(map.geometry, LogOddsBounds::default())
-        .expect("fixture fits the grid");
-    map.load_into(&mut grid).expect("fixture fits the grid");
-    let mut trav =
-        Traversability::<CELLS>::new_boxed(map.geometry, TraversabilityConfig::default()).unwrap();
-    trav.rebuild_from(&grid).unwrap();
-    (grid, trav)
-}
 
 fn bench(c: &mut Criterion) {
-    let (grid, trav) = snapshot();
-    let laser = LaserConfig::thesis();
-    let req = DecisionRequest {
-        grid: &grid,
-        trav: &trav,
-        pose: Pose2::new(1.5, 1.5, 0.0),
-        battery_steps: 60.0,
-        laser: &laser,
-    };
-    let mut field = DistanceField::<CELLS>::new_boxed();
-    let mut astar = AStar::<CELLS>::new_boxed();
-    let mut stamps = vec![0u32; CELLS];
-    let mut views = ViewCache::new_boxed();
+    let house = HouseSnapshot::load();
+    let req = house.request();
+    let mut memory = DecisionMemory::new();
     let mut ws = FrontierWorkspace::<8192, 256>::new_boxed();
     let mut group = c.benchmark_group("explore_decision");
     {
-        let mut obj =
-            ExploreObjective::with_view_cache(&mut field, &mut astar, &mut stamps, &mut views);
+        let mut obj = memory.cached();
         for pop in [5usize, 20] {
             let config = ExploreConfig {
                 population: pop,
@@ -84,7 +54,7 @@ fn bench(c: &mut Criterion) {
     }
     // Baseline: the traced model (every beam of every viewpoint traced from its exact pose),
     // with the same remembered evaluations.
-    let mut obj = ExploreObjective::new(&mut field, &mut astar, &mut stamps);
+    let mut obj = memory.traced();
     let config = ExploreConfig::default();
     let mut sel = Optimized::new(Method::Xboa, config, &mut obj);
     group.bench_function("xboa_pop5_gen30_traced", |b| {

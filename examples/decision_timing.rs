@@ -6,21 +6,16 @@
 //!
 //! Run: `cargo run --release --example decision_timing --no-default-features --features std`
 
-use std::path::Path;
 use std::time::{Duration, Instant};
 
-use papillon::explore::{
-    DecisionRequest, ExploreConfig, ExploreObjective, Optimized, TargetSelector, ViewCache,
-};
-use papillon::geometry::Pose2;
-use papillon::grid::{LogOddsBounds, OccupancyGrid};
-use papillon::mapfile::read_map;
-use papillon::optim::Method;
-use papillon::planner::{AStar, DistanceField, Traversability, TraversabilityConfig};
-use papillon::random::seeded;
-use papillon::sensor::LaserConfig;
+#[path = "../tests/house_fixture/mod.rs"]
+mod house_fixture;
 
-const CELLS: usize = 240 * 240;
+use house_fixture::{DecisionMemory, HouseSnapshot};
+use papillon::explore::{ExploreConfig, Optimized, TargetSelector};
+use papillon::optim::Method;
+use papillon::random::seeded;
+
 const RUNS: usize = 40;
 
 fn min_median(mut t: Vec<Duration>) -> (Duration, Duration) {
@@ -29,27 +24,10 @@ fn min_median(mut t: Vec<Duration>) -> (Duration, Duration) {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/house-mid-mission.yaml");
-    let map = read_map(&path)?;
-    let mut grid = OccupancyGrid::<CELLS>::new_boxed(map.geometry, LogOddsBounds::default())?;
-    map.load_into(&mut grid)?;
-    let mut trav =
-        Traversability::<CELLS>::new_boxed(map.geometry, TraversabilityConfig::default())?;
-    trav.rebuild_from(&grid)?;
-    let laser = LaserConfig::thesis();
-    let req = DecisionRequest {
-        grid: &grid,
-        trav: &trav,
-        pose: Pose2::new(1.5, 1.5, 0.0),
-        battery_steps: 60.0,
-        laser: &laser,
-    };
-    let mut field = DistanceField::<CELLS>::new_boxed();
-    let mut astar = AStar::<CELLS>::new_boxed();
-    let mut stamps = vec![0u32; CELLS];
-    let mut views = ViewCache::new_boxed();
-    let mut obj =
-        ExploreObjective::with_view_cache(&mut field, &mut astar, &mut stamps, &mut views);
+    let house = HouseSnapshot::load();
+    let req = house.request();
+    let mut memory = DecisionMemory::new();
+    let mut obj = memory.cached();
     for pop in [5usize, 20] {
         let config = ExploreConfig {
             population: pop,

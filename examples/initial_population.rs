@@ -7,21 +7,14 @@
 //!
 //! Run: `cargo run --release --example initial_population --no-default-features --features std`
 
-use std::path::Path;
+#[path = "../tests/house_fixture/mod.rs"]
+mod house_fixture;
 
-use papillon::explore::{
-    DecisionRequest, ExploreConfig, ExploreObjective, InitialPopulation, Optimized, Outcome,
-    TargetSelector, ViewCache,
-};
-use papillon::geometry::Pose2;
-use papillon::grid::{LogOddsBounds, OccupancyGrid};
-use papillon::mapfile::read_map;
+use house_fixture::{CELLS, DecisionMemory, HouseSnapshot};
+use papillon::explore::{ExploreConfig, InitialPopulation, Optimized, Outcome, TargetSelector};
 use papillon::optim::Method;
-use papillon::planner::{AStar, DistanceField, Traversability, TraversabilityConfig};
 use papillon::random::seeded;
-use papillon::sensor::LaserConfig;
 
-const CELLS: usize = 240 * 240;
 const SEEDS: u64 = 40;
 
 fn mean_sd(x: &[f64]) -> (f64, f64) {
@@ -31,28 +24,11 @@ fn mean_sd(x: &[f64]) -> (f64, f64) {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/house-mid-mission.yaml");
-    let map = read_map(&path)?;
-    let mut grid = OccupancyGrid::<CELLS>::new_boxed(map.geometry, LogOddsBounds::default())?;
-    map.load_into(&mut grid)?;
-    let mut trav =
-        Traversability::<CELLS>::new_boxed(map.geometry, TraversabilityConfig::default())?;
-    trav.rebuild_from(&grid)?;
-    let laser = LaserConfig::thesis();
-    let req = DecisionRequest {
-        grid: &grid,
-        trav: &trav,
-        pose: Pose2::new(1.5, 1.5, 0.0),
-        battery_steps: 60.0,
-        laser: &laser,
-    };
-    let mut field = DistanceField::<CELLS>::new_boxed();
-    let mut astar = AStar::<CELLS>::new_boxed();
-    let mut stamps = vec![0u32; CELLS];
-    let mut views = ViewCache::new_boxed();
-    let mut obj =
-        ExploreObjective::with_view_cache(&mut field, &mut astar, &mut stamps, &mut views);
-    let unknown = (CELLS - grid.counts().known()) as f64;
+    let house = HouseSnapshot::load();
+    let req = house.request();
+    let mut memory = DecisionMemory::new();
+    let mut obj = memory.cached();
+    let unknown = (CELLS - house.grid.counts().known()) as f64;
     println!("population | frontier share | initial best gain [cells] | final best gain [cells]");
     println!("---|---|---|---");
     for pop in [5usize, 20] {

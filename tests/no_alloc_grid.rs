@@ -1,71 +1,17 @@
 //! Integrating scans, tracing rays and finding frontiers allocate nothing: a counting global
 //! allocator watches the thread doing the work.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell as StdCell;
+mod alloc_count;
+
 use std::ops::ControlFlow;
 
+use alloc_count::allocations_in;
 use papillon::frontier::{FrontierConfig, FrontierWorkspace, find_frontiers};
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::{GridGeometry, LogOddsBounds, OccupancyGrid};
 use papillon::random::{range_f32, seeded};
 use papillon::raycast::traverse;
 use papillon::sensor::{Beam, LaserConfig, Scan, SensorModel, integrate_scan};
-
-struct Counting;
-
-thread_local! {
-    static WATCHING: StdCell<bool> = const { StdCell::new(false) };
-    static ALLOCATIONS: StdCell<usize> = const { StdCell::new(0) };
-}
-
-fn note() {
-    // `try_with`: the allocator may run while thread-locals are being torn down.
-    let _ = WATCHING.try_with(|w| {
-        if w.get() {
-            let _ = ALLOCATIONS.try_with(|a| a.set(a.get() + 1));
-        }
-    });
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note();
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-/// Runs `f` and returns how many allocations this thread made meanwhile.
-fn allocations_in(f: impl FnOnce()) -> usize {
-    ALLOCATIONS.with(|a| a.set(0));
-    WATCHING.with(|w| w.set(true));
-    f();
-    WATCHING.with(|w| w.set(false));
-    ALLOCATIONS.with(|a| a.get())
-}
-
-#[test]
-fn the_counter_sees_allocations() {
-    let n = allocations_in(|| {
-        let v = std::hint::black_box(vec![1u8; 10]);
-        drop(v);
-    });
-    assert_eq!(n, 1);
-}
 
 #[test]
 fn integrating_scans_tracing_rays_and_finding_frontiers_allocate_nothing() {
@@ -98,7 +44,7 @@ fn integrating_scans_tracing_rays_and_finding_frontiers_allocate_nothing() {
     let mut known = 0;
     let mut traced = 0;
     let mut frontier_count = 0;
-    let n = allocations_in(|| {
+    let ((), n) = allocations_in(|| {
         for (scan, pose) in &scans {
             let r = integrate_scan(&mut grid, scan, *pose, &laser, &model, &mut ()).unwrap();
             known += r.newly_known;

@@ -3,49 +3,15 @@
 //! Only the test's own thread is counted (the test harness's main thread may allocate
 //! meanwhile).
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell as StdCell;
-use std::sync::atomic::{AtomicUsize, Ordering};
+mod alloc_count;
 
+use alloc_count::allocations_in;
 use papillon::geometry::Point2;
 use papillon::grid::{Cell, CellClass, GridGeometry, LogOddsBounds, OccupancyGrid};
 use papillon::planner::{
     AStar, DistanceField, Planner, Traversability, TraversabilityConfig, prune_to_waypoints,
 };
 use papillon::random;
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-thread_local! {
-    /// Whether allocations on this thread are counted.
-    static COUNTED: StdCell<bool> = const { StdCell::new(false) };
-}
-
-fn count() {
-    if COUNTED.try_with(StdCell::get).unwrap_or(false) {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-    }
-}
-
-// SAFETY: forwards to the system allocator, counting calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 const CAP: usize = 120 * 100;
 
@@ -71,30 +37,23 @@ fn queries_and_updates_do_not_allocate() {
     }
     trav.rebuild_from(&grid).unwrap();
 
-    COUNTED.with(|c| c.set(true));
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
     let mut solved = 0;
-    for _ in 0..200 {
-        let a = geometry.cell(random::below(&mut rng, geometry.cell_count()));
-        let b = geometry.cell(random::below(&mut rng, geometry.cell_count()));
-        if let Ok(p) = astar.plan(&trav, a, b, &mut path) {
-            solved += 1;
-            prune_to_waypoints(&trav, &path[..p.len], &mut waypoints).unwrap();
+    let ((), n) = allocations_in(|| {
+        for _ in 0..200 {
+            let a = geometry.cell(random::below(&mut rng, geometry.cell_count()));
+            let b = geometry.cell(random::below(&mut rng, geometry.cell_count()));
+            if let Ok(p) = astar.plan(&trav, a, b, &mut path) {
+                solved += 1;
+                prune_to_waypoints(&trav, &path[..p.len], &mut waypoints).unwrap();
+            }
+            if field.compute(&trav, a).is_ok() {
+                let _ = field.distance_to(b);
+                let _ = field.path_to(b, &mut path);
+            }
+            let i = random::below(&mut rng, geometry.cell_count());
+            grid.add_evidence(i, random::range_f32(&mut rng, -2.0, 2.0), &mut *trav);
         }
-        if field.compute(&trav, a).is_ok() {
-            let _ = field.distance_to(b);
-            let _ = field.path_to(b, &mut path);
-        }
-        let i = random::below(&mut rng, geometry.cell_count());
-        grid.add_evidence(i, random::range_f32(&mut rng, -2.0, 2.0), &mut *trav);
-    }
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
-    COUNTED.with(|c| c.set(false));
+    });
     assert!(solved > 50, "only {solved} queries solved");
-    assert_eq!(
-        after - before,
-        0,
-        "planner allocated {} times",
-        after - before
-    );
+    assert_eq!(n, 0, "planner allocated {n} times");
 }
