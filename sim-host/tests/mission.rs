@@ -271,20 +271,7 @@ fn score_reads_a_saved_map_and_reports_its_coverage() {
     let world = builtin::house(0.1).unwrap();
     let dir = std::env::temp_dir().join(format!("papillon-score-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let perfect = MapImage {
-        geometry: *world.geometry(),
-        cells: world
-            .blocked()
-            .iter()
-            .map(|&b| {
-                if b {
-                    CellClass::Occupied
-                } else {
-                    CellClass::Free
-                }
-            })
-            .collect(),
-    };
+    let perfect = world.perfect_map();
     let unknown = MapImage {
         geometry: *world.geometry(),
         cells: vec![CellClass::Unknown; world.geometry().cell_count()],

@@ -166,27 +166,10 @@ mod tests {
     use super::*;
     use crate::world::builtin;
 
-    fn perfect(world: &World) -> MapImage {
-        MapImage {
-            geometry: *world.geometry(),
-            cells: world
-                .blocked()
-                .iter()
-                .map(|&b| {
-                    if b {
-                        CellClass::Occupied
-                    } else {
-                        CellClass::Free
-                    }
-                })
-                .collect(),
-        }
-    }
-
     #[test]
     fn a_perfect_map_scores_one_and_an_empty_map_zero() {
         let w = builtin::lab(0.1).unwrap();
-        let s = score(&w, &perfect(&w), w.start());
+        let s = score(&w, &w.perfect_map(), w.start());
         assert_eq!(s.coverage, 1.0);
         assert_eq!(s.known_cells, s.observable_cells);
         assert_eq!(s.observable_cells, w.truth().len());
@@ -238,7 +221,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("papillon-score-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let yaml = dir.join("robot.yaml");
-        mapfile::write_map_image(&perfect(&w), &yaml).unwrap();
+        mapfile::write_map_image(&w.perfect_map(), &yaml).unwrap();
         let args = Args {
             map: "lab".into(),
             robot_map: yaml.clone(),

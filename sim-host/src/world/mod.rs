@@ -19,6 +19,7 @@ use std::path::Path;
 
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::{Cell, CellClass, GridError, GridGeometry, LogOddsBounds, OccupancyGrid};
+use papillon::mapfile::MapImage;
 
 pub use truth::Truth;
 
@@ -296,6 +297,25 @@ impl World {
             }
         }
         cells
+    }
+
+    /// The world as a perfect robot map would hold it: blocked cells Occupied, the rest Free.
+    pub fn perfect_map(&self) -> MapImage {
+        let cells = self
+            .blocked
+            .iter()
+            .map(|&b| {
+                if b {
+                    CellClass::Occupied
+                } else {
+                    CellClass::Free
+                }
+            })
+            .collect();
+        MapImage {
+            geometry: self.geometry,
+            cells,
+        }
     }
 
     /// Number of blocked cells.
