@@ -10,8 +10,8 @@ use crate::control::odometry::MapFromOdom;
 use crate::control::safety::{RobotFlags, SafetyEvent, SafetyInputs, SafetyMonitor, SafetyState};
 use crate::explore::frontier_utility::{MAX_BLACKLIST, known_around};
 use crate::explore::{
-    CandidateStatus, DecideError, Decision, DecisionRequest, ExploreConfig, FrontierUtility,
-    MAX_TARGETS, NearestFrontier, Optimized, Outcome, TargetSelector,
+    Blacklist, CandidateStatus, DecideError, Decision, DecisionRequest, ExploreConfig,
+    FrontierUtility, MAX_TARGETS, NearestFrontier, Optimized, Outcome, TargetSelector,
 };
 use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::{Cell, CellClass};
@@ -670,10 +670,14 @@ impl<const N: usize> Mission<N> {
         let (mut objective, frontier) = ws.parts();
         match self.config.selector {
             SelectorKind::Optimized(method) => {
-                Optimized::new(method, config, &mut objective).decide(&req, rng)
+                let mut s = Optimized::new(method, config, &mut objective);
+                self.fill_blacklist(&mut s.blacklist)?;
+                s.decide(&req, rng)
             }
             SelectorKind::NearestFrontier => {
-                NearestFrontier::new(config, &mut objective, frontier).decide(&req, rng)
+                let mut s = NearestFrontier::new(config, &mut objective, frontier);
+                self.fill_blacklist(&mut s.blacklist)?;
+                s.decide(&req, rng)
             }
             SelectorKind::FrontierUtility => {
                 let mut s = FrontierUtility::new(config, &mut objective, frontier);
@@ -886,6 +890,15 @@ impl<const N: usize> Mission<N> {
             evaluations: d.evaluations,
         });
         true
+    }
+
+    /// The places this mission failed to reach, for a selector to avoid.
+    fn fill_blacklist(&self, list: &mut Blacklist) -> Result<(), DecideError> {
+        list.radius_m = BLACKLIST_RADIUS_M;
+        for &(p, _) in &self.blacklist {
+            list.push(p)?;
+        }
+        Ok(())
     }
 
     fn is_blacklisted(&self, p: Point2) -> bool {
