@@ -105,6 +105,14 @@ fn every_optimizer_explores_the_house_instead_of_giving_up() {
             r.coverage
         );
         assert!(r.coverage >= 0.95, "{method:?}: coverage {}", r.coverage);
+        // Each decision's convergence curve: the initial best and one per generation, never
+        // getting worse.
+        let robot = &r.robots[0];
+        assert_eq!(robot.decision_histories.len() as u32, robot.decisions);
+        for h in &robot.decision_histories {
+            assert_eq!(h.len(), 31, "{method:?}: {h:?}");
+            assert!(h.windows(2).all(|w| w[1] <= w[0]), "{method:?}: {h:?}");
+        }
     }
 }
 
