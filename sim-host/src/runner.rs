@@ -284,6 +284,9 @@ pub struct RobotReport {
     pub fitness_evals: u64,
     /// Wall-clock compute time of each decision \[ms\]: the `step` call that emitted it.
     pub decision_ms: Vec<f64>,
+    /// Best fitness per generation of each decision, initial population first (the
+    /// optimizer's convergence curve; empty for the frontier rules).
+    pub decision_histories: Vec<Vec<f32>>,
     /// Replans.
     pub replans: u32,
     /// Times the robot gave way to another.
@@ -839,6 +842,9 @@ impl Runner {
                 match &e {
                     MissionEvent::Decided { targets, .. } => {
                         r.report.decision_ms.push(elapsed_ms);
+                        r.report
+                            .decision_histories
+                            .push(r.mission.last_decision_history().to_vec());
                         r.report.targets.extend(targets.iter().copied());
                         decided.push(k);
                     }

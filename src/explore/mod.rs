@@ -236,15 +236,95 @@ pub(crate) fn reach_frontier_cell<const N: usize>(
     best
 }
 
-/// Whether any frontier cell (Unknown with a Free 4-neighbour) can be reached from the
-/// distance field's source: if not, exploration is done.
-pub(crate) fn any_reachable_frontier<const N: usize>(
+/// Most places a [`Blacklist`] holds.
+pub const MAX_BLACKLISTED: usize = frontier_utility::MAX_BLACKLIST;
+
+/// Places the robot failed to reach (its caller decides when an entry lapses): a decision
+/// never chooses a target within [`Blacklist::radius_m`] of one of them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Blacklist {
+    /// A target this close to a listed place counts as listed \[m\].
+    pub radius_m: f32,
+    points: heapless::Vec<Point2, MAX_BLACKLISTED>,
+}
+
+impl Default for Blacklist {
+    fn default() -> Self {
+        Self::new(0.5)
+    }
+}
+
+impl Blacklist {
+    /// An empty list covering `radius_m` around each place.
+    pub const fn new(radius_m: f32) -> Self {
+        Self {
+            radius_m,
+            points: heapless::Vec::new(),
+        }
+    }
+
+    /// Adds a place; [`DecideError::BlacklistFull`] when [`MAX_BLACKLISTED`] are listed.
+    pub fn push(&mut self, p: Point2) -> Result<(), DecideError> {
+        self.points.push(p).map_err(|_| DecideError::BlacklistFull {
+            capacity: MAX_BLACKLISTED,
+        })
+    }
+
+    /// Listed places.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Whether nothing is listed.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Whether `p` lies within the radius of a listed place.
+    pub fn contains(&self, p: Point2) -> bool {
+        self.points.iter().any(|q| q.distance(p) <= self.radius_m)
+    }
+}
+
+/// What a scan of the frontier cells found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum FrontierScan {
+    /// No frontier cell can be reached: exploration is done.
+    NoneReachable,
+    /// Every reachable frontier cell is blacklisted.
+    AllBlacklisted,
+    /// The cell to drive to for the nearest (by path) frontier cell not blacklisted.
+    Nearest(Cell),
+}
+
+/// Scans every frontier cell (Unknown with a Free 4-neighbour) for the one with the shortest
+/// path distance from the distance field's source whose drive-to cell ([`reach_frontier_cell`])
+/// is not blacklisted.
+pub(crate) fn nearest_reachable_frontier<const N: usize>(
     grid: &OccupancyGrid<N>,
     field: &DistanceField<N>,
-) -> bool {
-    (0..grid.cell_count()).any(|i| {
-        crate::frontier::is_frontier_cell(grid, i) && reach_frontier_cell(grid, field, i).is_some()
-    })
+    blacklist: &Blacklist,
+) -> FrontierScan {
+    let geom = grid.geometry();
+    let mut reachable = false;
+    let mut best: Option<(Cell, f32)> = None;
+    for i in 0..grid.cell_count() {
+        if !crate::frontier::is_frontier_cell(grid, i) {
+            continue;
+        }
+        let Some((c, d)) = reach_frontier_cell(grid, field, i) else {
+            continue;
+        };
+        reachable = true;
+        if best.is_none_or(|(_, b)| d < b) && !blacklist.contains(geom.cell_center(c)) {
+            best = Some((c, d));
+        }
+    }
+    match best {
+        Some((c, _)) => FrontierScan::Nearest(c),
+        None if reachable => FrontierScan::AllBlacklisted,
+        None => FrontierScan::NoneReachable,
+    }
 }
 
 /// A reachable frontier cell (as [`reach_frontier_cell`] gives it) found by scanning the grid

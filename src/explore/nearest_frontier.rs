@@ -3,7 +3,8 @@
 //! from the robot, read from the decision's distance field.
 //!
 //! A frontier cell the robot cannot stand on (Unknown cells in strict mode) is approached
-//! through its reachable Free 4-neighbour. The plan, predicted gain and energy come from the
+//! through its reachable Free 4-neighbour; one near a place the robot failed to reach
+//! ([`NearestFrontier::blacklist`]) is skipped. The plan, predicted gain and energy come from the
 //! same [`ExploreObjective`] as the optimized selector, so decisions compare like for like.
 
 use crate::frontier::{FrontierConfig, FrontierWorkspace, find_frontiers};
@@ -11,7 +12,8 @@ use crate::grid::Cell;
 
 use super::objective::ExploreObjective;
 use super::{
-    DecideError, DecisionRequest, ExploreConfig, Outcome, TargetSelector, reach_frontier_cell,
+    Blacklist, DecideError, DecisionRequest, ExploreConfig, Outcome, TargetSelector,
+    reach_frontier_cell,
 };
 
 /// Yamauchi's nearest-frontier rule.
@@ -20,6 +22,9 @@ pub struct NearestFrontier<'o, 'm, 'w, const N: usize, const C: usize, const F: 
     pub config: ExploreConfig,
     /// Frontier search settings.
     pub frontier: FrontierConfig,
+    /// Places the robot failed to reach: frontier cells near them are skipped (empty by
+    /// default).
+    pub blacklist: Blacklist,
     objective: &'o mut ExploreObjective<'m, N>,
     workspace: &'w mut FrontierWorkspace<C, F>,
 }
@@ -50,6 +55,7 @@ impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize>
                 ..config
             },
             frontier: FrontierConfig::default(),
+            blacklist: Blacklist::default(),
             objective,
             workspace,
         }
@@ -73,21 +79,33 @@ impl<const N: usize, const C: usize, const F: usize> TargetSelector<N>
         )
         .map_err(DecideError::Frontier)?;
         let ws = &*self.workspace;
+        let geom = req.grid.geometry();
         let mut best: Option<(Cell, f32)> = None;
+        let mut reachable = false;
         let mut evaluations = 0u32;
         for fr in ws.frontiers() {
             for &i in ws.cells_of(fr) {
                 evaluations += 1;
                 if let Some((c, d)) =
                     reach_frontier_cell(req.grid, self.objective.field(), i as usize)
-                    && best.is_none_or(|(_, b)| d < b)
                 {
-                    best = Some((c, d));
+                    reachable = true;
+                    if best.is_none_or(|(_, b)| d < b)
+                        && !self.blacklist.contains(geom.cell_center(c))
+                    {
+                        best = Some((c, d));
+                    }
                 }
             }
         }
         let Some((cell, _)) = best else {
-            return Ok(Outcome::Done);
+            return if reachable {
+                Err(DecideError::AllBlacklisted {
+                    entries: self.blacklist.len(),
+                })
+            } else {
+                Ok(Outcome::Done)
+            };
         };
         let target = req.grid.geometry().cell_center(cell);
         let eval = self.objective.evaluate_targets(req, &[target]);

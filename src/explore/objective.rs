@@ -14,7 +14,9 @@
 //! the length of the waypoint polyline plus the turn from the robot's heading onto the first
 //! segment and at every waypoint. A candidate over `battery - reserve`, or with a target
 //! outside the grid, on a blocked (Occupied, inflated) or unreachable cell, scores the worst
-//! fitness, [`WORST_FITNESS`].
+//! fitness, [`WORST_FITNESS`]; so does, in the optimizer's view
+//! ([`ExploreObjective::problem_avoiding`]), a candidate with a target near a place the robot
+//! failed to reach (the mission's [`Blacklist`]).
 //!
 //! # Speed
 //!
@@ -57,7 +59,7 @@ use crate::units;
 
 use super::memo::EvalMemo;
 use super::view_cache::{ViewCache, ViewCacheStats};
-use super::{DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS};
+use super::{Blacklist, DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS};
 use crate::control::follower::MAX_WAYPOINTS;
 
 /// Fitness of an infeasible or blocked candidate: worse than any feasible one (those lie in
@@ -481,6 +483,21 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         BoundObjective {
             objective: self,
             req,
+            blacklist: None,
+        }
+    }
+
+    /// As [`Self::problem`], and a candidate with a target near a place of `blacklist` (one the
+    /// robot failed to reach) scores [`WORST_FITNESS`], as a blocked one does.
+    pub fn problem_avoiding<'s, 'r>(
+        &'s mut self,
+        req: &'s DecisionRequest<'r, N>,
+        blacklist: &'s Blacklist,
+    ) -> BoundObjective<'s, 'm, 'r, N> {
+        BoundObjective {
+            objective: self,
+            req,
+            blacklist: Some(blacklist),
         }
     }
 }
@@ -489,6 +506,7 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
 pub struct BoundObjective<'s, 'm, 'r, const N: usize> {
     objective: &'s mut ExploreObjective<'m, N>,
     req: &'s DecisionRequest<'r, N>,
+    blacklist: Option<&'s Blacklist>,
 }
 
 impl<const N: usize> core::fmt::Debug for BoundObjective<'_, '_, '_, N> {
@@ -535,6 +553,13 @@ impl<const N: usize> Problem for BoundObjective<'_, '_, '_, N> {
         }
         if !inside {
             return self.objective.evaluate_targets(self.req, &pts[..k]).fitness;
+        }
+        if let Some(list) = self.blacklist
+            && pts[..k]
+                .iter()
+                .any(|&p| list.contains(geom.cell_center(geom.cell_at_unchecked(p))))
+        {
+            return WORST_FITNESS;
         }
         if let Some(eval) = self.objective.memo.get(&cells[..k]) {
             return eval.fitness;

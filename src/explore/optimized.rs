@@ -7,14 +7,23 @@
 //! ([`InitialPopulation::NearFrontiers`]; measured in `docs/benchmarks.md`); the run stops after [`ExploreConfig::max_generations`] generations (no early stop, so the
 //! history has one entry per generation). The best genome is evaluated once more to produce
 //! the plan.
+//!
+//! Candidates with a target near a place the robot failed to reach ([`Optimized::blacklist`])
+//! score worst. When the run ends with no feasible candidate, or with one predicted to see
+//! nothing Unknown (both happen late in a mission, when little reachable space is left
+//! Unknown and a small population can miss it), the decision falls back to the nearest
+//! reachable frontier (by path distance) that is not blacklisted, so a decision is never
+//! wasted while Unknown space is reachable: the selector answers [`Outcome::Done`] only when
+//! no frontier can be reached, and [`DecideError::AllBlacklisted`] when every reachable one is
+//! blacklisted.
 
 use crate::optim::{self, MAX_DIM, Method, Optimizer, Population, Problem, StopRules};
 use crate::random;
 
 use super::objective::{BoundObjective, ExploreObjective, WORST_FITNESS};
 use super::{
-    DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS, Outcome, TargetSelector,
-    any_reachable_frontier, sample_reachable_frontier,
+    Blacklist, DecideError, DecisionRequest, ExploreConfig, FrontierScan, MAX_TARGETS, Outcome,
+    TargetSelector, nearest_reachable_frontier, sample_reachable_frontier,
 };
 use crate::geometry::Point2;
 
@@ -42,6 +51,9 @@ pub struct Optimized<'o, 'm, const N: usize> {
     pub config: ExploreConfig,
     /// How the initial population is drawn ([`InitialPopulation::Uniform`] by default).
     pub initial: InitialPopulation,
+    /// Places the robot failed to reach: candidates with a target near one score worst, and
+    /// the fallback frontier avoids them (empty by default).
+    pub blacklist: Blacklist,
     objective: &'o mut ExploreObjective<'m, N>,
 }
 
@@ -56,6 +68,7 @@ impl<'o, 'm, const N: usize> Optimized<'o, 'm, N> {
             method,
             config,
             initial: InitialPopulation::Uniform,
+            blacklist: Blacklist::default(),
             objective,
         }
     }
@@ -68,9 +81,16 @@ impl<const N: usize> TargetSelector<N> for Optimized<'_, '_, N> {
         rng: &mut R,
     ) -> Result<Outcome, DecideError> {
         self.objective.prepare(req, &self.config)?;
-        if !any_reachable_frontier(req.grid, self.objective.field()) {
-            return Ok(Outcome::Done);
-        }
+        let fallback =
+            match nearest_reachable_frontier(req.grid, self.objective.field(), &self.blacklist) {
+                FrontierScan::NoneReachable => return Ok(Outcome::Done),
+                FrontierScan::AllBlacklisted => {
+                    return Err(DecideError::AllBlacklisted {
+                        entries: self.blacklist.len(),
+                    });
+                }
+                FrontierScan::Nearest(cell) => req.grid.geometry().cell_center(cell),
+            };
         let rules = StopRules {
             max_generations: self.config.max_generations,
             patience: None,
@@ -80,7 +100,7 @@ impl<const N: usize> TargetSelector<N> for Optimized<'_, '_, N> {
             .method
             .build(self.config.population, rules.max_generations);
         let (best, evaluations, history_len) = {
-            let mut problem = self.objective.problem(req);
+            let mut problem = self.objective.problem_avoiding(req, &self.blacklist);
             let initial = match self.initial {
                 InitialPopulation::Uniform => {
                     Population::uniform(&problem, self.config.population, rng)
@@ -97,19 +117,26 @@ impl<const N: usize> TargetSelector<N> for Optimized<'_, '_, N> {
             best[..g.len()].copy_from_slice(g);
             (best, opt.evaluations(), g.len())
         };
-        if opt.best_fitness() >= WORST_FITNESS {
-            return Err(DecideError::NoFeasibleTarget {
-                battery_steps: req.battery_steps,
-            });
+        let found = opt.best_fitness() < WORST_FITNESS;
+        if found {
+            let mut pts = [Point2::new(0.0, 0.0); MAX_TARGETS];
+            let k = history_len / 2;
+            for (i, p) in pts[..k].iter_mut().enumerate() {
+                *p = Point2::new(best[2 * i], best[2 * i + 1]);
+            }
+            let eval = self.objective.evaluate_targets(req, &pts[..k]);
+            if eval.gain_cells > 0
+                && let Some(d) = self.objective.decision(&eval, evaluations, opt.history())
+            {
+                return Ok(Outcome::Go(d));
+            }
         }
-        let mut pts = [Point2::new(0.0, 0.0); MAX_TARGETS];
-        let k = history_len / 2;
-        for (i, p) in pts[..k].iter_mut().enumerate() {
-            *p = Point2::new(best[2 * i], best[2 * i + 1]);
-        }
-        let eval = self.objective.evaluate_targets(req, &pts[..k]);
+        // Every candidate was infeasible, blacklisted or blind (nothing Unknown in view), yet
+        // reachable Unknown space is left: go to the nearest frontier the robot has not
+        // failed to reach, so that a decision is never wasted.
+        let eval = self.objective.evaluate_targets(req, &[fallback]);
         self.objective
-            .decision(&eval, evaluations, opt.history())
+            .decision(&eval, evaluations + 1, opt.history())
             .map(Outcome::Go)
             .ok_or(DecideError::NoFeasibleTarget {
                 battery_steps: req.battery_steps,

@@ -751,3 +751,148 @@ fn a_laser_beyond_the_cache_capacities_is_predicted_by_tracing() {
     a.prepare(&req, &config).unwrap();
     assert!(a.uses_view_cache());
 }
+
+#[test]
+fn no_selector_chooses_a_place_the_robot_failed_to_reach() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    let mut ws = FrontierWorkspace::<1024, 64>::new_boxed();
+    let config = ExploreConfig {
+        population: 5,
+        max_generations: 5,
+        ..ExploreConfig::default()
+    };
+    // The unexplored east, where every method wants to go, is listed except for a strip
+    // along the frontier at x = 2 m.
+    let mut east = Blacklist::new(0.6);
+    for x in [3.0f32, 4.0, 5.0] {
+        for y in [0.5f32, 1.5, 2.5, 3.5] {
+            east.push(Point2::new(x, y)).unwrap();
+        }
+    }
+    let check = |name: &str, o: Outcome, list: &Blacklist| {
+        let Outcome::Go(d) = o else {
+            panic!("{name}: {o:?}")
+        };
+        for t in &d.targets {
+            assert!(!list.contains(*t), "{name}: target {t:?} is blacklisted");
+        }
+        *d.targets.last().unwrap()
+    };
+    for method in Method::ALL {
+        let mut sel = Optimized::new(method, config, &mut obj);
+        // Each decision's target is then listed, as the mission does when it fails.
+        for round in 0..4 {
+            let t = check(
+                &format!("{method:?} round {round}"),
+                run_selector(&mut sel, &req, round),
+                &sel.blacklist,
+            );
+            sel.blacklist.push(t).unwrap();
+        }
+        sel.blacklist = east.clone();
+        let o = run_selector(&mut sel, &req, 7);
+        check(&format!("{method:?} east listed"), o, &east);
+    }
+    let mut sel = NearestFrontier::new(config, &mut obj, &mut ws);
+    for round in 0..4 {
+        let t = check(
+            &format!("nearest frontier round {round}"),
+            run_selector(&mut sel, &req, round),
+            &sel.blacklist,
+        );
+        sel.blacklist.push(t).unwrap();
+    }
+}
+
+/// A known room (x, y in 0.2..1.3 m) open to the east on an Unknown pocket (x 1.3..2.1 m,
+/// y 0.4..1.1 m); everything else Occupied: hardly any cell of the map can be a target.
+fn pocket_grid() -> Grid {
+    let g = geometry();
+    let mut grid = Grid::new(g, LogOddsBounds::default()).unwrap();
+    for i in 0..g.cell_count() {
+        let c = g.cell(i);
+        let room = (2..=12).contains(&c.col) && (2..=12).contains(&c.row);
+        let pocket = (13..=20).contains(&c.col) && (4..=10).contains(&c.row);
+        if room {
+            grid.set_class(i, CellClass::Free, &mut ());
+        } else if !pocket {
+            grid.set_class(i, CellClass::Occupied, &mut ());
+        }
+    }
+    grid
+}
+
+#[test]
+fn without_a_feasible_candidate_the_optimizer_falls_back_to_the_nearest_frontier() {
+    let grid = pocket_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = DecisionRequest {
+        pose: Pose2::new(0.75, 0.75, 0.0),
+        ..request(&grid, &trav, &laser)
+    };
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    let config = ExploreConfig {
+        population: 2,
+        max_generations: 1,
+        ..ExploreConfig::default()
+    };
+    let mut fell_back = 0;
+    for method in Method::ALL {
+        for seed in 0..3 {
+            let o = run_selector(&mut Optimized::new(method, config, &mut obj), &req, seed);
+            let Outcome::Go(d) = o else {
+                panic!("{method:?} seed {seed}: {o:?}")
+            };
+            assert!(d.predicted_gain_cells > 0, "{method:?}: {d:?}");
+            if d.history.iter().all(|&f| f >= WORST_FITNESS) {
+                // No candidate was feasible: the nearest frontier cell, on the pocket's edge.
+                fell_back += 1;
+                let t = d.targets[0];
+                assert!(
+                    (t.x - 1.35).abs() < 0.01 && (t.y - 0.75).abs() < 0.35,
+                    "{method:?}: {t:?}"
+                );
+            }
+        }
+    }
+    assert!(
+        fell_back >= 10,
+        "only {fell_back} decisions without a feasible candidate"
+    );
+}
+
+#[test]
+fn with_every_reachable_frontier_blacklisted_the_selectors_say_so() {
+    let grid = pocket_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = DecisionRequest {
+        pose: Pose2::new(0.75, 0.75, 0.0),
+        ..request(&grid, &trav, &laser)
+    };
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    let mut ws = FrontierWorkspace::<1024, 64>::new_boxed();
+    let config = ExploreConfig::default();
+    let mut list = Blacklist::default();
+    list.push(Point2::new(1.35, 0.75)).unwrap();
+    let mut sel = Optimized::new(Method::Pso, config, &mut obj);
+    sel.blacklist = list.clone();
+    assert_eq!(
+        sel.decide(&req, &mut seeded(1)),
+        Err(DecideError::AllBlacklisted { entries: 1 })
+    );
+    let mut sel = NearestFrontier::new(config, &mut obj, &mut ws);
+    sel.blacklist = list;
+    assert_eq!(
+        sel.decide(&req, &mut seeded(1)),
+        Err(DecideError::AllBlacklisted { entries: 1 })
+    );
+}

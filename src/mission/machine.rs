@@ -10,8 +10,9 @@ use crate::control::odometry::MapFromOdom;
 use crate::control::safety::{RobotFlags, SafetyEvent, SafetyInputs, SafetyMonitor, SafetyState};
 use crate::explore::frontier_utility::{MAX_BLACKLIST, known_around};
 use crate::explore::{
-    CandidateStatus, DecideError, Decision, DecisionRequest, ExploreConfig, FrontierUtility,
-    MAX_TARGETS, NearestFrontier, Optimized, Outcome, TargetSelector,
+    Blacklist, CandidateStatus, DecideError, Decision, DecisionRequest, ExploreConfig,
+    FrontierUtility, MAX_DECISION_HISTORY, MAX_TARGETS, NearestFrontier, Optimized, Outcome,
+    TargetSelector,
 };
 use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::{Cell, CellClass};
@@ -92,6 +93,8 @@ pub struct Mission<const N: usize> {
     progress_time: Time,
     blacklist: heapless::Vec<(Point2, u32), MAX_BLACKLIST>,
     ahead: Option<Ahead>,
+    /// Best fitness per generation of the last decision adopted.
+    last_history: heapless::Vec<f32, MAX_DECISION_HISTORY>,
     /// The remaining waypoints of the last path given up (for telling whether a robot is in
     /// the way, and for publishing while the robot holds).
     last_path: heapless::Vec<Point2, MAX_SHARED_WAYPOINTS>,
@@ -173,6 +176,7 @@ impl<const N: usize> Mission<N> {
             progress_time: Time::ZERO,
             blacklist: heapless::Vec::new(),
             ahead: None,
+            last_history: heapless::Vec::new(),
             last_path: heapless::Vec::new(),
             contacts: heapless::Deque::new(),
             trail: heapless::Deque::new(),
@@ -326,6 +330,12 @@ impl<const N: usize> Mission<N> {
     /// Energy left \[steps\].
     pub fn battery_steps(&self) -> f32 {
         self.battery_steps
+    }
+
+    /// Best fitness per generation (initial population first) of the last decision adopted:
+    /// the optimizer's convergence curve; empty for the frontier rules and go-to goals.
+    pub fn last_decision_history(&self) -> &[f32] {
+        &self.last_history
     }
 
     /// The safety monitor (read only).
@@ -670,10 +680,14 @@ impl<const N: usize> Mission<N> {
         let (mut objective, frontier) = ws.parts();
         match self.config.selector {
             SelectorKind::Optimized(method) => {
-                Optimized::new(method, config, &mut objective).decide(&req, rng)
+                let mut s = Optimized::new(method, config, &mut objective);
+                self.fill_blacklist(&mut s.blacklist)?;
+                s.decide(&req, rng)
             }
             SelectorKind::NearestFrontier => {
-                NearestFrontier::new(config, &mut objective, frontier).decide(&req, rng)
+                let mut s = NearestFrontier::new(config, &mut objective, frontier);
+                self.fill_blacklist(&mut s.blacklist)?;
+                s.decide(&req, rng)
             }
             SelectorKind::FrontierUtility => {
                 let mut s = FrontierUtility::new(config, &mut objective, frontier);
@@ -875,6 +889,7 @@ impl<const N: usize> Mission<N> {
         }
         self.targets.clear();
         let _ = self.targets.extend_from_slice(&d.targets);
+        self.last_history.clone_from(&d.history);
         self.replans_this_decision = 0;
         self.failed_in_row = 0;
         events.stats.decisions += 1;
@@ -886,6 +901,15 @@ impl<const N: usize> Mission<N> {
             evaluations: d.evaluations,
         });
         true
+    }
+
+    /// The places this mission failed to reach, for a selector to avoid.
+    fn fill_blacklist(&self, list: &mut Blacklist) -> Result<(), DecideError> {
+        list.radius_m = BLACKLIST_RADIUS_M;
+        for &(p, _) in &self.blacklist {
+            list.push(p)?;
+        }
+        Ok(())
     }
 
     fn is_blacklisted(&self, p: Point2) -> bool {
