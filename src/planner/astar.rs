@@ -14,7 +14,7 @@
 //! and is reused across queries through generation stamps: a query neither clears nor
 //! allocates anything.
 
-use super::search::{Move, SearchMemory, moves, octile};
+use super::search::{Octile, SearchMemory};
 use super::{PlanError, PlannedPath, Planner, Traversability, path_length_m};
 use crate::grid::Cell;
 
@@ -107,25 +107,15 @@ impl<const N: usize> AStar<N> {
         }
         let (s, t) = trav.check_endpoints(start, goal)?;
         let w = trav.geometry().width;
-        let (gc, gr) = (t % w, t / w);
+        let goal_cell = Octile {
+            col: t % w,
+            row: t / w,
+        };
         let mem = &mut self.memory;
-        mem.begin();
-        mem.open_source(s, octile(s % w, s / w, gc, gr));
-        let mut expansions = 0u32;
-        let mut buf = [Move::default(); 8];
-        while let Some(i) = mem.pop_and_close() {
-            expansions += 1;
-            if i == t {
-                return Ok((mem.g(i), expansions, t));
-            }
-            let gi = mem.g(i);
-            let (ic, ir) = (i % w, i / w);
-            let count = moves(trav, i, ic, ir, &mut buf);
-            for m in &buf[..count] {
-                mem.relax(i, m.to, gi + m.step, || octile(m.col, m.row, gc, gr));
-            }
+        match mem.search(trav, s, t, goal_cell) {
+            (expansions, true) => Ok((mem.g(t), expansions, t)),
+            (_, false) => Err(PlanError::NoPath { start, goal }),
         }
-        Err(PlanError::NoPath { start, goal })
     }
 }
 

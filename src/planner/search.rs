@@ -4,31 +4,46 @@
 //! Processing Letters 4(3), 1975). Nothing is cleared between queries: a cell's entries are
 //! valid only if its stamp carries the current generation.
 
-use super::traversability::{CODE_BLOCKED, CODE_FREE, Traversability};
+use super::traversability::{MOVES, Traversability};
 
 /// Diagonal step \[cells\].
 pub(crate) const DIAGONAL: f32 = core::f32::consts::SQRT_2;
 
 const NO_PARENT: u32 = u32::MAX;
 
-/// Per-cell state read on every relaxation.
+/// Per-cell state. One record per cell, so a relaxation touches one cache line.
 #[derive(Clone, Copy)]
 struct Node {
     /// `2 * generation` when the cell was reached this query, `+ 1` once it is closed.
     stamp: u32,
     g: f32,
+    /// Parent cell (`NO_PARENT` for the source).
+    parent: u32,
+    /// Heap position while open (or `ON_STACK`).
+    pos: u32,
 }
 
-/// An open-list entry.
+/// An open-list entry: the cell and its row (its column follows from the index without a
+/// division).
 #[derive(Clone, Copy)]
 struct Entry {
     key: u64,
     idx: u32,
+    row: u32,
 }
 
-const ZERO_NODE: Node = Node { stamp: 0, g: 0.0 };
+const ZERO_NODE: Node = Node {
+    stamp: 0,
+    g: 0.0,
+    parent: 0,
+    pos: 0,
+};
 
-const ZERO_ENTRY: Entry = Entry { key: 0, idx: 0 };
+const ZERO_ENTRY: Entry = Entry {
+    key: 0,
+    idx: 0,
+    row: 0,
+};
 
 /// Relative slack of the bypass test, one unit in the last place of an f32. Along a straight
 /// diagonal run f stays constant in exact arithmetic but wobbles by rounding; the slack lets
@@ -40,20 +55,45 @@ const BYPASS_SLACK: f32 = 1.0 + f32::EPSILON;
 /// `pos` of a cell waiting on the bypass stack rather than in the heap.
 const ON_STACK: u32 = u32::MAX;
 
-/// Open list: a 4-ary heap growing from the front of `heap`, plus a bypass stack of cell
-/// indices growing from its back. A cell opened with f no greater than the open list's minimum
-/// (up to [`BYPASS_SLACK`]) would go straight to the top of the heap; it is pushed on the stack
+/// A lower bound on the cost from a cell to the goal \[cells\].
+pub(crate) trait Heuristic: Copy {
+    fn at(self, col: usize, row: usize) -> f32;
+}
+
+/// Octile distance to a goal cell (A*).
+#[derive(Clone, Copy)]
+pub(crate) struct Octile {
+    pub(crate) col: usize,
+    pub(crate) row: usize,
+}
+
+impl Heuristic for Octile {
+    #[inline(always)]
+    fn at(self, col: usize, row: usize) -> f32 {
+        octile(col, row, self.col, self.row)
+    }
+}
+
+/// No heuristic (Dijkstra).
+#[derive(Clone, Copy)]
+pub(crate) struct Zero;
+
+impl Heuristic for Zero {
+    #[inline(always)]
+    fn at(self, _: usize, _: usize) -> f32 {
+        0.0
+    }
+}
+
+/// Open list: a 4-ary heap growing from the front of `heap`, plus a bypass stack of cells
+/// growing from its back. A cell opened with f no greater than the open list's minimum (up to
+/// [`BYPASS_SLACK`]) would go straight to the top of the heap; it is pushed on the stack
 /// instead and expanded next, skipping two heap operations (one of the optimisations of Sun,
 /// Yeoh, Chen & Koenig, "Simple optimization techniques for A*-based search", AAMAS 2009). It
 /// pays on open ground, where straight runs keep f constant. Heap and stack never hold more
 /// than the open cells, fewer than `N`, so they share one array.
 pub(crate) struct SearchMemory<const N: usize> {
-    /// Read on every relaxation: kept small.
     nodes: [Node; N],
-    /// Parent of each reached cell (`NO_PARENT` for the source).
-    parents: [u32; N],
-    /// Heap position of each open cell (or `ON_STACK`).
-    pos: [u32; N],
     heap: [Entry; N],
     heap_len: usize,
     stack_len: usize,
@@ -67,8 +107,6 @@ impl<const N: usize> SearchMemory<N> {
     pub(crate) const fn new() -> Self {
         Self {
             nodes: [ZERO_NODE; N],
-            parents: [0; N],
-            pos: [0; N],
             heap: [ZERO_ENTRY; N],
             heap_len: 0,
             stack_len: 0,
@@ -78,7 +116,7 @@ impl<const N: usize> SearchMemory<N> {
     }
 
     /// Starts a query: new generation, empty heap.
-    pub(crate) fn begin(&mut self) {
+    fn begin(&mut self) {
         self.heap_len = 0;
         self.stack_len = 0;
         self.bypass_limit = 0.0;
@@ -106,70 +144,147 @@ impl<const N: usize> SearchMemory<N> {
 
     #[inline]
     pub(crate) fn parent(&self, i: usize) -> Option<usize> {
-        let p = self.parents[i];
+        let p = self.nodes[i].parent;
         (p != NO_PARENT).then_some(p as usize)
     }
 
+    /// Best-first search from `source` over `trav`, guided by `h`, until `target` is closed
+    /// (`Some` of the number of cells closed) or every reachable cell is (`None`; pass an
+    /// index outside the grid to sweep them all). `source` must be a passable cell of `trav`,
+    /// and the grid must have at most `N` cells.
+    pub(crate) fn search<const M: usize>(
+        &mut self,
+        trav: &Traversability<M>,
+        source: usize,
+        target: usize,
+        h: impl Heuristic,
+    ) -> (u32, bool) {
+        if trav.uniform_costs() {
+            self.run::<M, true>(trav, source, target, h)
+        } else {
+            self.run::<M, false>(trav, source, target, h)
+        }
+    }
+
+    /// [`Self::search`]; `UNIFORM`: every step costs its plain length (no cost factor to
+    /// look up).
+    #[inline(always)]
+    fn run<const M: usize, const UNIFORM: bool>(
+        &mut self,
+        trav: &Traversability<M>,
+        source: usize,
+        target: usize,
+        h: impl Heuristic,
+    ) -> (u32, bool) {
+        let w = trav.geometry().width;
+        let masks = trav.move_masks();
+        let codes = trav.codes();
+        // Cost factor by step code: blocked (never entered), Free, Unknown.
+        let factors = [0.0, 1.0, trav.unknown_factor()];
+        let offsets = MOVES.map(|(dc, dr)| (dc as isize + dr as isize * w as isize) as usize);
+        let steps = MOVES.map(|(dc, dr)| if dc != 0 && dr != 0 { DIAGONAL } else { 1.0 });
+        self.begin();
+        let (sc, sr) = (source % w, source / w);
+        self.open_source(source, sr, h.at(sc, sr));
+        let mut closed = 0u32;
+        while let Some(Entry { idx, row, .. }) = self.pop_and_close() {
+            closed += 1;
+            let i = idx as usize;
+            if i == target {
+                return (closed, true);
+            }
+            let row = row as usize;
+            let col = i - row * w;
+            let gi = self.nodes[i].g;
+            let mask = masks[i];
+            for k in 0..8 {
+                if mask & (1 << k) == 0 {
+                    continue;
+                }
+                let to = i.wrapping_add(offsets[k]);
+                let step = if UNIFORM {
+                    steps[k]
+                } else {
+                    steps[k] * factors[codes[to] as usize]
+                };
+                let (dc, dr) = MOVES[k];
+                let tc = col.wrapping_add(dc as usize);
+                let tr = row.wrapping_add(dr as usize);
+                self.relax(idx, to, tr, gi + step, || h.at(tc, tr));
+            }
+        }
+        (closed, false)
+    }
+
     /// Opens the source cell with g = 0.
-    pub(crate) fn open_source(&mut self, i: usize, key: f32) {
+    fn open_source(&mut self, i: usize, row: usize, key: f32) {
         self.nodes[i] = Node {
             stamp: 2 * self.generation,
             g: 0.0,
+            parent: NO_PARENT,
+            pos: 0,
         };
-        self.parents[i] = NO_PARENT;
-        self.push(i, make_key(key, 0.0));
+        self.push(make_key(key, 0.0), i, row);
     }
 
     /// Relaxes the edge `from -> to` with tentative cost `g`; `h` gives the heuristic of `to`
     /// (called only when `to` is opened or improved).
     #[inline(always)]
-    pub(crate) fn relax(&mut self, from: usize, to: usize, g: f32, h: impl FnOnce() -> f32) {
+    fn relax(&mut self, from: u32, to: usize, row: usize, g: f32, h: impl FnOnce() -> f32) {
         let seen = 2 * self.generation;
         let node = &mut self.nodes[to];
-        if node.stamp == seen + 1 {
-            return; // closed
-        }
         if node.stamp == seen {
             if g >= node.g {
                 return;
             }
             node.g = g;
-            self.parents[to] = from as u32;
-            if self.pos[to] == ON_STACK {
+            node.parent = from;
+            if node.pos == ON_STACK {
                 return; // expanded before any heap entry anyway
             }
-            let p = self.pos[to] as usize;
+            let p = node.pos as usize;
             self.heap[p].key = make_key(g + h(), g);
             self.sift_up(p);
-        } else {
-            node.stamp = seen;
-            node.g = g;
-            self.parents[to] = from as u32;
+        } else if node.stamp != seen + 1 {
             let f = g + h();
             if f <= self.bypass_limit {
-                self.pos[to] = ON_STACK;
+                *node = Node {
+                    stamp: seen,
+                    g,
+                    parent: from,
+                    pos: ON_STACK,
+                };
                 self.stack_len += 1;
-                self.heap[N - self.stack_len].idx = to as u32;
+                self.heap[N - self.stack_len] = Entry {
+                    key: 0,
+                    idx: to as u32,
+                    row: row as u32,
+                };
             } else {
-                self.push(to, make_key(f, g));
+                *node = Node {
+                    stamp: seen,
+                    g,
+                    parent: from,
+                    pos: 0,
+                };
+                self.push(make_key(f, g), to, row);
             }
         }
     }
 
     /// Removes the best open cell and closes it.
-    #[inline]
-    pub(crate) fn pop_and_close(&mut self) -> Option<usize> {
+    #[inline(always)]
+    fn pop_and_close(&mut self) -> Option<Entry> {
         let top = if self.stack_len > 0 {
-            let top = self.heap[N - self.stack_len].idx as usize;
+            let top = self.heap[N - self.stack_len];
             self.stack_len -= 1;
             top
         } else {
             if self.heap_len == 0 {
                 return None;
             }
-            let Entry { key, idx } = self.heap[0];
-            let top = idx as usize;
-            self.bypass_limit = f32::from_bits((key >> 32) as u32) * BYPASS_SLACK;
+            let top = self.heap[0];
+            self.bypass_limit = f32::from_bits((top.key >> 32) as u32) * BYPASS_SLACK;
             self.heap_len -= 1;
             if self.heap_len > 0 {
                 self.heap[0] = self.heap[self.heap_len];
@@ -177,20 +292,24 @@ impl<const N: usize> SearchMemory<N> {
             }
             top
         };
-        self.nodes[top].stamp = 2 * self.generation + 1;
+        self.nodes[top.idx as usize].stamp = 2 * self.generation + 1;
         Some(top)
     }
 
-    #[inline]
-    fn push(&mut self, i: usize, key: u64) {
+    #[inline(always)]
+    fn push(&mut self, key: u64, i: usize, row: usize) {
         // Each cell is in the heap at most once, so `heap_len < N` here.
         let p = self.heap_len;
         self.heap_len += 1;
-        self.heap[p] = Entry { key, idx: i as u32 };
+        self.heap[p] = Entry {
+            key,
+            idx: i as u32,
+            row: row as u32,
+        };
         self.sift_up(p);
     }
 
-    #[inline]
+    #[inline(always)]
     fn sift_up(&mut self, mut p: usize) {
         let e = self.heap[p];
         while p > 0 {
@@ -200,11 +319,11 @@ impl<const N: usize> SearchMemory<N> {
                 break;
             }
             self.heap[p] = up;
-            self.pos[up.idx as usize] = p as u32;
+            self.nodes[up.idx as usize].pos = p as u32;
             p = parent;
         }
         self.heap[p] = e;
-        self.pos[e.idx as usize] = p as u32;
+        self.nodes[e.idx as usize].pos = p as u32;
     }
 
     /// Fills the hole at `p` with the entry moved there: Floyd's bottom-up variant (the hole
@@ -216,21 +335,34 @@ impl<const N: usize> SearchMemory<N> {
         let len = self.heap_len;
         loop {
             let first = 4 * p + 1;
-            if first >= len {
-                break;
-            }
-            let mut child = first;
-            let mut best = self.heap[first].key;
-            for c in first + 1..(first + 4).min(len) {
-                let k = self.heap[c].key;
-                if k < best {
-                    best = k;
-                    child = c;
+            let child = if first + 3 < len {
+                // Smallest of four, as two independent pairs then their winners.
+                let k = [
+                    self.heap[first].key,
+                    self.heap[first + 1].key,
+                    self.heap[first + 2].key,
+                    self.heap[first + 3].key,
+                ];
+                let a = if k[1] < k[0] { 1 } else { 0 };
+                let b = if k[3] < k[2] { 3 } else { 2 };
+                first + if k[b] < k[a] { b } else { a }
+            } else if first < len {
+                let mut child = first;
+                let mut best = self.heap[first].key;
+                for c in first + 1..len {
+                    let k = self.heap[c].key;
+                    if k < best {
+                        best = k;
+                        child = c;
+                    }
                 }
-            }
+                child
+            } else {
+                break;
+            };
             let down = self.heap[child];
             self.heap[p] = down;
-            self.pos[down.idx as usize] = p as u32;
+            self.nodes[down.idx as usize].pos = p as u32;
             p = child;
         }
         self.heap[p] = e;
@@ -275,88 +407,6 @@ impl<const N: usize> SearchMemory<N> {
 #[inline]
 fn make_key(f: f32, g: f32) -> u64 {
     ((f.to_bits() as u64) << 32) | (!g.to_bits()) as u64
-}
-
-/// One legal move: the entered cell's index and coordinates, and the step cost \[cells\]
-/// already multiplied by the entered cell's cost factor.
-#[derive(Clone, Copy, Default)]
-pub(crate) struct Move {
-    pub(crate) to: usize,
-    pub(crate) col: usize,
-    pub(crate) row: usize,
-    pub(crate) step: f32,
-}
-
-/// Writes into `out` every legal move out of cell `i` = (`col`, `row`) and returns how many:
-/// orthogonal steps into passable cells, diagonal steps into passable cells whose two
-/// orthogonal neighbours are passable too (no corner cutting).
-#[inline(always)]
-pub(crate) fn moves<const N: usize>(
-    trav: &Traversability<N>,
-    i: usize,
-    col: usize,
-    row: usize,
-    out: &mut [Move; 8],
-) -> usize {
-    let codes = trav.codes();
-    let w = trav.geometry().width;
-    let h = trav.geometry().height;
-    let uf = trav.unknown_factor();
-    let factor = |c: u8| if c == CODE_FREE { 1.0 } else { uf };
-    let mut n = 0;
-    let mut add = |to: usize, col: usize, row: usize, step: f32| {
-        out[n] = Move { to, col, row, step };
-        n += 1;
-    };
-    let west = col > 0 && codes[i - 1] != CODE_BLOCKED;
-    let east = col + 1 < w && codes[i + 1] != CODE_BLOCKED;
-    let south = row > 0 && codes[i - w] != CODE_BLOCKED;
-    let north = row + 1 < h && codes[i + w] != CODE_BLOCKED;
-    if west {
-        add(i - 1, col - 1, row, factor(codes[i - 1]));
-    }
-    if east {
-        add(i + 1, col + 1, row, factor(codes[i + 1]));
-    }
-    if south {
-        add(i - w, col, row - 1, factor(codes[i - w]));
-        if west && codes[i - w - 1] != CODE_BLOCKED {
-            add(
-                i - w - 1,
-                col - 1,
-                row - 1,
-                DIAGONAL * factor(codes[i - w - 1]),
-            );
-        }
-        if east && codes[i - w + 1] != CODE_BLOCKED {
-            add(
-                i - w + 1,
-                col + 1,
-                row - 1,
-                DIAGONAL * factor(codes[i - w + 1]),
-            );
-        }
-    }
-    if north {
-        add(i + w, col, row + 1, factor(codes[i + w]));
-        if west && codes[i + w - 1] != CODE_BLOCKED {
-            add(
-                i + w - 1,
-                col - 1,
-                row + 1,
-                DIAGONAL * factor(codes[i + w - 1]),
-            );
-        }
-        if east && codes[i + w + 1] != CODE_BLOCKED {
-            add(
-                i + w + 1,
-                col + 1,
-                row + 1,
-                DIAGONAL * factor(codes[i + w + 1]),
-            );
-        }
-    }
-    n
 }
 
 /// Octile distance between cells `(c0, r0)` and `(c1, r1)` \[cells\]: the exact cost on an
