@@ -61,7 +61,10 @@ fn batch<const N: usize>(map: &Map, trav: &Traversability<N>, q: &[(Cell, Cell)]
         "papillon" => {
             let mut astar = AStar::<N>::new_boxed();
             let (sum, e) = black_box(run_papillon(trav, &mut astar, q));
-            println!("papillon: {} queries, cost sum {sum:.3}, {e} expansions", q.len());
+            println!(
+                "papillon: {} queries, cost sum {sum:.3}, {e} expansions",
+                q.len()
+            );
         }
         "pathfinding" => {
             let sum = black_box(run_pathfinding(map, q));

@@ -37,7 +37,7 @@ impl<const N: usize> Default for AStar<N> {
 }
 
 impl<const N: usize> AStar<N> {
-    /// A planner built on the stack (about 28 bytes per cell). For large `N` on a host prefer
+    /// A planner built on the stack (32 bytes per cell). For large `N` on a host prefer
     /// [`Self::new_boxed`].
     pub const fn new() -> Self {
         Self {
