@@ -371,9 +371,14 @@ impl<const N: usize> SearchMemory<N> {
             } else {
                 break;
             };
-            let down = heap[child];
-            heap[p] = down;
-            nodes[down.idx as usize].pos = p as u32;
+            // SAFETY: `child < heap.len()` (tested above); `p` is the start, checked by the
+            // read of `e`, or an earlier child; the cell index of every heap entry passed a
+            // checked access to `nodes` when it was pushed (`open_source`, `relax`).
+            unsafe {
+                let down = *heap.get_unchecked(child);
+                *heap.get_unchecked_mut(p) = down;
+                nodes.get_unchecked_mut(down.idx as usize).pos = p as u32;
+            }
             p = child;
         }
         heap[p] = e;
@@ -473,12 +478,17 @@ fn sift_up(heap: &mut [Entry], nodes: &mut [Node], mut p: usize) {
     let e = heap[p];
     while p > 0 {
         let parent = (p - 1) / 4;
-        let up = heap[parent];
+        // SAFETY: `parent < p < heap.len()` (`p` was checked by the read of `e`), and the
+        // cell index of every heap entry passed a checked access to `nodes` when it was
+        // pushed (`open_source`, `relax`).
+        let up = unsafe { *heap.get_unchecked(parent) };
         if up.key <= e.key {
             break;
         }
-        heap[p] = up;
-        nodes[up.idx as usize].pos = p as u32;
+        unsafe {
+            *heap.get_unchecked_mut(p) = up;
+            nodes.get_unchecked_mut(up.idx as usize).pos = p as u32;
+        }
         p = parent;
     }
     heap[p] = e;
