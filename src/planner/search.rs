@@ -11,12 +11,18 @@ pub(crate) const DIAGONAL: f32 = core::f32::consts::SQRT_2;
 
 const NO_PARENT: u32 = u32::MAX;
 
-/// Per-cell state. One record per cell, so a relaxation touches one cache line.
+/// Per-cell state read on every relaxation: kept to 8 bytes so that the cells a search
+/// touches stay in cache.
 #[derive(Clone, Copy)]
 struct Node {
     /// `2 * generation` when the cell was reached this query, `+ 1` once it is closed.
     stamp: u32,
     g: f32,
+}
+
+/// Per-cell state written when a cell is opened or improved.
+#[derive(Clone, Copy)]
+struct Link {
     /// Parent cell times 8 plus the index in [`MOVES`] of the step from it
     /// (`NO_PARENT` for the source).
     parent: u32,
@@ -33,12 +39,9 @@ struct Entry {
     row: u32,
 }
 
-const ZERO_NODE: Node = Node {
-    stamp: 0,
-    g: 0.0,
-    parent: 0,
-    pos: 0,
-};
+const ZERO_NODE: Node = Node { stamp: 0, g: 0.0 };
+
+const ZERO_LINK: Link = Link { parent: 0, pos: 0 };
 
 const ZERO_ENTRY: Entry = Entry {
     key: 0,
@@ -95,6 +98,7 @@ impl Heuristic for Zero {
 /// than the open cells, fewer than `N`, so they share one array.
 pub(crate) struct SearchMemory<const N: usize> {
     nodes: [Node; N],
+    links: [Link; N],
     heap: [Entry; N],
     heap_len: usize,
     stack_len: usize,
@@ -114,6 +118,7 @@ impl<const N: usize> SearchMemory<N> {
         };
         Self {
             nodes: [ZERO_NODE; N],
+            links: [ZERO_LINK; N],
             heap: [ZERO_ENTRY; N],
             heap_len: 0,
             stack_len: 0,
@@ -151,7 +156,7 @@ impl<const N: usize> SearchMemory<N> {
 
     #[inline]
     pub(crate) fn parent(&self, i: usize) -> Option<usize> {
-        let p = self.nodes[i].parent;
+        let p = self.links[i].parent;
         (p != NO_PARENT).then_some((p >> 3) as usize)
     }
 
@@ -202,7 +207,8 @@ impl<const N: usize> SearchMemory<N> {
             }
             let row = row as usize;
             let col = i - row * w;
-            let Node { g: gi, parent, .. } = self.nodes[i];
+            let gi = self.nodes[i].g;
+            let parent = self.links[i].parent;
             // Steps into the parent's neighbourhood cannot improve anything: see
             // [`SKIP_AFTER`].
             let mask = if parent == NO_PARENT {
@@ -247,6 +253,8 @@ impl<const N: usize> SearchMemory<N> {
         self.nodes[i] = Node {
             stamp: 2 * self.generation,
             g: 0.0,
+        };
+        self.links[i] = Link {
             parent: NO_PARENT,
             pos: 0,
         };
@@ -265,19 +273,19 @@ impl<const N: usize> SearchMemory<N> {
                 return;
             }
             node.g = g;
-            node.parent = from;
-            if node.pos == ON_STACK {
+            let link = &mut self.links[to];
+            link.parent = from;
+            if link.pos == ON_STACK {
                 return; // expanded before any heap entry anyway
             }
-            let p = node.pos as usize;
+            let p = link.pos as usize;
             self.heap[p].key = make_key(g + h(), g);
             self.sift_up(p);
         } else if node.stamp != seen + 1 {
             let f = g + h();
             if f <= self.bypass_limit {
-                *node = Node {
-                    stamp: seen,
-                    g,
+                *node = Node { stamp: seen, g };
+                self.links[to] = Link {
                     parent: from,
                     pos: ON_STACK,
                 };
@@ -288,9 +296,8 @@ impl<const N: usize> SearchMemory<N> {
                     row: row as u32,
                 };
             } else {
-                *node = Node {
-                    stamp: seen,
-                    g,
+                *node = Node { stamp: seen, g };
+                self.links[to] = Link {
                     parent: from,
                     pos: 0,
                 };
@@ -339,7 +346,7 @@ impl<const N: usize> SearchMemory<N> {
     #[inline(always)]
     fn sift_up(&mut self, p: usize) {
         let len = self.heap_len;
-        sift_up(&mut self.heap[..len], &mut self.nodes, p);
+        sift_up(&mut self.heap[..len], &mut self.links, p);
     }
 
     /// Fills the hole at `p` with the entry moved there: Floyd's bottom-up variant (the hole
@@ -351,7 +358,7 @@ impl<const N: usize> SearchMemory<N> {
         // Working on the slice of live entries lets the compiler drop the bounds checks that
         // the `< heap.len()` tests already imply.
         let heap = &mut self.heap[..len];
-        let nodes = &mut self.nodes;
+        let links = &mut self.links;
         let e = heap[p];
         loop {
             let first = 4 * p + 1;
@@ -373,16 +380,16 @@ impl<const N: usize> SearchMemory<N> {
             };
             // SAFETY: `child < heap.len()` (tested above); `p` is the start, checked by the
             // read of `e`, or an earlier child; the cell index of every heap entry passed a
-            // checked access to `nodes` when it was pushed (`open_source`, `relax`).
+            // checked access to `links` when it was pushed (`open_source`, `relax`).
             unsafe {
                 let down = *heap.get_unchecked(child);
                 *heap.get_unchecked_mut(p) = down;
-                nodes.get_unchecked_mut(down.idx as usize).pos = p as u32;
+                links.get_unchecked_mut(down.idx as usize).pos = p as u32;
             }
             p = child;
         }
         heap[p] = e;
-        sift_up(heap, nodes, p);
+        sift_up(heap, links, p);
     }
 
     /// Writes the path ending at `end` (following parents back to the source) into `out`,
@@ -472,14 +479,14 @@ const fn skip_after() -> [[u8; 256]; 8] {
 }
 
 /// Moves the entry at `p` up `heap` until its parent's key is no larger, recording every
-/// entry's new position in `nodes`.
+/// entry's new position in `links`.
 #[inline(always)]
-fn sift_up(heap: &mut [Entry], nodes: &mut [Node], mut p: usize) {
+fn sift_up(heap: &mut [Entry], links: &mut [Link], mut p: usize) {
     let e = heap[p];
     while p > 0 {
         let parent = (p - 1) / 4;
         // SAFETY: `parent < p < heap.len()` (`p` was checked by the read of `e`), and the
-        // cell index of every heap entry passed a checked access to `nodes` when it was
+        // cell index of every heap entry passed a checked access to `links` when it was
         // pushed (`open_source`, `relax`).
         let up = unsafe { *heap.get_unchecked(parent) };
         if up.key <= e.key {
@@ -487,12 +494,12 @@ fn sift_up(heap: &mut [Entry], nodes: &mut [Node], mut p: usize) {
         }
         unsafe {
             *heap.get_unchecked_mut(p) = up;
-            nodes.get_unchecked_mut(up.idx as usize).pos = p as u32;
+            links.get_unchecked_mut(up.idx as usize).pos = p as u32;
         }
         p = parent;
     }
     heap[p] = e;
-    nodes[e.idx as usize].pos = p as u32;
+    links[e.idx as usize].pos = p as u32;
 }
 
 /// Heap key: f first (non-negative floats order like their bits), then larger g first.
