@@ -7,8 +7,11 @@
 //! cost factor is at least 1, so the first time the goal is closed its cost is optimal and no
 //! cell is reopened. Ties on f are broken towards larger g (deeper nodes first), and cells
 //! opened at the open list's minimum f bypass the heap (a stack, expanded first); both cut work
-//! on open ground. The bypass test allows one f32 ulp of slack, so the cost found is optimal up
-//! to float rounding (relative 1.2e-7); the Moving AI acceptance test checks lengths to 1e-3.
+//! on open ground. Steps into cells that the expanded cell's parent reaches by a legal step
+//! are not relaxed when the step costs make that useless (see the search module), which
+//! changes nothing A* does but halves the relaxations. The bypass test allows one f32 ulp of
+//! slack, so the cost found is optimal up to float rounding (relative 1.2e-7); the Moving AI
+//! acceptance test checks lengths to 1e-3.
 //!
 //! Working memory (4-ary heap open list, g-values, parents, closed flags) has capacity `N`
 //! and is reused across queries through generation stamps: a query neither clears nor
