@@ -9,7 +9,7 @@
 //!
 //! Working memory of capacity `N` is reused across sweeps through generation stamps.
 
-use super::search::{Move, SearchMemory, moves};
+use super::search::{SearchMemory, Zero};
 use super::{PlanError, PlannedPath, Planner, Traversability, path_length_m};
 use crate::grid::{Cell, GridGeometry};
 
@@ -40,7 +40,7 @@ impl<const N: usize> Default for DistanceField<N> {
 }
 
 impl<const N: usize> DistanceField<N> {
-    /// An empty field built on the stack (about 28 bytes per cell). For large `N` on a host
+    /// An empty field built on the stack (32 bytes per cell). For large `N` on a host
     /// prefer [`Self::new_boxed`].
     pub const fn new() -> Self {
         Self {
@@ -90,20 +90,7 @@ impl<const N: usize> DistanceField<N> {
             });
         }
         let (s, _) = trav.check_endpoints(source, source)?;
-        let mem = &mut self.memory;
-        mem.begin();
-        mem.open_source(s, 0.0);
-        let w = trav.geometry().width;
-        let mut reached = 0u32;
-        let mut buf = [Move::default(); 8];
-        while let Some(i) = mem.pop_and_close() {
-            reached += 1;
-            let gi = mem.g(i);
-            let count = moves(trav, i, i % w, i / w, &mut buf);
-            for m in &buf[..count] {
-                mem.relax(i, m.to, gi + m.step, || 0.0);
-            }
-        }
+        let (reached, _) = self.memory.search(trav, s, usize::MAX, Zero);
         self.geometry = Some(*trav.geometry());
         self.source = source;
         self.reached = reached;

@@ -4,14 +4,15 @@
 //! Processing Letters 4(3), 1975). Nothing is cleared between queries: a cell's entries are
 //! valid only if its stamp carries the current generation.
 
-use super::traversability::{CODE_BLOCKED, CODE_FREE, Traversability};
+use super::traversability::{MOVES, Traversability};
 
 /// Diagonal step \[cells\].
 pub(crate) const DIAGONAL: f32 = core::f32::consts::SQRT_2;
 
 const NO_PARENT: u32 = u32::MAX;
 
-/// Per-cell state read on every relaxation.
+/// Per-cell state read on every relaxation: kept to 8 bytes so that the cells a search
+/// touches stay in cache.
 #[derive(Clone, Copy)]
 struct Node {
     /// `2 * generation` when the cell was reached this query, `+ 1` once it is closed.
@@ -19,16 +20,34 @@ struct Node {
     g: f32,
 }
 
-/// An open-list entry.
+/// Per-cell state written when a cell is opened or improved.
+#[derive(Clone, Copy)]
+struct Link {
+    /// Parent cell times 8 plus the index in [`MOVES`] of the step from it
+    /// (`NO_PARENT` for the source).
+    parent: u32,
+    /// Heap position while open (or `ON_STACK`).
+    pos: u32,
+}
+
+/// An open-list entry: the cell and its row (its column follows from the index without a
+/// division).
 #[derive(Clone, Copy)]
 struct Entry {
     key: u64,
     idx: u32,
+    row: u32,
 }
 
 const ZERO_NODE: Node = Node { stamp: 0, g: 0.0 };
 
-const ZERO_ENTRY: Entry = Entry { key: 0, idx: 0 };
+const ZERO_LINK: Link = Link { parent: 0, pos: 0 };
+
+const ZERO_ENTRY: Entry = Entry {
+    key: 0,
+    idx: 0,
+    row: 0,
+};
 
 /// Relative slack of the bypass test, one unit in the last place of an f32. Along a straight
 /// diagonal run f stays constant in exact arithmetic but wobbles by rounding; the slack lets
@@ -40,20 +59,46 @@ const BYPASS_SLACK: f32 = 1.0 + f32::EPSILON;
 /// `pos` of a cell waiting on the bypass stack rather than in the heap.
 const ON_STACK: u32 = u32::MAX;
 
-/// Open list: a 4-ary heap growing from the front of `heap`, plus a bypass stack of cell
-/// indices growing from its back. A cell opened with f no greater than the open list's minimum
-/// (up to [`BYPASS_SLACK`]) would go straight to the top of the heap; it is pushed on the stack
+/// A lower bound on the cost from a cell to the goal \[cells\].
+pub(crate) trait Heuristic: Copy {
+    fn at(self, col: usize, row: usize) -> f32;
+}
+
+/// Octile distance to a goal cell (A*).
+#[derive(Clone, Copy)]
+pub(crate) struct Octile {
+    pub(crate) col: usize,
+    pub(crate) row: usize,
+}
+
+impl Heuristic for Octile {
+    #[inline(always)]
+    fn at(self, col: usize, row: usize) -> f32 {
+        octile(col, row, self.col, self.row)
+    }
+}
+
+/// No heuristic (Dijkstra).
+#[derive(Clone, Copy)]
+pub(crate) struct Zero;
+
+impl Heuristic for Zero {
+    #[inline(always)]
+    fn at(self, _: usize, _: usize) -> f32 {
+        0.0
+    }
+}
+
+/// Open list: a 4-ary heap growing from the front of `heap`, plus a bypass stack of cells
+/// growing from its back. A cell opened with f no greater than the open list's minimum (up to
+/// [`BYPASS_SLACK`]) would go straight to the top of the heap; it is pushed on the stack
 /// instead and expanded next, skipping two heap operations (one of the optimisations of Sun,
 /// Yeoh, Chen & Koenig, "Simple optimization techniques for A*-based search", AAMAS 2009). It
 /// pays on open ground, where straight runs keep f constant. Heap and stack never hold more
 /// than the open cells, fewer than `N`, so they share one array.
 pub(crate) struct SearchMemory<const N: usize> {
-    /// Read on every relaxation: kept small.
     nodes: [Node; N],
-    /// Parent of each reached cell (`NO_PARENT` for the source).
-    parents: [u32; N],
-    /// Heap position of each open cell (or `ON_STACK`).
-    pos: [u32; N],
+    links: [Link; N],
     heap: [Entry; N],
     heap_len: usize,
     stack_len: usize,
@@ -65,10 +110,15 @@ pub(crate) struct SearchMemory<const N: usize> {
 
 impl<const N: usize> SearchMemory<N> {
     pub(crate) const fn new() -> Self {
+        const {
+            assert!(
+                N < 1 << 29,
+                "parent links hold a cell index times 8 in a u32"
+            )
+        };
         Self {
             nodes: [ZERO_NODE; N],
-            parents: [0; N],
-            pos: [0; N],
+            links: [ZERO_LINK; N],
             heap: [ZERO_ENTRY; N],
             heap_len: 0,
             stack_len: 0,
@@ -78,7 +128,7 @@ impl<const N: usize> SearchMemory<N> {
     }
 
     /// Starts a query: new generation, empty heap.
-    pub(crate) fn begin(&mut self) {
+    fn begin(&mut self) {
         self.heap_len = 0;
         self.stack_len = 0;
         self.bypass_limit = 0.0;
@@ -106,70 +156,169 @@ impl<const N: usize> SearchMemory<N> {
 
     #[inline]
     pub(crate) fn parent(&self, i: usize) -> Option<usize> {
-        let p = self.parents[i];
-        (p != NO_PARENT).then_some(p as usize)
+        let p = self.links[i].parent;
+        (p != NO_PARENT).then_some((p >> 3) as usize)
+    }
+
+    /// Best-first search from `source` over `trav`, guided by `h`, until `target` is closed
+    /// (`Some` of the number of cells closed) or every reachable cell is (`None`; pass an
+    /// index outside the grid to sweep them all). `source` must be a passable cell of `trav`,
+    /// and the grid must have at most `N` cells.
+    pub(crate) fn search<const M: usize>(
+        &mut self,
+        trav: &Traversability<M>,
+        source: usize,
+        target: usize,
+        h: impl Heuristic,
+    ) -> (u32, bool) {
+        if trav.uniform_costs() {
+            self.run::<M, true>(trav, source, target, h)
+        } else {
+            self.run::<M, false>(trav, source, target, h)
+        }
+    }
+
+    /// [`Self::search`]; `UNIFORM`: every step costs its plain length (no cost factor to
+    /// look up).
+    #[inline(always)]
+    fn run<const M: usize, const UNIFORM: bool>(
+        &mut self,
+        trav: &Traversability<M>,
+        source: usize,
+        target: usize,
+        h: impl Heuristic,
+    ) -> (u32, bool) {
+        let w = trav.geometry().width;
+        let masks = trav.move_masks();
+        let codes = trav.codes();
+        // Cost factor by step code: blocked (never entered), Free, Unknown.
+        let factors = [0.0, 1.0, trav.unknown_factor()];
+        let offsets = MOVES.map(|(dc, dr)| (dc as isize + dr as isize * w as isize) as usize);
+        let steps = MOVES.map(|(dc, dr)| if dc != 0 && dr != 0 { DIAGONAL } else { 1.0 });
+        self.begin();
+        let (sc, sr) = (source % w, source / w);
+        self.open_source(source, sr, h.at(sc, sr));
+        let mut closed = 0u32;
+        while let Some(Entry { idx, row, .. }) = self.pop_and_close() {
+            closed += 1;
+            let i = idx as usize;
+            if i == target {
+                return (closed, true);
+            }
+            let row = row as usize;
+            let col = i - row * w;
+            let gi = self.nodes[i].g;
+            let parent = self.links[i].parent;
+            // Steps into the parent's neighbourhood cannot improve anything: see
+            // [`SKIP_AFTER`].
+            let mask = if parent == NO_PARENT {
+                masks[i]
+            } else {
+                let p_mask = masks[(parent >> 3) as usize];
+                let p_mask = if UNIFORM { p_mask } else { p_mask & ORTHOGONAL };
+                masks[i] & !SKIP_AFTER[(parent & 7) as usize][p_mask as usize]
+            };
+            // One block per direction, unrolled so that offsets and step lengths are
+            // constants of the block.
+            macro_rules! step {
+                ($k:expr) => {
+                    if mask & (1 << $k) != 0 {
+                        let to = i.wrapping_add(offsets[$k]);
+                        let step = if UNIFORM {
+                            steps[$k]
+                        } else {
+                            steps[$k] * factors[codes[to] as usize]
+                        };
+                        let (dc, dr) = MOVES[$k];
+                        let tc = col.wrapping_add(dc as usize);
+                        let tr = row.wrapping_add(dr as usize);
+                        self.relax(idx << 3 | $k, to, tr, gi + step, || h.at(tc, tr));
+                    }
+                };
+            }
+            step!(0);
+            step!(1);
+            step!(2);
+            step!(3);
+            step!(4);
+            step!(5);
+            step!(6);
+            step!(7);
+        }
+        (closed, false)
     }
 
     /// Opens the source cell with g = 0.
-    pub(crate) fn open_source(&mut self, i: usize, key: f32) {
+    fn open_source(&mut self, i: usize, row: usize, key: f32) {
         self.nodes[i] = Node {
             stamp: 2 * self.generation,
             g: 0.0,
         };
-        self.parents[i] = NO_PARENT;
-        self.push(i, make_key(key, 0.0));
+        self.links[i] = Link {
+            parent: NO_PARENT,
+            pos: 0,
+        };
+        self.push(make_key(key, 0.0), i, row);
     }
 
     /// Relaxes the edge `from -> to` with tentative cost `g`; `h` gives the heuristic of `to`
-    /// (called only when `to` is opened or improved).
+    /// (called only when `to` is opened or improved). `from` is the parent link: the cell
+    /// index times 8 plus the step's index in [`MOVES`].
     #[inline(always)]
-    pub(crate) fn relax(&mut self, from: usize, to: usize, g: f32, h: impl FnOnce() -> f32) {
+    fn relax(&mut self, from: u32, to: usize, row: usize, g: f32, h: impl FnOnce() -> f32) {
         let seen = 2 * self.generation;
         let node = &mut self.nodes[to];
-        if node.stamp == seen + 1 {
-            return; // closed
-        }
         if node.stamp == seen {
             if g >= node.g {
                 return;
             }
             node.g = g;
-            self.parents[to] = from as u32;
-            if self.pos[to] == ON_STACK {
+            let link = &mut self.links[to];
+            link.parent = from;
+            if link.pos == ON_STACK {
                 return; // expanded before any heap entry anyway
             }
-            let p = self.pos[to] as usize;
+            let p = link.pos as usize;
             self.heap[p].key = make_key(g + h(), g);
             self.sift_up(p);
-        } else {
-            node.stamp = seen;
-            node.g = g;
-            self.parents[to] = from as u32;
+        } else if node.stamp != seen + 1 {
             let f = g + h();
             if f <= self.bypass_limit {
-                self.pos[to] = ON_STACK;
+                *node = Node { stamp: seen, g };
+                self.links[to] = Link {
+                    parent: from,
+                    pos: ON_STACK,
+                };
                 self.stack_len += 1;
-                self.heap[N - self.stack_len].idx = to as u32;
+                self.heap[N - self.stack_len] = Entry {
+                    key: 0,
+                    idx: to as u32,
+                    row: row as u32,
+                };
             } else {
-                self.push(to, make_key(f, g));
+                *node = Node { stamp: seen, g };
+                self.links[to] = Link {
+                    parent: from,
+                    pos: 0,
+                };
+                self.push(make_key(f, g), to, row);
             }
         }
     }
 
     /// Removes the best open cell and closes it.
-    #[inline]
-    pub(crate) fn pop_and_close(&mut self) -> Option<usize> {
+    #[inline(always)]
+    fn pop_and_close(&mut self) -> Option<Entry> {
         let top = if self.stack_len > 0 {
-            let top = self.heap[N - self.stack_len].idx as usize;
+            let top = self.heap[N - self.stack_len];
             self.stack_len -= 1;
             top
         } else {
             if self.heap_len == 0 {
                 return None;
             }
-            let Entry { key, idx } = self.heap[0];
-            let top = idx as usize;
-            self.bypass_limit = f32::from_bits((key >> 32) as u32) * BYPASS_SLACK;
+            let top = self.heap[0];
+            self.bypass_limit = f32::from_bits((top.key >> 32) as u32) * BYPASS_SLACK;
             self.heap_len -= 1;
             if self.heap_len > 0 {
                 self.heap[0] = self.heap[self.heap_len];
@@ -177,34 +326,27 @@ impl<const N: usize> SearchMemory<N> {
             }
             top
         };
-        self.nodes[top].stamp = 2 * self.generation + 1;
+        self.nodes[top.idx as usize].stamp = 2 * self.generation + 1;
         Some(top)
     }
 
-    #[inline]
-    fn push(&mut self, i: usize, key: u64) {
+    #[inline(always)]
+    fn push(&mut self, key: u64, i: usize, row: usize) {
         // Each cell is in the heap at most once, so `heap_len < N` here.
         let p = self.heap_len;
         self.heap_len += 1;
-        self.heap[p] = Entry { key, idx: i as u32 };
+        self.heap[p] = Entry {
+            key,
+            idx: i as u32,
+            row: row as u32,
+        };
         self.sift_up(p);
     }
 
-    #[inline]
-    fn sift_up(&mut self, mut p: usize) {
-        let e = self.heap[p];
-        while p > 0 {
-            let parent = (p - 1) / 4;
-            let up = self.heap[parent];
-            if up.key <= e.key {
-                break;
-            }
-            self.heap[p] = up;
-            self.pos[up.idx as usize] = p as u32;
-            p = parent;
-        }
-        self.heap[p] = e;
-        self.pos[e.idx as usize] = p as u32;
+    #[inline(always)]
+    fn sift_up(&mut self, p: usize) {
+        let len = self.heap_len;
+        sift_up(&mut self.heap[..len], &mut self.links, p);
     }
 
     /// Fills the hole at `p` with the entry moved there: Floyd's bottom-up variant (the hole
@@ -212,29 +354,42 @@ impl<const N: usize> SearchMemory<N> {
     /// comparisons against the entry on the way down.
     #[inline]
     fn sift_down(&mut self, mut p: usize) {
-        let e = self.heap[p];
         let len = self.heap_len;
+        // Working on the slice of live entries lets the compiler drop the bounds checks that
+        // the `< heap.len()` tests already imply.
+        let heap = &mut self.heap[..len];
+        let links = &mut self.links;
+        let e = heap[p];
         loop {
             let first = 4 * p + 1;
-            if first >= len {
-                break;
-            }
-            let mut child = first;
-            let mut best = self.heap[first].key;
-            for c in first + 1..(first + 4).min(len) {
-                let k = self.heap[c].key;
-                if k < best {
-                    best = k;
-                    child = c;
+            let child = if let Some(c) = heap.get(first..first + 4) {
+                // Smallest of four, as two independent pairs then their winners.
+                let a = (c[1].key < c[0].key) as usize;
+                let b = 2 + (c[3].key < c[2].key) as usize;
+                first + if c[b].key < c[a].key { b } else { a }
+            } else if first < heap.len() {
+                let mut child = first;
+                for c in first + 1..heap.len() {
+                    if heap[c].key < heap[child].key {
+                        child = c;
+                    }
                 }
+                child
+            } else {
+                break;
+            };
+            // SAFETY: `child < heap.len()` (tested above); `p` is the start, checked by the
+            // read of `e`, or an earlier child; the cell index of every heap entry passed a
+            // checked access to `links` when it was pushed (`open_source`, `relax`).
+            unsafe {
+                let down = *heap.get_unchecked(child);
+                *heap.get_unchecked_mut(p) = down;
+                links.get_unchecked_mut(down.idx as usize).pos = p as u32;
             }
-            let down = self.heap[child];
-            self.heap[p] = down;
-            self.pos[down.idx as usize] = p as u32;
             p = child;
         }
-        self.heap[p] = e;
-        self.sift_up(p);
+        heap[p] = e;
+        sift_up(heap, links, p);
     }
 
     /// Writes the path ending at `end` (following parents back to the source) into `out`,
@@ -271,100 +426,96 @@ impl<const N: usize> SearchMemory<N> {
     }
 }
 
+/// The orthogonal steps of a move mask (west, east, south, north).
+const ORTHOGONAL: u8 = 0b0010_0111;
+
+/// `SKIP_AFTER[k][m]`: the steps out of a cell `i` not worth relaxing when `i` was reached by
+/// step `k` from its parent `p` and `m` holds (some of) `p`'s legal steps: the step back into
+/// `p` (closed) and every step into a cell `t` that `p` reaches by a step in `m`. When `p` was
+/// expanded it relaxed `t` with `g(p) + c(p, t)`, and `t`'s cost only falls after that; through
+/// `i` the cost is `g(p) + c(p, i) + c(i, t)`, which is no smaller when the step costs obey the
+/// triangle inequality `c(p, i) + c(i, t) >= c(p, t)`. With plain lengths they do for every
+/// step (the smallest gap, 2 - sqrt(2) cells, dwarfs the f32 rounding of g below 2^21 cells).
+/// With cost factors `>= 1` on the entered cell they do when `p -> t` is orthogonal
+/// (`c(i, t) >= c(p, t)` already), not always when it is diagonal, so the search then passes
+/// only `p`'s orthogonal steps. Such relaxations would change nothing, so skipping them leaves
+/// the search step for step the same, only cheaper: about half of a cell's eight neighbours
+/// are the parent's neighbours. (The same neighbourhood argument is the basis of the pruning
+/// in Harabor & Grastien, "Online graph pruning for pathfinding on grid maps", AAAI 2011; here
+/// it only removes relaxations that cannot succeed, with no change to what A* expands.)
+static SKIP_AFTER: [[u8; 256]; 8] = skip_after();
+
+const fn skip_after() -> [[u8; 256]; 8] {
+    let mut table = [[0u8; 256]; 8];
+    let mut k = 0;
+    while k < 8 {
+        let mut m = 0;
+        while m < 256 {
+            let mut skip = 0u8;
+            let mut j = 0;
+            while j < 8 {
+                // t - p = step k + step j.
+                let dc = MOVES[k].0 + MOVES[j].0;
+                let dr = MOVES[k].1 + MOVES[j].1;
+                if dc == 0 && dr == 0 {
+                    skip |= 1 << j;
+                } else {
+                    let mut s = 0;
+                    while s < 8 {
+                        if MOVES[s].0 == dc && MOVES[s].1 == dr && m & (1 << s) != 0 {
+                            skip |= 1 << j;
+                        }
+                        s += 1;
+                    }
+                }
+                j += 1;
+            }
+            table[k][m] = skip;
+            m += 1;
+        }
+        k += 1;
+    }
+    table
+}
+
+/// Moves the entry at `p` up `heap` until its parent's key is no larger, recording every
+/// entry's new position in `links`.
+#[inline(always)]
+fn sift_up(heap: &mut [Entry], links: &mut [Link], mut p: usize) {
+    let e = heap[p];
+    while p > 0 {
+        let parent = (p - 1) / 4;
+        // SAFETY: `parent < p < heap.len()` (`p` was checked by the read of `e`), and the
+        // cell index of every heap entry passed a checked access to `links` when it was
+        // pushed (`open_source`, `relax`).
+        let up = unsafe { *heap.get_unchecked(parent) };
+        if up.key <= e.key {
+            break;
+        }
+        unsafe {
+            *heap.get_unchecked_mut(p) = up;
+            links.get_unchecked_mut(up.idx as usize).pos = p as u32;
+        }
+        p = parent;
+    }
+    heap[p] = e;
+    links[e.idx as usize].pos = p as u32;
+}
+
 /// Heap key: f first (non-negative floats order like their bits), then larger g first.
 #[inline]
 fn make_key(f: f32, g: f32) -> u64 {
     ((f.to_bits() as u64) << 32) | (!g.to_bits()) as u64
 }
 
-/// One legal move: the entered cell's index and coordinates, and the step cost \[cells\]
-/// already multiplied by the entered cell's cost factor.
-#[derive(Clone, Copy, Default)]
-pub(crate) struct Move {
-    pub(crate) to: usize,
-    pub(crate) col: usize,
-    pub(crate) row: usize,
-    pub(crate) step: f32,
-}
-
-/// Writes into `out` every legal move out of cell `i` = (`col`, `row`) and returns how many:
-/// orthogonal steps into passable cells, diagonal steps into passable cells whose two
-/// orthogonal neighbours are passable too (no corner cutting).
-#[inline(always)]
-pub(crate) fn moves<const N: usize>(
-    trav: &Traversability<N>,
-    i: usize,
-    col: usize,
-    row: usize,
-    out: &mut [Move; 8],
-) -> usize {
-    let codes = trav.codes();
-    let w = trav.geometry().width;
-    let h = trav.geometry().height;
-    let uf = trav.unknown_factor();
-    let factor = |c: u8| if c == CODE_FREE { 1.0 } else { uf };
-    let mut n = 0;
-    let mut add = |to: usize, col: usize, row: usize, step: f32| {
-        out[n] = Move { to, col, row, step };
-        n += 1;
-    };
-    let west = col > 0 && codes[i - 1] != CODE_BLOCKED;
-    let east = col + 1 < w && codes[i + 1] != CODE_BLOCKED;
-    let south = row > 0 && codes[i - w] != CODE_BLOCKED;
-    let north = row + 1 < h && codes[i + w] != CODE_BLOCKED;
-    if west {
-        add(i - 1, col - 1, row, factor(codes[i - 1]));
-    }
-    if east {
-        add(i + 1, col + 1, row, factor(codes[i + 1]));
-    }
-    if south {
-        add(i - w, col, row - 1, factor(codes[i - w]));
-        if west && codes[i - w - 1] != CODE_BLOCKED {
-            add(
-                i - w - 1,
-                col - 1,
-                row - 1,
-                DIAGONAL * factor(codes[i - w - 1]),
-            );
-        }
-        if east && codes[i - w + 1] != CODE_BLOCKED {
-            add(
-                i - w + 1,
-                col + 1,
-                row - 1,
-                DIAGONAL * factor(codes[i - w + 1]),
-            );
-        }
-    }
-    if north {
-        add(i + w, col, row + 1, factor(codes[i + w]));
-        if west && codes[i + w - 1] != CODE_BLOCKED {
-            add(
-                i + w - 1,
-                col - 1,
-                row + 1,
-                DIAGONAL * factor(codes[i + w - 1]),
-            );
-        }
-        if east && codes[i + w + 1] != CODE_BLOCKED {
-            add(
-                i + w + 1,
-                col + 1,
-                row + 1,
-                DIAGONAL * factor(codes[i + w + 1]),
-            );
-        }
-    }
-    n
-}
-
 /// Octile distance between cells `(c0, r0)` and `(c1, r1)` \[cells\]: the exact cost on an
 /// empty grid, a lower bound whenever cost factors are at least 1.
 #[inline(always)]
 pub(crate) fn octile(c0: usize, r0: usize, c1: usize, r1: usize) -> f32 {
-    let dc = c0.abs_diff(c1) as f32;
-    let dr = r0.abs_diff(r1) as f32;
+    // Cells number fewer than 2^29 (see `SearchMemory::new`), so the differences fit an
+    // i32, whose conversion to f32 is one instruction (a u64's is several).
+    let dc = (c0 as i32 - c1 as i32).abs() as f32;
+    let dr = (r0 as i32 - r1 as i32).abs() as f32;
     let (lo, hi) = if dc < dr { (dc, dr) } else { (dr, dc) };
     (hi - lo) + DIAGONAL * lo
 }

@@ -11,6 +11,13 @@
 //! stops being Occupied, the counts under its stencil are incremented or decremented; a cell is
 //! inflated while its count is non-zero. The layer is a [`CellObserver`], so passing it to the
 //! grid's updates keeps it current; no query rescans the grid.
+//!
+//! For the searches, the layer also keeps a move mask per cell: one bit per legal step out of
+//! the cell (in bounds, into a passable cell, and for a diagonal both orthogonal neighbours
+//! passable: no corner cutting). A search then expands a cell from one byte instead of testing
+//! bounds and up to eight neighbours' codes. The mask of a cell depends only on the codes of
+//! its 3 x 3 neighbourhood, so a change of a cell between blocked and passable refreshes the nine
+//! masks around it.
 
 use crate::grid::{Cell, CellClass, CellObserver, GridGeometry, OccupancyGrid};
 
@@ -30,6 +37,20 @@ pub(crate) const CODE_BLOCKED: u8 = 0;
 pub(crate) const CODE_FREE: u8 = 1;
 /// Per-cell step code: Unknown, traversable at the configured factor.
 pub(crate) const CODE_UNKNOWN: u8 = 2;
+
+/// The eight steps out of a cell as (column, row) offsets, in the order of the move-mask bits
+/// (bit `k` of a mask is step `MOVES[k]`): west, east, south, south-west, south-east, north,
+/// north-west, north-east.
+pub(crate) const MOVES: [(i8, i8); 8] = [
+    (-1, 0),
+    (1, 0),
+    (0, -1),
+    (-1, -1),
+    (1, -1),
+    (0, 1),
+    (-1, 1),
+    (1, 1),
+];
 
 const CLASS_UNKNOWN: u8 = 0;
 const CLASS_FREE: u8 = 1;
@@ -152,6 +173,9 @@ pub struct Traversability<const N: usize> {
     near: [u16; N],
     /// Step code (CODE_*), derived from `class` and `near`.
     code: [u8; N],
+    /// Legal steps out of each cell (bit `k`: step [`MOVES`]`[k]`), derived from `code`; zero
+    /// for blocked cells.
+    moves: [u8; N],
 }
 
 impl<const N: usize> core::fmt::Debug for Traversability<N> {
@@ -184,6 +208,7 @@ impl<const N: usize> Traversability<N> {
             class: [CLASS_UNKNOWN; N],
             near: [0; N],
             code: [CODE_BLOCKED; N],
+            moves: [0; N],
         };
         t.configure(geometry, config)?;
         t.reset_cells();
@@ -249,6 +274,7 @@ impl<const N: usize> Traversability<N> {
             self.near[i] = b as u16;
             self.code[i] = if b { CODE_BLOCKED } else { CODE_FREE };
         }
+        self.refresh_all_moves();
         Ok(())
     }
 
@@ -297,6 +323,7 @@ impl<const N: usize> Traversability<N> {
         for i in 0..n {
             self.code[i] = self.code_of(i);
         }
+        self.refresh_all_moves();
     }
 
     /// Checks and stores geometry and configuration, recomputes the stencil. Cell arrays are
@@ -366,6 +393,7 @@ impl<const N: usize> Traversability<N> {
         self.near[..n].fill(0);
         let c = self.unknown_code();
         self.code[..n].fill(c);
+        self.refresh_all_moves();
     }
 
     #[inline]
@@ -411,9 +439,56 @@ impl<const N: usize> Traversability<N> {
                 before.saturating_sub(1)
             };
             if (before == 0) != (self.near[j] == 0) {
-                self.code[j] = self.code_of(j);
+                self.set_code(j, self.code_of(j));
             }
         }
+    }
+
+    /// Sets the step code of cell `i`; if the cell changes between blocked and passable,
+    /// refreshes the move masks of its 3 x 3 neighbourhood.
+    #[inline]
+    fn set_code(&mut self, i: usize, code: u8) {
+        let was_blocked = self.code[i] == CODE_BLOCKED;
+        self.code[i] = code;
+        if was_blocked != (code == CODE_BLOCKED) {
+            let w = self.geometry.width;
+            let h = self.geometry.height;
+            let (col, row) = (i % w, i / w);
+            for r in row.saturating_sub(1)..(row + 2).min(h) {
+                for c in col.saturating_sub(1)..(col + 2).min(w) {
+                    self.moves[r * w + c] = self.moves_of(c, r);
+                }
+            }
+        }
+    }
+
+    fn refresh_all_moves(&mut self) {
+        let w = self.geometry.width;
+        for r in 0..self.geometry.height {
+            for c in 0..w {
+                self.moves[r * w + c] = self.moves_of(c, r);
+            }
+        }
+    }
+
+    /// The move mask of cell (`col`, `row`) from the codes around it.
+    fn moves_of(&self, col: usize, row: usize) -> u8 {
+        let w = self.geometry.width as isize;
+        let h = self.geometry.height as isize;
+        let (col, row) = (col as isize, row as isize);
+        let open = |dc: i8, dr: i8| {
+            let (c, r) = (col + dc as isize, row + dr as isize);
+            c >= 0 && r >= 0 && c < w && r < h && self.code[(r * w + c) as usize] != CODE_BLOCKED
+        };
+        if !open(0, 0) {
+            return 0;
+        }
+        let mut mask = 0u8;
+        for (k, &(dc, dr)) in MOVES.iter().enumerate() {
+            let legal = open(dc, dr) && (dc == 0 || dr == 0 || (open(dc, 0) && open(0, dr)));
+            mask |= (legal as u8) << k;
+        }
+        mask
     }
 
     /// Size and placement.
@@ -481,6 +556,20 @@ impl<const N: usize> Traversability<N> {
         &self.code[..self.geometry.cell_count()]
     }
 
+    /// Move masks of the cells in use, flat-index order (bit `k`: step [`MOVES`]`[k]` is
+    /// legal).
+    #[inline]
+    pub(crate) fn move_masks(&self) -> &[u8] {
+        &self.moves[..self.geometry.cell_count()]
+    }
+
+    /// Whether every legal step costs its plain length: no traversable Unknown cells, or their
+    /// cost factor is 1.
+    #[inline]
+    pub(crate) fn uniform_costs(&self) -> bool {
+        self.unknown_blocked || self.unknown_cost_factor == 1.0
+    }
+
     /// The unknown-cell cost factor (1 when Unknown is blocked).
     #[inline]
     pub(crate) fn unknown_factor(&self) -> f32 {
@@ -519,6 +608,7 @@ impl<const N: usize> Traversability<N> {
             && self.class[..n] == other.class[..n]
             && self.near[..n] == other.near[..n]
             && self.code[..n] == other.code[..n]
+            && self.moves[..n] == other.moves[..n]
     }
 }
 
@@ -547,7 +637,7 @@ impl<const N: usize> CellObserver for Traversability<N> {
         } else if is_occupied && !was_occupied {
             self.stamp_disc(index, 1);
         }
-        self.code[index] = self.code_of(index);
+        self.set_code(index, self.code_of(index));
     }
 }
 
