@@ -188,9 +188,9 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         }
     }
 
-    /// Starts a decision: sweeps the distance field from the robot's cell and records the
-    /// budget. Must be called before [`Self::evaluate_targets`] whenever the map or the pose
-    /// changed.
+    /// Starts a decision: starts the distance field's sweep from the robot's cell (it runs
+    /// lazily, as far as the questions need) and records the budget. Must be called before
+    /// [`Self::evaluate_targets`] whenever the map or the pose changed.
     pub fn prepare(
         &mut self,
         req: &DecisionRequest<'_, N>,
@@ -211,7 +211,7 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         let geom = req.grid.geometry();
         let start_cell = geom.cell_at_unchecked(req.pose.position());
         self.field
-            .compute(req.trav, start_cell)
+            .start(req.trav, start_cell)
             .map_err(DecideError::Start)?;
         self.start = req.pose;
         self.start_cell = start_cell;
