@@ -25,12 +25,23 @@ use crate::world::World;
 /// Distance \[m\] from `origin` along the unit direction `(cos, sin)` of `angle_rad` to the first
 /// blocked cell, if within `max_range_m`. A ray starting in a blocked cell returns 0.
 pub fn cast_ray(world: &World, origin: Point2, angle_rad: f32, max_range_m: f32) -> Option<f32> {
+    let (dx, dy) = (math::cos(angle_rad), math::sin(angle_rad));
+    cast_ray_along(world, origin, dx, dy, max_range_m)
+}
+
+/// [`cast_ray`] along the unit direction `(dx, dy)` = `(cos, sin)` of the beam's angle.
+fn cast_ray_along(
+    world: &World,
+    origin: Point2,
+    dx: f32,
+    dy: f32,
+    max_range_m: f32,
+) -> Option<f32> {
     let g = world.geometry();
     let r = g.resolution_m;
-    let (dx, dy) = (math::cos(angle_rad), math::sin(angle_rad));
     // Work in cell units from the grid origin.
     let (px, py) = ((origin.x - g.origin.x) / r, (origin.y - g.origin.y) / r);
-    let mut cell = Cell::new(px.floor() as i32, py.floor() as i32);
+    let cell = Cell::new(px.floor() as i32, py.floor() as i32);
     if world.is_blocked(cell) {
         return Some(0.0);
     }
@@ -57,14 +68,22 @@ pub fn cast_ray(world: &World, origin: Point2, angle_rad: f32, max_range_m: f32)
     } else {
         f32::INFINITY
     };
+    // The walk keeps the cell's flat index along (the start cell is inside the grid, or it
+    // would have counted as blocked); a cell outside the grid is blocked.
+    let (width, height) = (g.width as i64, g.height as i64);
+    let (mut col, mut row) = (cell.col as i64, cell.row as i64);
+    let mut index = row * width + col;
+    let index_step_y = step_y as i64 * width;
     loop {
         let t = if t_max_x < t_max_y {
-            cell.col += step_x;
+            col += step_x as i64;
+            index += step_x as i64;
             let t = t_max_x;
             t_max_x += t_delta_x;
             t
         } else {
-            cell.row += step_y;
+            row += step_y as i64;
+            index += index_step_y;
             let t = t_max_y;
             t_max_y += t_delta_y;
             t
@@ -72,7 +91,10 @@ pub fn cast_ray(world: &World, origin: Point2, angle_rad: f32, max_range_m: f32)
         if t > max_t {
             return None;
         }
-        if world.is_blocked(cell) {
+        if !(0..width).contains(&col)
+            || !(0..height).contains(&row)
+            || world.is_blocked_index(index as usize)
+        {
             return Some(t * r);
         }
     }
@@ -157,8 +179,8 @@ impl LaserSim {
         for i in 0..cfg.beam_count as usize {
             let angle_rad = cfg.beam_angle(i);
             let a = laser.theta + angle_rad;
-            let mut range = cast_ray(world, origin, a, max);
             let (dx, dy) = (math::cos(a), math::sin(a));
+            let mut range = cast_ray_along(world, origin, dx, dy, max);
             for d in discs {
                 if let Some(t) = ray_disc(origin, dx, dy, d)
                     && t <= max
