@@ -511,13 +511,16 @@ mod tests {
         let geom = GridGeometry::new(40, 30, 0.1, Point2::new(-1.0, 0.5)).unwrap();
         let mut rng = seeded(5);
         for case in 0..3000 {
-            let point = |rng: &mut _| {
-                Point2::new(range_f32(rng, -1.2, 3.2), range_f32(rng, 0.3, 3.7))
-            };
+            let point =
+                |rng: &mut _| Point2::new(range_f32(rng, -1.2, 3.2), range_f32(rng, 0.3, 3.7));
             let (a, b) = (point(&mut rng), point(&mut rng));
             let want: Vec<(Cell, usize)> = RayCells::new(&geom, a, b).collect();
             let (got, t) = walk(&geom, a, b);
-            assert_eq!(got, want.iter().map(|w| w.0).collect::<Vec<_>>(), "case {case}");
+            assert_eq!(
+                got,
+                want.iter().map(|w| w.0).collect::<Vec<_>>(),
+                "case {case}"
+            );
             let mut ray = RayCells::new(&geom, a, b);
             ray.by_ref().count();
             let end = if ray.reached_end() {

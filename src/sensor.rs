@@ -610,17 +610,18 @@ mod tests {
                     b.range_m = Some(0.9);
                 }
             }
-            let out = integrate_scan(
-                &mut fast,
+            let out = integrate_scan(&mut fast, &scan, pose, &laser, &model, &mut |_, _, _| {
+                fast_changes += 1
+            })
+            .unwrap();
+            let updates = integrate_literally(
+                &mut literal,
                 &scan,
                 pose,
                 &laser,
                 &model,
-                &mut |_, _, _| fast_changes += 1,
-            )
-            .unwrap();
-            let updates =
-                integrate_literally(&mut literal, &scan, pose, &laser, &model, &mut literal_changes);
+                &mut literal_changes,
+            );
             assert_eq!(out.updates, updates, "scan {k}");
             for (i, (a, b)) in fast.log_odds().iter().zip(literal.log_odds()).enumerate() {
                 assert_eq!(a.to_bits(), b.to_bits(), "scan {k}, cell {i}");

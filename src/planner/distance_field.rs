@@ -260,9 +260,7 @@ impl<const N: usize> DistanceField<N> {
         let i = self.geometry?.index(cell)?;
         self.settle(Some(i));
         let memory = &self.state().memory;
-        memory
-            .is_closed_in(i, memory.generation())
-            .then_some(i)
+        memory.is_closed_in(i, memory.generation()).then_some(i)
     }
 
     /// Cost of the shortest path from the source to `cell` \[m\]; `None` if the cell is
@@ -390,7 +388,11 @@ mod tests {
     /// the bit.
     fn same_answers(lazy: &DistanceField<CAP>, full: &DistanceField<CAP>, cell: Cell) {
         let (a, b) = (lazy.distance_to(cell), full.distance_to(cell));
-        assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits), "distance to {cell:?}");
+        assert_eq!(
+            a.map(f32::to_bits),
+            b.map(f32::to_bits),
+            "distance to {cell:?}"
+        );
         assert_eq!(lazy.is_reachable(cell), full.is_reachable(cell));
         assert_eq!(lazy.first_step_towards(cell), full.first_step_towards(cell));
         let mut pa = [Cell::default(); CAP];
@@ -462,8 +464,8 @@ mod tests {
         lazy.start(&trav, source).unwrap();
         full.compute(&trav, source).unwrap();
         // The layer the lazy sweep started on is gone; the answers stay those of the start.
-        let mut grid = OccupancyGrid::<CAP>::new(*trav.geometry(), LogOddsBounds::default())
-            .unwrap();
+        let mut grid =
+            OccupancyGrid::<CAP>::new(*trav.geometry(), LogOddsBounds::default()).unwrap();
         for i in 0..CAP {
             grid.set_class(i, CellClass::Occupied, &mut changed);
         }
