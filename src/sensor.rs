@@ -632,7 +632,7 @@ mod tests {
         // The test did exercise saturation on both sides.
         let b = fast.bounds();
         assert!(fast.log_odds().iter().filter(|&&l| l == b.min).count() > 500);
-        assert!(fast.log_odds().iter().any(|&l| l == b.max));
+        assert!(fast.log_odds().contains(&b.max));
     }
 
     #[test]
