@@ -197,7 +197,7 @@ impl RayCells {
         self.reached
     }
 
-    #[inline]
+    #[inline(always)]
     fn in_grid(&self) -> bool {
         self.col >= 0 && self.row >= 0 && self.col < self.width && self.row < self.height
     }
@@ -274,7 +274,7 @@ impl RayCells {
 
     /// The next cell of a walk that [stays inside](Self::stays_inside) the grid: what
     /// [`Iterator::next`] would give, without the checks for leaving the grid.
-    #[inline]
+    #[inline(always)]
     fn next_inside(&mut self) -> Option<(Cell, usize)> {
         if self.finished {
             return None;
@@ -291,7 +291,7 @@ impl RayCells {
     }
 
     /// Whether the current (outside) cell can no longer lead into the grid.
-    #[inline]
+    #[inline(always)]
     fn beyond_grid(&self) -> bool {
         let col_lost = (self.col < 0 && (self.step_col <= 0 || self.col + self.left_col < 0))
             || (self.col >= self.width
@@ -303,7 +303,7 @@ impl RayCells {
     }
 
     /// Moves to the next cell along the segment.
-    #[inline]
+    #[inline(always)]
     fn advance(&mut self) {
         let (step_x, step_y) = if self.left_col == 0 {
             (false, true)
@@ -338,7 +338,7 @@ impl RayCells {
 impl Iterator for RayCells {
     type Item = (Cell, usize);
 
-    #[inline]
+    #[inline(always)]
     fn next(&mut self) -> Option<(Cell, usize)> {
         loop {
             if self.finished {
