@@ -439,20 +439,24 @@ impl CoverageCounter {
         let log_odds = grid.log_odds();
         // Branch-free over each row (the compiler vectorises it): a cell counts when it is
         // observable and known; `known` only ever holds observable cells.
-        let mut delta = 0isize;
+        let (mut now_known, mut was_known) = (0usize, 0usize);
         for row in r0..r1 {
             let span = row * g.width + c0..row * g.width + c1;
+            let (mut now_row, mut was_row) = (0u32, 0u32);
             for ((known, &observable), &l) in self.known[span.clone()]
                 .iter_mut()
                 .zip(&mask[span.clone()])
                 .zip(&log_odds[span])
             {
                 let k = observable & ((l > 0.0) | (l < 0.0));
-                delta += k as isize - *known as isize;
+                now_row += k as u32;
+                was_row += *known as u32;
                 *known = k;
             }
+            now_known += now_row as usize;
+            was_known += was_row as usize;
         }
-        self.count = self.count.wrapping_add_signed(delta);
+        self.count = self.count + now_known - was_known;
     }
 
     fn coverage(&self) -> f32 {
