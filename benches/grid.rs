@@ -1,12 +1,13 @@
 //! Occupancy grid benchmarks: integrating one thesis scan (181 beams, 4 m) into a 240 x 240
-//! grid at 10 cm, tracing the same 181 rays alone, and finding the frontiers afterwards.
+//! grid at 10 cm (into an all-Unknown grid, and repeatedly into the same grid), tracing the
+//! same 181 rays alone, and finding the frontiers afterwards.
 //!
 //! `cargo bench -p papillon --bench grid -- --warm-up-time 1 --measurement-time 3`
 
 use std::hint::black_box;
 use std::ops::ControlFlow;
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use papillon::frontier::{FrontierConfig, FrontierWorkspace, find_frontiers};
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::{GridGeometry, LogOddsBounds, OccupancyGrid};
@@ -39,6 +40,18 @@ fn grid_benches(c: &mut Criterion) {
     let s = scan(&laser);
     let pose = Pose2::new(12.0, 12.0, 0.3);
 
+    // Into an all-Unknown grid: no cell saturated yet, every update weighs its evidence.
+    let fresh = OccupancyGrid::<CELLS>::new_boxed(geom, LogOddsBounds::default()).unwrap();
+    c.bench_function("integrate_scan 181 beams 4 m, 240x240, first scan", |b| {
+        b.iter_batched_ref(
+            || fresh.clone(),
+            |g| integrate_scan(g, black_box(&s), black_box(pose), &laser, &model, &mut ()).unwrap(),
+            BatchSize::LargeInput,
+        )
+    });
+
+    // The same scan again and again: the steady state of a robot scanning at 10 Hz, where
+    // most cells it crosses are already saturated.
     c.bench_function("integrate_scan 181 beams 4 m, 240x240", |b| {
         b.iter(|| {
             integrate_scan(

@@ -73,8 +73,14 @@ pub fn traverse(
     mut visit: impl FnMut(Cell, usize) -> ControlFlow<()>,
 ) -> Traversal {
     let mut ray = RayCells::new(geom, from, to);
+    // A walk that stays inside the grid skips the checks for leaving it.
+    let inside = ray.stays_inside();
     let mut visited = 0;
-    for (cell, index) in ray.by_ref() {
+    while let Some((cell, index)) = if inside {
+        ray.next_inside()
+    } else {
+        ray.next()
+    } {
         visited += 1;
         if visit(cell, index).is_break() {
             return Traversal {
@@ -191,7 +197,7 @@ impl RayCells {
         self.reached
     }
 
-    #[inline]
+    #[inline(always)]
     fn in_grid(&self) -> bool {
         self.col >= 0 && self.row >= 0 && self.col < self.width && self.row < self.height
     }
@@ -253,8 +259,39 @@ impl RayCells {
         true
     }
 
-    /// Whether the current (outside) cell can no longer lead into the grid.
+    /// Whether every cell still to visit lies inside the grid: the walk moves monotonically
+    /// from the current cell to the end cell along each axis, so it stays within their
+    /// bounding box.
     #[inline]
+    fn stays_inside(&self) -> bool {
+        let end_col = self.col + self.step_col * self.left_col;
+        let end_row = self.row + self.step_row * self.left_row;
+        !self.finished
+            && self.in_grid()
+            && (0..self.width).contains(&end_col)
+            && (0..self.height).contains(&end_row)
+    }
+
+    /// The next cell of a walk that [stays inside](Self::stays_inside) the grid: what
+    /// [`Iterator::next`] would give, without the checks for leaving the grid.
+    #[inline(always)]
+    fn next_inside(&mut self) -> Option<(Cell, usize)> {
+        if self.finished {
+            return None;
+        }
+        let (col, row) = (self.col, self.row);
+        if self.left_col == 0 && self.left_row == 0 {
+            self.finished = true;
+            self.reached = true;
+        } else {
+            self.advance();
+        }
+        let index = row as usize * self.width as usize + col as usize;
+        Some((Cell::new(col as i32, row as i32), index))
+    }
+
+    /// Whether the current (outside) cell can no longer lead into the grid.
+    #[inline(always)]
     fn beyond_grid(&self) -> bool {
         let col_lost = (self.col < 0 && (self.step_col <= 0 || self.col + self.left_col < 0))
             || (self.col >= self.width
@@ -266,7 +303,7 @@ impl RayCells {
     }
 
     /// Moves to the next cell along the segment.
-    #[inline]
+    #[inline(always)]
     fn advance(&mut self) {
         let (step_x, step_y) = if self.left_col == 0 {
             (false, true)
@@ -301,7 +338,7 @@ impl RayCells {
 impl Iterator for RayCells {
     type Item = (Cell, usize);
 
-    #[inline]
+    #[inline(always)]
     fn next(&mut self) -> Option<(Cell, usize)> {
         loop {
             if self.finished {
@@ -465,6 +502,49 @@ mod tests {
             corner_cases > 50,
             "only {corner_cases} diagonal steps exercised"
         );
+    }
+
+    #[test]
+    fn traverse_visits_what_the_iterator_yields_and_stops_where_asked() {
+        // `traverse` walks segments that stay inside the grid without the iterator's checks
+        // for leaving it; both must give the same cells, in the same order.
+        let geom = GridGeometry::new(40, 30, 0.1, Point2::new(-1.0, 0.5)).unwrap();
+        let mut rng = seeded(5);
+        for case in 0..3000 {
+            let point =
+                |rng: &mut _| Point2::new(range_f32(rng, -1.2, 3.2), range_f32(rng, 0.3, 3.7));
+            let (a, b) = (point(&mut rng), point(&mut rng));
+            let want: Vec<(Cell, usize)> = RayCells::new(&geom, a, b).collect();
+            let (got, t) = walk(&geom, a, b);
+            assert_eq!(
+                got,
+                want.iter().map(|w| w.0).collect::<Vec<_>>(),
+                "case {case}"
+            );
+            let mut ray = RayCells::new(&geom, a, b);
+            ray.by_ref().count();
+            let end = if ray.reached_end() {
+                TraversalEnd::Reached
+            } else {
+                TraversalEnd::Clipped
+            };
+            assert_eq!(t.end, end, "case {case}");
+            // Stopping at the k-th cell.
+            if !want.is_empty() {
+                let k = below(&mut rng, want.len());
+                let mut seen = 0;
+                let t = traverse(&geom, a, b, |_, i| {
+                    assert_eq!(i, want[seen].1);
+                    seen += 1;
+                    if seen == k + 1 {
+                        ControlFlow::Break(())
+                    } else {
+                        ControlFlow::Continue(())
+                    }
+                });
+                assert_eq!((t.visited, t.end), (k + 1, TraversalEnd::Stopped));
+            }
+        }
     }
 
     #[test]

@@ -323,6 +323,7 @@ pub fn integrate_scan<const N: usize>(
     }
     let origin = pose.position();
     let inv_two_sigma_sq = 1.0 / (2.0 * model.sigma_m * model.sigma_m);
+    let bounds = grid.bounds();
     let mut out = ScanIntegration::default();
 
     for beam in scan.beams() {
@@ -345,17 +346,24 @@ pub fn integrate_scan<const N: usize>(
         let hit_cell = grid.geometry().cell_at_unchecked(end);
         let geom = *grid.geometry();
         raycast::traverse(&geom, origin, end, |cell, index| {
+            out.updates += 1;
+            let occupied = hit && cell == hit_cell;
+            // A cell saturated at the bound this evidence pushes towards stays there whatever
+            // the weight (the sum is clamped back to the bound), so the weight is not needed.
+            let current = grid.log_odds_at(index);
+            if (occupied && current >= bounds.max) || (!occupied && current <= bounds.min) {
+                return ControlFlow::Continue(());
+            }
             let centre = geom.cell_center(cell);
             // Perpendicular distance from the cell centre to the beam's line.
             let d = (centre.x - origin.x) * dir_y - (centre.y - origin.y) * dir_x;
             let weight = math::exp(-d * d * inv_two_sigma_sq);
-            let delta = if hit && cell == hit_cell {
+            let delta = if occupied {
                 model.occupied_log_odds
             } else {
                 model.free_log_odds
             };
             let (old, new) = grid.add_evidence(index, delta * weight, observer);
-            out.updates += 1;
             if old != new {
                 out.changed += 1;
                 if old == CellClass::Unknown {
@@ -537,6 +545,94 @@ mod tests {
         );
         integrate_scan(&mut g, &s, pose, &laser, &model, &mut ()).unwrap();
         assert!((g.log_odds_at(i) - 2.0 * want).abs() < 1e-4);
+    }
+
+    /// The model applied literally: every crossed cell gets its weighted evidence, saturated
+    /// or not. Returns the updates applied and the class changes seen.
+    fn integrate_literally(
+        grid: &mut Grid,
+        scan: &Scan,
+        pose: Pose2,
+        laser: &LaserConfig,
+        model: &SensorModel,
+        changes: &mut usize,
+    ) -> usize {
+        let origin = pose.position();
+        let geom = *grid.geometry();
+        let mut updates = 0;
+        for beam in scan.beams() {
+            let (length, hit) = match beam.range_m {
+                Some(r) if r < laser.min_range_m => continue,
+                Some(r) if r <= laser.max_range_m => (r, true),
+                _ => (laser.max_range_m, false),
+            };
+            let a = pose.theta + beam.angle_rad;
+            let (dx, dy) = (math::cos(a), math::sin(a));
+            let end = Point2::new(origin.x + dx * length, origin.y + dy * length);
+            let hit_cell = geom.cell_at_unchecked(end);
+            raycast::traverse(&geom, origin, end, |cell, index| {
+                let c = geom.cell_center(cell);
+                let d = (c.x - origin.x) * dy - (c.y - origin.y) * dx;
+                let w = math::exp(-d * d * (1.0 / (2.0 * model.sigma_m * model.sigma_m)));
+                let delta = if hit && cell == hit_cell {
+                    model.occupied_log_odds
+                } else {
+                    model.free_log_odds
+                };
+                grid.add_evidence(index, delta * w, &mut |_, _, _| *changes += 1);
+                updates += 1;
+                ControlFlow::Continue(())
+            });
+        }
+        updates
+    }
+
+    #[test]
+    fn repeated_scans_give_exactly_the_literal_model_including_saturated_cells() {
+        // Many scans from nearby poses saturate most cells at the bounds; walls seen from
+        // both sides and a return inside the free interior make cells flip both ways.
+        let mut fast = grid();
+        let mut literal = grid();
+        let laser = LaserConfig::thesis();
+        let model = SensorModel::default();
+        let mut rng = crate::random::seeded(8);
+        let (mut fast_changes, mut literal_changes) = (0usize, 0usize);
+        for k in 0..60 {
+            let pose = Pose2::new(
+                2.5 + crate::random::unit_f32(&mut rng),
+                2.5 + crate::random::unit_f32(&mut rng),
+                crate::random::unit_f32(&mut rng) * 2.0 * PI,
+            );
+            let mut scan = room_scan(pose, &laser);
+            if k % 7 == 3 {
+                // A person in the room: a few short returns.
+                for b in scan.beams_mut().iter_mut().skip(80).take(10) {
+                    b.range_m = Some(0.9);
+                }
+            }
+            let out = integrate_scan(&mut fast, &scan, pose, &laser, &model, &mut |_, _, _| {
+                fast_changes += 1
+            })
+            .unwrap();
+            let updates = integrate_literally(
+                &mut literal,
+                &scan,
+                pose,
+                &laser,
+                &model,
+                &mut literal_changes,
+            );
+            assert_eq!(out.updates, updates, "scan {k}");
+            for (i, (a, b)) in fast.log_odds().iter().zip(literal.log_odds()).enumerate() {
+                assert_eq!(a.to_bits(), b.to_bits(), "scan {k}, cell {i}");
+            }
+            assert_eq!(fast_changes, literal_changes, "scan {k}");
+        }
+        assert_eq!(fast.counts(), literal.counts());
+        // The test did exercise saturation on both sides.
+        let b = fast.bounds();
+        assert!(fast.log_odds().iter().filter(|&&l| l == b.min).count() > 500);
+        assert!(fast.log_odds().contains(&b.max));
     }
 
     #[test]

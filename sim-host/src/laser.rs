@@ -25,12 +25,23 @@ use crate::world::World;
 /// Distance \[m\] from `origin` along the unit direction `(cos, sin)` of `angle_rad` to the first
 /// blocked cell, if within `max_range_m`. A ray starting in a blocked cell returns 0.
 pub fn cast_ray(world: &World, origin: Point2, angle_rad: f32, max_range_m: f32) -> Option<f32> {
+    let (dx, dy) = (math::cos(angle_rad), math::sin(angle_rad));
+    cast_ray_along(world, origin, dx, dy, max_range_m)
+}
+
+/// [`cast_ray`] along the unit direction `(dx, dy)` = `(cos, sin)` of the beam's angle.
+fn cast_ray_along(
+    world: &World,
+    origin: Point2,
+    dx: f32,
+    dy: f32,
+    max_range_m: f32,
+) -> Option<f32> {
     let g = world.geometry();
     let r = g.resolution_m;
-    let (dx, dy) = (math::cos(angle_rad), math::sin(angle_rad));
     // Work in cell units from the grid origin.
     let (px, py) = ((origin.x - g.origin.x) / r, (origin.y - g.origin.y) / r);
-    let mut cell = Cell::new(px.floor() as i32, py.floor() as i32);
+    let cell = Cell::new(px.floor() as i32, py.floor() as i32);
     if world.is_blocked(cell) {
         return Some(0.0);
     }
@@ -57,14 +68,31 @@ pub fn cast_ray(world: &World, origin: Point2, angle_rad: f32, max_range_m: f32)
     } else {
         f32::INFINITY
     };
+    // The walk keeps the cell's flat index along (the start cell is inside the grid, or it
+    // would have counted as blocked); a cell outside the grid is blocked.
+    let (width, height) = (g.width as i64, g.height as i64);
+    let (mut col, mut row) = (cell.col as i64, cell.row as i64);
+    let mut index = row * width + col;
+    let index_step_y = step_y as i64 * width;
+    // The k-th step along an axis happens at t >= k - 1 (a step takes at least one cell of
+    // travel), so within the range the walk stays less than max_t + 2 cells from the start
+    // cell along each axis: when that square lies inside the grid, no bounds check is needed.
+    let reach = max_t.ceil() as i64 + 2;
+    let inside = max_t.is_finite()
+        && col - reach >= 0
+        && col + reach < width
+        && row - reach >= 0
+        && row + reach < height;
     loop {
         let t = if t_max_x < t_max_y {
-            cell.col += step_x;
+            col += step_x as i64;
+            index += step_x as i64;
             let t = t_max_x;
             t_max_x += t_delta_x;
             t
         } else {
-            cell.row += step_y;
+            row += step_y as i64;
+            index += index_step_y;
             let t = t_max_y;
             t_max_y += t_delta_y;
             t
@@ -72,7 +100,9 @@ pub fn cast_ray(world: &World, origin: Point2, angle_rad: f32, max_range_m: f32)
         if t > max_t {
             return None;
         }
-        if world.is_blocked(cell) {
+        if !(inside || (0..width).contains(&col) && (0..height).contains(&row))
+            || world.is_blocked_index(index as usize)
+        {
             return Some(t * r);
         }
     }
@@ -157,8 +187,8 @@ impl LaserSim {
         for i in 0..cfg.beam_count as usize {
             let angle_rad = cfg.beam_angle(i);
             let a = laser.theta + angle_rad;
-            let mut range = cast_ray(world, origin, a, max);
             let (dx, dy) = (math::cos(a), math::sin(a));
+            let mut range = cast_ray_along(world, origin, dx, dy, max);
             for d in discs {
                 if let Some(t) = ray_disc(origin, dx, dy, d)
                     && t <= max
@@ -227,6 +257,91 @@ mod tests {
             noise_fraction: noise,
             ..LaserConfig::thesis()
         }
+    }
+
+    /// The walk checked cell by cell against the world (outside counts as blocked).
+    fn cast_ray_checked(world: &World, origin: Point2, a: f32, max_range_m: f32) -> Option<f32> {
+        let g = world.geometry();
+        let r = g.resolution_m;
+        let (dx, dy) = (math::cos(a), math::sin(a));
+        let (px, py) = ((origin.x - g.origin.x) / r, (origin.y - g.origin.y) / r);
+        let mut cell = Cell::new(px.floor() as i32, py.floor() as i32);
+        if world.is_blocked(cell) {
+            return Some(0.0);
+        }
+        let max_t = max_range_m / r;
+        let (sx, sy) = (if dx > 0.0 { 1 } else { -1 }, if dy > 0.0 { 1 } else { -1 });
+        let nb = |p: f32, d: f32, c: i32| {
+            if d > 0.0 {
+                ((c + 1) as f32 - p) / d
+            } else if d < 0.0 {
+                (c as f32 - p) / d
+            } else {
+                f32::INFINITY
+            }
+        };
+        let (mut tx, mut ty) = (nb(px, dx, cell.col), nb(py, dy, cell.row));
+        let tdx = if dx != 0.0 {
+            1.0 / dx.abs()
+        } else {
+            f32::INFINITY
+        };
+        let tdy = if dy != 0.0 {
+            1.0 / dy.abs()
+        } else {
+            f32::INFINITY
+        };
+        loop {
+            let t;
+            if tx < ty {
+                cell.col += sx;
+                t = tx;
+                tx += tdx;
+            } else {
+                cell.row += sy;
+                t = ty;
+                ty += tdy;
+            }
+            if t > max_t {
+                return None;
+            }
+            if world.is_blocked(cell) {
+                return Some(t * r);
+            }
+        }
+    }
+
+    #[test]
+    fn rays_far_from_the_edges_see_what_a_checked_walk_sees() {
+        // An open 12 m x 12 m world with scattered blocks and no outer wall: rays from the
+        // middle skip the bounds checks, rays near the edges leave the grid.
+        let g = GridGeometry::from_extent(12.0, 12.0, 0.1, Point2::default()).unwrap();
+        let mut w = World::new("blocks", g);
+        let mut rng = random::seeded(6);
+        for _ in 0..40 {
+            let (x, y) = (
+                12.0 * random::unit_f32(&mut rng),
+                12.0 * random::unit_f32(&mut rng),
+            );
+            w.fill_rect(x, y, x + 0.3, y + 0.3, true);
+        }
+        let mut returns = 0;
+        for _ in 0..20_000 {
+            let o = Point2::new(
+                12.0 * random::unit_f32(&mut rng),
+                12.0 * random::unit_f32(&mut rng),
+            );
+            let a = 2.0 * PI * random::unit_f32(&mut rng);
+            let want = cast_ray_checked(&w, o, a, 4.0);
+            let got = cast_ray(&w, o, a, 4.0);
+            assert_eq!(
+                got.map(f32::to_bits),
+                want.map(f32::to_bits),
+                "from {o:?} at {a}"
+            );
+            returns += got.is_some() as usize;
+        }
+        assert!(returns > 2_000 && returns < 18_000, "{returns} returns");
     }
 
     #[test]
