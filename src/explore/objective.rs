@@ -190,13 +190,32 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         }
     }
 
-    /// Starts a decision: sweeps the distance field from the robot's cell and records the
-    /// budget. Must be called before [`Self::evaluate_targets`] whenever the map or the pose
-    /// changed.
+    /// Starts a decision: starts the distance field's sweep from the robot's cell (it runs
+    /// lazily, as far as the questions need) and records the budget. Must be called before
+    /// [`Self::evaluate_targets`] whenever the map or the pose changed.
     pub fn prepare(
         &mut self,
         req: &DecisionRequest<'_, N>,
         config: &ExploreConfig,
+    ) -> Result<(), DecideError> {
+        self.prepare_with(req, config, true)
+    }
+
+    /// Starts a re-plan: as [`Self::prepare`], but without the visibility cache's
+    /// per-decision pass, for [`Self::plan_targets`] (which predicts no gain).
+    pub fn prepare_plan(
+        &mut self,
+        req: &DecisionRequest<'_, N>,
+        config: &ExploreConfig,
+    ) -> Result<(), DecideError> {
+        self.prepare_with(req, config, false)
+    }
+
+    fn prepare_with(
+        &mut self,
+        req: &DecisionRequest<'_, N>,
+        config: &ExploreConfig,
+        predict: bool,
     ) -> Result<(), DecideError> {
         let cells = req.grid.cell_count();
         if cells > self.stamps.len() || req.trav.geometry() != req.grid.geometry() {
@@ -213,7 +232,7 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         let geom = req.grid.geometry();
         let start_cell = geom.cell_at_unchecked(req.pose.position());
         self.field
-            .compute(req.trav, start_cell)
+            .start(req.trav, start_cell)
             .map_err(DecideError::Start)?;
         self.start = req.pose;
         self.start_cell = start_cell;
@@ -224,7 +243,7 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         self.cached = match self.views.as_deref_mut() {
             Some(v) => {
                 v.boxes.build(req.trav);
-                v.begin(req.grid, req.laser)
+                predict && v.begin(req.grid, req.laser)
             }
             None => false,
         };
@@ -314,6 +333,29 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
             _ => self.predict_gain(req.grid, req.laser),
         };
         eval.fitness = self.fitness_of(eval.gain_cells, eval.energy_steps);
+        eval
+    }
+
+    /// Plans the path from the robot through `targets` in order, as
+    /// [`Self::evaluate_targets`] does (same legs, waypoints, length, energy and status), but
+    /// predicts no gain: `gain_cells` is 0 and `fitness` the worst. For re-planning towards
+    /// targets already chosen; call [`Self::prepare_plan`] (or [`Self::prepare`]) first.
+    pub fn plan_targets(&mut self, req: &DecisionRequest<'_, N>, targets: &[Point2]) -> Evaluation {
+        self.waypoint_len = 0;
+        self.viewpoint_len = 0;
+        self.target_len = 0;
+        let mut eval = Evaluation {
+            status: CandidateStatus::Feasible,
+            gain_cells: 0,
+            energy_steps: 0.0,
+            path_length_m: 0.0,
+            fitness: WORST_FITNESS,
+        };
+        if let Err(status) = self.plan(req, targets, &mut eval) {
+            eval.status = status;
+        } else if eval.energy_steps > self.budget_steps {
+            eval.status = CandidateStatus::OverBudget;
+        }
         eval
     }
 

@@ -896,3 +896,37 @@ fn with_every_reachable_frontier_blacklisted_the_selectors_say_so() {
         Err(DecideError::AllBlacklisted { entries: 1 })
     );
 }
+
+#[test]
+fn a_replan_plans_the_same_path_as_an_evaluation_without_predicting_gain() {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let req = house_request(&maps, &laser);
+    let mut mem = Memory::<HOUSE_CELLS>::new();
+    let mut obj = mem.objective();
+    let mut rng = seeded(31);
+    let mut statuses = std::collections::HashSet::new();
+    for k in [1usize, 2] {
+        let config = ExploreConfig {
+            targets: k,
+            ..ExploreConfig::default()
+        };
+        for _ in 0..150 {
+            let targets = random_targets(&mut rng, k);
+            obj.prepare(&req, &config).unwrap();
+            let full = obj.evaluate_targets(&req, &targets);
+            let full_waypoints = obj.waypoints().to_vec();
+            obj.prepare_plan(&req, &config).unwrap();
+            let plan = obj.plan_targets(&req, &targets);
+            assert_eq!(plan.status, full.status, "{targets:?}");
+            assert_eq!(obj.waypoints(), &full_waypoints[..], "{targets:?}");
+            assert_eq!(plan.energy_steps, full.energy_steps);
+            assert_eq!(plan.path_length_m, full.path_length_m);
+            assert_eq!(plan.gain_cells, 0);
+            assert_eq!(plan.fitness, WORST_FITNESS);
+            statuses.insert(format!("{:?}", plan.status));
+        }
+    }
+    // Both feasible and refused candidates were compared.
+    assert!(statuses.len() >= 2, "{statuses:?}");
+}

@@ -723,9 +723,9 @@ impl<const N: usize> Mission<N> {
         };
         let (mut objective, _) = ws.parts();
         objective
-            .prepare(&req, &config)
+            .prepare_plan(&req, &config)
             .map_err(|_| CandidateStatus::Unreachable)?;
-        let eval = objective.evaluate_targets(&req, targets);
+        let eval = objective.plan_targets(&req, targets);
         if eval.status != CandidateStatus::Feasible {
             return Err(eval.status);
         }

@@ -1,26 +1,86 @@
-//! One-to-all shortest paths: a Dijkstra sweep from one source over the whole reachable grid.
+//! One-to-all shortest paths: a Dijkstra sweep from one source over the reachable grid.
 //!
 //! Dijkstra, "A note on two problems in connexion with graphs", Numerische Mathematik 1, 1959.
 //! Same moves and costs as A* (8-connected, diagonal sqrt(2), no corner cutting, cost factor of
-//! the entered cell; see the [module root](super)). After one [`DistanceField::compute`], the
-//! cost to any cell is an O(1) lookup and the path to it is extracted by following parent links
-//! (O(path length)): the exploration objective sweeps once per decision and then asks about
-//! hundreds of candidate targets.
+//! the entered cell; see the [module root](super)). After the sweep, the cost to any cell is an
+//! O(1) lookup and the path to it is extracted by following parent links (O(path length)): the
+//! exploration objective sweeps once per decision and then asks about hundreds of candidate
+//! targets.
+//!
+//! The sweep can run lazily ([`DistanceField::start`]): it settles cells only until the cell
+//! asked about is settled (or nothing reachable is left), and goes on from there at the next
+//! question. Dijkstra settles cells in the same order whenever it stops, so every answer is
+//! bit for bit the one of a full sweep ([`DistanceField::compute`]); a question about a nearby
+//! cell (a replan towards the current target) costs only the cells closer than it. The step
+//! codes and move masks of the traversability layer are copied at the start, so later changes
+//! to the layer do not leak into a sweep in progress.
 //!
 //! Working memory of capacity `N` is reused across sweeps through generation stamps.
 
-use super::search::{SearchMemory, Zero};
+use core::cell::UnsafeCell;
+
+use super::search::{SearchMemory, StepCosts, Zero};
+use super::traversability::CODE_BLOCKED;
 use super::{PlanError, PlannedPath, Planner, Traversability, path_length_m};
 use crate::grid::{Cell, GridGeometry};
 
+/// The state of a sweep: search memory, the copy of the layer it runs on and how far it got.
+struct Sweep<const N: usize> {
+    memory: SearchMemory<N>,
+    /// Step codes of the traversability layer at the start of the sweep.
+    codes: [u8; N],
+    /// Move masks of the layer at the start of the sweep.
+    masks: [u8; N],
+    cells: usize,
+    width: usize,
+    unknown_factor: f32,
+    uniform: bool,
+    /// Cells settled so far.
+    reached: u32,
+    /// Every reachable cell is settled.
+    done: bool,
+}
+
+impl<const N: usize> Sweep<N> {
+    /// Settles cells until `target` is settled, or until every reachable cell is (`None`, or
+    /// an unreachable target).
+    fn run_until(&mut self, target: Option<usize>) {
+        if self.done {
+            return;
+        }
+        if let Some(t) = target
+            && self.memory.is_closed_in(t, self.memory.generation())
+        {
+            return;
+        }
+        let n = self.cells;
+        let costs = StepCosts {
+            width: self.width,
+            masks: &self.masks[..n],
+            codes: &self.codes[..n],
+            unknown_factor: self.unknown_factor,
+            uniform: self.uniform,
+        };
+        let (closed, found) = self
+            .memory
+            .resume(&costs, target.unwrap_or(usize::MAX), Zero);
+        self.reached += closed;
+        if !found {
+            self.done = true;
+        }
+    }
+}
+
 /// Shortest-path costs from one source cell to every reachable cell of a grid of up to `N`
 /// cells.
+///
+/// The queries take `&self` yet may advance a lazy sweep: the sweep state sits in an
+/// [`UnsafeCell`], so a field is not `Sync`.
 pub struct DistanceField<const N: usize> {
-    memory: SearchMemory<N>,
-    /// Geometry of the last sweep; `None` before the first.
+    sweep: UnsafeCell<Sweep<N>>,
+    /// Geometry of the current sweep; `None` before the first.
     geometry: Option<GridGeometry>,
     source: Cell,
-    reached: u32,
 }
 
 impl<const N: usize> core::fmt::Debug for DistanceField<N> {
@@ -28,7 +88,7 @@ impl<const N: usize> core::fmt::Debug for DistanceField<N> {
         f.debug_struct("DistanceField")
             .field("capacity", &N)
             .field("source", &self.source)
-            .field("reached", &self.reached)
+            .field("reached", &self.reached())
             .finish()
     }
 }
@@ -40,24 +100,35 @@ impl<const N: usize> Default for DistanceField<N> {
 }
 
 impl<const N: usize> DistanceField<N> {
-    /// An empty field built on the stack (32 bytes per cell). For large `N` on a host
+    /// An empty field built on the stack (34 bytes per cell). For large `N` on a host
     /// prefer [`Self::new_boxed`].
     pub const fn new() -> Self {
         Self {
-            memory: SearchMemory::new(),
+            sweep: UnsafeCell::new(Sweep {
+                memory: SearchMemory::new(),
+                codes: [CODE_BLOCKED; N],
+                masks: [0; N],
+                cells: 0,
+                width: 0,
+                unknown_factor: 1.0,
+                uniform: true,
+                reached: 0,
+                done: true,
+            }),
             geometry: None,
             source: Cell::new(0, 0),
-            reached: 0,
         }
     }
 
     /// An empty field built directly on the heap.
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
-        // SAFETY: `DistanceField` is integers, floats, arrays of structs of them, and an
-        // `Option<GridGeometry>`. The all-zero pattern may not be a valid `Option`, so the field
-        // is written through a raw pointer before the box is formed (GridGeometry has no drop
-        // glue, so nothing is dropped); every other field is valid at zero.
+        // SAFETY: the sweep (inside an `UnsafeCell`, which has the layout of its content) is
+        // integers, floats, a bool and arrays of structs of them, all valid at zero (zero
+        // reached cells, not done, no geometry: nothing is answered before a sweep starts).
+        // The all-zero pattern may not be a valid `Option`, so `geometry` is written through a
+        // raw pointer before the box is formed (GridGeometry has no drop glue, so nothing is
+        // dropped); `source` is valid at zero.
         unsafe {
             let layout = std::alloc::Layout::new::<Self>();
             let raw = std::alloc::alloc_zeroed(layout) as *mut Self;
@@ -69,19 +140,41 @@ impl<const N: usize> DistanceField<N> {
         }
     }
 
-    /// Sweeps from `source` over every cell reachable from it. Returns the number of cells
-    /// reached (the source included).
+    /// The sweep state, for reading.
+    #[inline]
+    fn state(&self) -> &Sweep<N> {
+        // SAFETY: the only mutable accesses through `&self` are in `settle`, whose borrow ends
+        // before it returns; no reference handed out by this type points into the sweep, and
+        // the type is not `Sync`, so no other thread can be settling meanwhile.
+        unsafe { &*self.sweep.get() }
+    }
+
+    /// Advances the sweep until `target` is settled (or everything reachable is, for `None`).
+    #[inline]
+    fn settle(&self, target: Option<usize>) {
+        // SAFETY: the type is not `Sync` (`UnsafeCell`), so only this thread reaches the
+        // sweep; every reference made by `state` or `settle` lives only within one method
+        // call of this type and none is alive here (no method calls back into the field while
+        // holding one), so this is the only reference to the sweep while it lives.
+        let sweep = unsafe { &mut *self.sweep.get() };
+        sweep.run_until(target);
+    }
+
+    /// Starts a lazy sweep from `source` over the cells `trav` lets the robot enter: the
+    /// cells are settled as questions need them (see the [module documentation](self)).
     ///
     /// Errors: [`PlanError::OutOfBounds`] or [`PlanError::StartBlocked`] for a bad source,
     /// [`PlanError::CapacityExceeded`] if the grid is larger than `N`. On error the previous
     /// field is forgotten.
-    pub fn compute<const M: usize>(
+    pub fn start<const M: usize>(
         &mut self,
         trav: &Traversability<M>,
         source: Cell,
-    ) -> Result<u32, PlanError> {
+    ) -> Result<(), PlanError> {
         self.geometry = None;
-        self.reached = 0;
+        let sweep = self.sweep.get_mut();
+        sweep.reached = 0;
+        sweep.done = true;
         let n = trav.geometry().cell_count();
         if n > N {
             return Err(PlanError::CapacityExceeded {
@@ -90,11 +183,32 @@ impl<const N: usize> DistanceField<N> {
             });
         }
         let (s, _) = trav.check_endpoints(source, source)?;
-        let (reached, _) = self.memory.search(trav, s, usize::MAX, Zero);
+        sweep.codes[..n].copy_from_slice(trav.codes());
+        sweep.masks[..n].copy_from_slice(trav.move_masks());
+        sweep.cells = n;
+        sweep.width = trav.geometry().width;
+        sweep.unknown_factor = trav.unknown_factor();
+        sweep.uniform = trav.uniform_costs();
+        sweep.done = false;
+        sweep.memory.start(s, sweep.width, Zero);
         self.geometry = Some(*trav.geometry());
         self.source = source;
-        self.reached = reached;
-        Ok(reached)
+        Ok(())
+    }
+
+    /// Sweeps from `source` over every cell reachable from it, at once. Returns the number of
+    /// cells reached (the source included).
+    ///
+    /// Errors: as [`Self::start`].
+    pub fn compute<const M: usize>(
+        &mut self,
+        trav: &Traversability<M>,
+        source: Cell,
+    ) -> Result<u32, PlanError> {
+        self.start(trav, source)?;
+        let sweep = self.sweep.get_mut();
+        sweep.run_until(None);
+        Ok(sweep.reached)
     }
 
     /// Source of the last sweep (meaningless before the first).
@@ -102,28 +216,32 @@ impl<const N: usize> DistanceField<N> {
         self.source
     }
 
-    /// Cells reached by the last sweep (0 before the first).
+    /// Cells settled so far by the current sweep: all the reachable cells after
+    /// [`Self::compute`] (0 before the first sweep).
     pub fn reached(&self) -> u32 {
-        self.reached
+        self.state().reached
     }
 
+    /// Flat index of `cell` once settled; `None` if outside the grid, unreachable, or no
+    /// sweep was made.
     #[inline]
     fn index(&self, cell: Cell) -> Option<usize> {
         let i = self.geometry?.index(cell)?;
-        self.memory
-            .is_closed_in(i, self.memory.generation())
-            .then_some(i)
+        self.settle(Some(i));
+        let memory = &self.state().memory;
+        memory.is_closed_in(i, memory.generation()).then_some(i)
     }
 
     /// Cost of the shortest path from the source to `cell` \[m\]; `None` if the cell is
-    /// unreachable, outside the grid, or no sweep was made. O(1).
+    /// unreachable, outside the grid, or no sweep was made. O(1) once the sweep has passed
+    /// the cell.
     #[inline]
     pub fn distance_to(&self, cell: Cell) -> Option<f32> {
         let i = self.index(cell)?;
-        Some(self.memory.g(i) * self.geometry?.resolution_m)
+        Some(self.state().memory.g(i) * self.geometry?.resolution_m)
     }
 
-    /// Whether `cell` was reached by the last sweep.
+    /// Whether `cell` is reachable from the source.
     #[inline]
     pub fn is_reachable(&self, cell: Cell) -> bool {
         self.index(cell).is_some()
@@ -134,8 +252,9 @@ impl<const N: usize> DistanceField<N> {
     pub fn first_step_towards(&self, cell: Cell) -> Option<Cell> {
         let g = self.geometry?;
         let mut i = self.index(cell)?;
+        let memory = &self.state().memory;
         let mut prev = i;
-        while let Some(p) = self.memory.parent(i) {
+        while let Some(p) = memory.parent(i) {
             prev = i;
             i = p;
         }
@@ -161,12 +280,13 @@ impl<const N: usize> DistanceField<N> {
             });
         }
         let i = self.index(cell).ok_or(no_path)?;
-        let len = self.memory.write_path(i, g.width, path)?;
+        let sweep = self.state();
+        let len = sweep.memory.write_path(i, g.width, path)?;
         Ok(PlannedPath {
             len,
             length_m: path_length_m(&path[..len], g.resolution_m),
-            cost_m: self.memory.g(i) * g.resolution_m,
-            expansions: self.reached,
+            cost_m: sweep.memory.g(i) * g.resolution_m,
+            expansions: sweep.reached,
         })
     }
 }
@@ -184,5 +304,160 @@ impl<const N: usize> Planner<N> for DistanceField<N> {
         trav.check_endpoints(start, goal)?;
         self.compute(trav, start)?;
         self.path_to(goal, path)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Point2;
+    use crate::grid::{CellClass, LogOddsBounds, OccupancyGrid};
+    use crate::planner::{TraversabilityConfig, UnknownPolicy};
+    use crate::random;
+
+    const W: usize = 30;
+    const H: usize = 20;
+    const CAP: usize = W * H;
+
+    /// Random walls (Occupied), Unknown and Free cells; Unknown costs `unknown_cost`.
+    fn random_trav(rng: &mut random::ProjectRng, density: f32) -> Traversability<CAP> {
+        let g = GridGeometry::new(W, H, 0.1, Point2::new(0.0, 0.0)).unwrap();
+        let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
+        let config = TraversabilityConfig {
+            robot_radius_m: 0.0,
+            unknown_policy: UnknownPolicy::Traversable {
+                cost_factor: 1.0 + random::unit_f32(rng),
+            },
+        };
+        let mut trav = Traversability::<CAP>::new(g, config).unwrap();
+        for i in 0..CAP {
+            let u = random::unit_f32(rng);
+            let class = if u < density {
+                CellClass::Occupied
+            } else if u < density + 0.3 {
+                CellClass::Unknown
+            } else {
+                CellClass::Free
+            };
+            grid.set_class(i, class, &mut trav);
+        }
+        trav
+    }
+
+    fn passable_cell(rng: &mut random::ProjectRng, trav: &Traversability<CAP>) -> Cell {
+        loop {
+            let c = trav.geometry().cell(random::below(rng, CAP));
+            if trav.is_passable(c) {
+                return c;
+            }
+        }
+    }
+
+    /// Asks `lazy` and `full` the same questions about `cell` and checks the answers agree to
+    /// the bit.
+    fn same_answers(lazy: &DistanceField<CAP>, full: &DistanceField<CAP>, cell: Cell) {
+        let (a, b) = (lazy.distance_to(cell), full.distance_to(cell));
+        assert_eq!(
+            a.map(f32::to_bits),
+            b.map(f32::to_bits),
+            "distance to {cell:?}"
+        );
+        assert_eq!(lazy.is_reachable(cell), full.is_reachable(cell));
+        assert_eq!(lazy.first_step_towards(cell), full.first_step_towards(cell));
+        let mut pa = [Cell::default(); CAP];
+        let mut pb = [Cell::default(); CAP];
+        match (lazy.path_to(cell, &mut pa), full.path_to(cell, &mut pb)) {
+            (Ok(x), Ok(y)) => {
+                assert_eq!(pa[..x.len], pb[..y.len], "path to {cell:?}");
+                assert_eq!(x.cost_m.to_bits(), y.cost_m.to_bits());
+                assert_eq!(x.length_m.to_bits(), y.length_m.to_bits());
+            }
+            (x, y) => assert_eq!(x.err(), y.err()),
+        }
+    }
+
+    #[test]
+    fn a_lazy_sweep_answers_exactly_as_a_full_one() {
+        let mut rng = random::seeded(11);
+        let mut lazy = DistanceField::<CAP>::new();
+        let mut full = DistanceField::<CAP>::new();
+        for case in 0..60 {
+            let trav = random_trav(&mut rng, [0.1, 0.25, 0.4][case % 3]);
+            let source = passable_cell(&mut rng, &trav);
+            lazy.start(&trav, source).unwrap();
+            let total = full.compute(&trav, source).unwrap();
+            assert_eq!(full.reached(), total);
+            for _ in 0..40 {
+                let cell = Cell::new(
+                    random::below(&mut rng, W + 2) as i32 - 1,
+                    random::below(&mut rng, H + 2) as i32 - 1,
+                );
+                same_answers(&lazy, &full, cell);
+                assert!(lazy.reached() <= total);
+            }
+            // Every cell, in index order: the sweep ends where the full one did.
+            for i in 0..CAP {
+                same_answers(&lazy, &full, trav.geometry().cell(i));
+            }
+            assert_eq!(lazy.reached(), total);
+        }
+    }
+
+    #[test]
+    fn a_question_about_a_near_cell_settles_only_the_cells_closer_than_it() {
+        let trav = Traversability::<CAP>::from_blocked(W, H, |_| false).unwrap();
+        let mut field = DistanceField::<CAP>::new();
+        let source = Cell::new(2, 2);
+        field.start(&trav, source).unwrap();
+        assert_eq!(field.reached(), 0);
+        let step_m = trav.geometry().resolution_m;
+        assert_eq!(field.distance_to(Cell::new(3, 2)), Some(step_m));
+        // The source and at most its 8 neighbours.
+        assert!((1..=9).contains(&field.reached()), "{}", field.reached());
+        assert!(field.is_reachable(Cell::new(12, 2)));
+        assert!(field.reached() < CAP as u32 / 2, "{}", field.reached());
+        // Outside the grid: no answer, and the sweep did not move.
+        let before = field.reached();
+        assert_eq!(field.distance_to(Cell::new(-1, 0)), None);
+        assert_eq!(field.reached(), before);
+    }
+
+    #[test]
+    fn a_lazy_sweep_keeps_the_traversability_it_started_on() {
+        let mut rng = random::seeded(4);
+        let mut trav = random_trav(&mut rng, 0.15);
+        let source = passable_cell(&mut rng, &trav);
+        let mut lazy = DistanceField::<CAP>::new();
+        let mut full = DistanceField::<CAP>::new();
+        lazy.start(&trav, source).unwrap();
+        full.compute(&trav, source).unwrap();
+        // Walls everywhere once the lazy sweep has started: its answers stay those of the
+        // layer it started on.
+        let mut grid =
+            OccupancyGrid::<CAP>::new(*trav.geometry(), LogOddsBounds::default()).unwrap();
+        for i in 0..CAP {
+            grid.set_class(i, CellClass::Occupied, &mut trav);
+        }
+        assert!(!trav.is_passable(source));
+        for i in 0..CAP {
+            same_answers(&lazy, &full, trav.geometry().cell(i));
+        }
+        assert!(lazy.reached() > 1);
+    }
+
+    #[test]
+    fn a_failed_start_forgets_the_previous_sweep() {
+        let trav = Traversability::<CAP>::from_blocked(W, H, |c| c == Cell::new(0, 0)).unwrap();
+        let mut field = DistanceField::<CAP>::new();
+        field.start(&trav, Cell::new(5, 5)).unwrap();
+        assert!(field.is_reachable(Cell::new(6, 5)));
+        assert_eq!(
+            field.start(&trav, Cell::new(0, 0)),
+            Err(PlanError::StartBlocked {
+                cell: Cell::new(0, 0)
+            })
+        );
+        assert!(!field.is_reachable(Cell::new(6, 5)));
+        assert_eq!(field.reached(), 0);
     }
 }

@@ -89,6 +89,32 @@ impl Heuristic for Zero {
     }
 }
 
+/// What a search reads of the grid: its width, each cell's legal moves and step code, and the
+/// Unknown cost factor (a view of a [`Traversability`] layer, or of a copy of it).
+#[derive(Clone, Copy)]
+pub(crate) struct StepCosts<'a> {
+    pub(crate) width: usize,
+    /// Move masks, flat-index order (bit `k`: step [`MOVES`]`[k]` is legal).
+    pub(crate) masks: &'a [u8],
+    /// Step codes, flat-index order.
+    pub(crate) codes: &'a [u8],
+    pub(crate) unknown_factor: f32,
+    /// Every legal step costs its plain length.
+    pub(crate) uniform: bool,
+}
+
+impl<'a> StepCosts<'a> {
+    pub(crate) fn of<const M: usize>(trav: &'a Traversability<M>) -> Self {
+        Self {
+            width: trav.geometry().width,
+            masks: trav.move_masks(),
+            codes: trav.codes(),
+            unknown_factor: trav.unknown_factor(),
+            uniform: trav.uniform_costs(),
+        }
+    }
+}
+
 /// Open list: a 4-ary heap growing from the front of `heap`, plus a bypass stack of cells
 /// growing from its back. A cell opened with f no greater than the open list's minimum (up to
 /// [`BYPASS_SLACK`]) would go straight to the top of the heap; it is pushed on the stack
@@ -171,40 +197,57 @@ impl<const N: usize> SearchMemory<N> {
         target: usize,
         h: impl Heuristic,
     ) -> (u32, bool) {
-        if trav.uniform_costs() {
-            self.run::<M, true>(trav, source, target, h)
-        } else {
-            self.run::<M, false>(trav, source, target, h)
-        }
+        self.start(source, trav.geometry().width, h);
+        self.resume(&StepCosts::of(trav), target, h)
     }
 
-    /// [`Self::search`]; `UNIFORM`: every step costs its plain length (no cost factor to
-    /// look up).
-    #[inline(always)]
-    fn run<const M: usize, const UNIFORM: bool>(
+    /// Starts a search from `source` (a passable cell of a grid `width` cells wide): new
+    /// generation, only the source open. [`Self::resume`] runs it.
+    pub(crate) fn start(&mut self, source: usize, width: usize, h: impl Heuristic) {
+        self.begin();
+        let (sc, sr) = (source % width, source / width);
+        self.open_source(source, sr, h.at(sc, sr));
+    }
+
+    /// Runs the search started by [`Self::start`] (or left by an earlier call) until `target`
+    /// is closed or nothing is open; returns the number of cells closed by this call and
+    /// whether `target` was reached. Every closed cell is expanded before the call returns,
+    /// so a search stopped at one target and resumed later closes cells in the same order as
+    /// one that never stopped. `costs` must describe the same grid on every call of one
+    /// search.
+    pub(crate) fn resume(
         &mut self,
-        trav: &Traversability<M>,
-        source: usize,
+        costs: &StepCosts<'_>,
         target: usize,
         h: impl Heuristic,
     ) -> (u32, bool) {
-        let w = trav.geometry().width;
-        let masks = trav.move_masks();
-        let codes = trav.codes();
+        if costs.uniform {
+            self.run::<true>(costs, target, h)
+        } else {
+            self.run::<false>(costs, target, h)
+        }
+    }
+
+    /// [`Self::resume`]; `UNIFORM`: every step costs its plain length (no cost factor to
+    /// look up).
+    #[inline(always)]
+    fn run<const UNIFORM: bool>(
+        &mut self,
+        costs: &StepCosts<'_>,
+        target: usize,
+        h: impl Heuristic,
+    ) -> (u32, bool) {
+        let w = costs.width;
+        let masks = costs.masks;
+        let codes = costs.codes;
         // Cost factor by step code: blocked (never entered), Free, Unknown.
-        let factors = [0.0, 1.0, trav.unknown_factor()];
+        let factors = [0.0, 1.0, costs.unknown_factor];
         let offsets = MOVES.map(|(dc, dr)| (dc as isize + dr as isize * w as isize) as usize);
         let steps = MOVES.map(|(dc, dr)| if dc != 0 && dr != 0 { DIAGONAL } else { 1.0 });
-        self.begin();
-        let (sc, sr) = (source % w, source / w);
-        self.open_source(source, sr, h.at(sc, sr));
         let mut closed = 0u32;
         while let Some(Entry { idx, row, .. }) = self.pop_and_close() {
             closed += 1;
             let i = idx as usize;
-            if i == target {
-                return (closed, true);
-            }
             let row = row as usize;
             let col = i - row * w;
             let gi = self.nodes[i].g;
@@ -244,6 +287,9 @@ impl<const N: usize> SearchMemory<N> {
             step!(5);
             step!(6);
             step!(7);
+            if i == target {
+                return (closed, true);
+            }
         }
         (closed, false)
     }
