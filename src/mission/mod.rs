@@ -362,6 +362,9 @@ pub struct MissionStats {
     pub decisions_ahead: u32,
     /// Decisions computed ahead that were used.
     pub decisions_ahead_used: u32,
+    /// Escapes: slow manoeuvres away from the nearest laser return after repeated obstacle
+    /// holds without progress.
+    pub escapes: u32,
 }
 
 /// The result of one control period.
