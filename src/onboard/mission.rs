@@ -245,6 +245,7 @@ impl CoreMission {
             scan_taken: false,
             scan_window_s: SCAN_WINDOW_S.max(1.0 / f64::from(board.laser.rate_hz.max(1.0))),
             trajectory_step_m: 0.1,
+            scans_integrated: 0,
         };
         std::thread::Builder::new()
             .name("mission".into())
@@ -374,6 +375,8 @@ struct Worker {
     /// How soon after a status packet a scan must arrive to be integrated \[s\].
     scan_window_s: f64,
     trajectory_step_m: f32,
+    /// Scans integrated into the map in this run.
+    scans_integrated: u64,
 }
 
 impl Worker {
@@ -429,6 +432,7 @@ impl Worker {
                 if let Some(m) = &mut self.mission {
                     m.on_scan(time(t_s), &scan, &mut self.map)
                         .map_err(|e| format!("scan integration: {e}"))?;
+                    self.scans_integrated += 1;
                 }
             }
             Input::Fault => {
@@ -584,7 +588,7 @@ impl Worker {
                 energy_used_steps: base.energy_used_steps + stats.steps,
                 faults: base.faults + u64::from(stats.faults),
                 reconnects: base.reconnects,
-                scans: base.scans,
+                scans: base.scans + self.scans_integrated,
             },
             coverage: known_fraction(&self.map),
             finished,
