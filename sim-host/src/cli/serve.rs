@@ -73,6 +73,10 @@ pub struct Args {
     /// created or truncated.
     #[arg(long)]
     pub truth_log: Option<PathBuf>,
+    /// The emulated firmware's watchdog \[ms\] (FLASH `Watchdog`, reported in CONFIG): with no
+    /// command for this long on an open session the robot halts at its deceleration.
+    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u16).range(100..))]
+    pub watchdog_ms: u16,
 }
 
 /// Period of the truth log \[s\].
@@ -92,6 +96,7 @@ pub enum LaserModel {
 /// The world and the robots, shared by the endpoint threads.
 struct Sim {
     world: World,
+    watchdog_ms: u16,
     bodies: Mutex<Vec<RobotBody>>,
     start: Instant,
     seed: u64,
@@ -221,6 +226,7 @@ fn serve(args: Args) -> Result<(), String> {
         .collect();
     let sim = Arc::new(Sim {
         world,
+        watchdog_ms: args.watchdog_ms,
         bodies: Mutex::new(bodies),
         start: Instant::now(),
         seed: args.seed,
@@ -405,7 +411,7 @@ fn serve_arcos_tcp(sim: &Sim, robot: usize, mut stream: TcpStream) {
 /// idle) until EOF; a dropped link stops the robot and disables its motors. A TCP link
 /// (`drops_on_cut`) is closed when a `cut` fault begins; a serial line just goes silent.
 fn serve_arcos(sim: &Sim, robot: usize, io: &mut (impl Read + Write), drops_on_cut: bool) {
-    let mut emu = ArcosEmulator::new(ROBOT_NAME);
+    let mut emu = ArcosEmulator::new(ROBOT_NAME).with_watchdog_ms(sim.watchdog_ms);
     let link = sim.links.fetch_add(1, Ordering::SeqCst);
     let mut rng = random::seeded(sim.seed ^ (link + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
     arcos_session(sim, robot, io, &mut emu, &mut rng, drops_on_cut);
