@@ -471,10 +471,10 @@ impl<const N: usize> Mission<N> {
         {
             return self.finish(DoneReason::CoverageReached, events);
         }
-        if self.escape.is_some() {
-            if let Some(cmd) = self.escape_step(now) {
-                return cmd;
-            }
+        if self.escape.is_some()
+            && let Some(cmd) = self.escape_step(now)
+        {
+            return cmd;
         }
         // Up to a few transitions in one period, so that arriving and deciding, or replanning
         // and driving, do not cost a period each.
