@@ -603,6 +603,7 @@ impl Worker {
                 "decisions": stats.decisions,
                 "failed_decisions": stats.failed_decisions,
                 "replans": stats.replans,
+                "escapes": stats.escapes,
                 "faults": stats.faults,
                 "stopped_s": stats.stopped_s,
                 "safety": format!("{:?}", mission.monitor().state()),
