@@ -288,6 +288,14 @@ impl<const N: usize> Mission<N> {
         self.publish(now, map)
     }
 
+    /// A scan the caller does not trust for mapping (taken while the robot turned fast, when
+    /// a small error in the scan's time puts its walls in the wrong place): it keeps the
+    /// safety monitor's view fresh, and nothing else.
+    pub fn on_scan_unmapped(&mut self, now: Time, scan: &Scan) {
+        self.scan.clone_from(scan);
+        self.scan_time = Some(now);
+    }
+
     /// Coverage measured by the caller (0..=1); the mission is done once it reaches the
     /// target. Without it the mission ends only when nothing reachable is unknown or the
     /// battery is out.

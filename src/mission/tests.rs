@@ -1209,3 +1209,32 @@ fn a_robot_facing_a_wall_too_close_to_turn_backs_away_and_explores() {
         );
     }
 }
+
+/// Scans given with [`Mission::on_scan_unmapped`] keep the safety monitor fresh (no stale
+/// fault, the robot keeps driving) and leave the map as it was.
+#[test]
+fn unmapped_scans_keep_the_robot_going_and_the_map_unchanged() {
+    let mut sim = cruising(21);
+    sim.bots[0].feed_scans = false;
+    let before = sim.map.grid.log_odds().to_vec();
+    let mut moved = 0;
+    for _ in 0..20 {
+        let pose = sim.bots[0].true_pose();
+        let laser = sim.bots[0].mission.config().laser;
+        let scan = sim.world.scan(pose, &laser, &[]);
+        sim.bots[0].mission.on_scan_unmapped(sim.now, &scan);
+        if moving(sim.period()[0]) {
+            moved += 1;
+        }
+        assert!(
+            !matches!(sim.bots[0].mission.state(), MissionState::Fault(_)),
+            "{:?}",
+            sim.bots[0].mission.state()
+        );
+    }
+    assert!(moved >= 15, "moved in {moved} of 20 periods");
+    assert!(
+        sim.map.grid.log_odds() == before.as_slice(),
+        "the map changed"
+    );
+}
