@@ -128,6 +128,9 @@ pub struct Mission<const N: usize> {
     holds_in_row: u32,
     hold_anchor: Point2,
     escape: Option<Escape>,
+    /// The selector found nothing reachable once; the mission ends if it still does after an
+    /// escape.
+    done_pending: bool,
 }
 
 impl<const N: usize> core::fmt::Debug for Mission<N> {
@@ -208,6 +211,7 @@ impl<const N: usize> Mission<N> {
             holds_in_row: 0,
             hold_anchor: start_map.position(),
             escape: None,
+            done_pending: false,
             config,
         })
     }
@@ -976,6 +980,17 @@ impl<const N: usize> Mission<N> {
                 self.adopt(now, &d, events)
             }
             Ok(Outcome::Done) => {
+                if !self.done_pending {
+                    // Confirmed from a little further away first: a robot boxed in by a
+                    // fresh mark next to it (a smeared return, a bumper contact) sees nothing
+                    // reachable too.
+                    self.done_pending = true;
+                    self.begin_escape(now, events);
+                    if self.escape.is_some() {
+                        self.state = MissionState::Deciding;
+                        return false;
+                    }
+                }
                 self.finish(DoneReason::NothingReachable, events);
                 true
             }
@@ -1025,6 +1040,7 @@ impl<const N: usize> Mission<N> {
         let _ = self.targets.extend_from_slice(&d.targets);
         self.replans_this_decision = 0;
         self.failed_in_row = 0;
+        self.done_pending = false;
         events.stats.decisions += 1;
         events.push(MissionEvent::Decided {
             targets: d.targets.clone(),

@@ -23,7 +23,7 @@
 //!   transform at the start pose) and the first scan integrated.
 //! - **Deciding**: a decision by the configured selector ([`SelectorKind`]), computed inside
 //!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` ends the mission with
-//!   [`DoneReason::NothingReachable`]; `NoFeasibleTarget` with the battery low ends it with
+//!   [`DoneReason::NothingReachable`] when it is still the answer after an escape (below); `NoFeasibleTarget` with the battery low ends it with
 //!   [`DoneReason::BatteryExhausted`].
 //! - **Rotating / Driving**: the [`WaypointFollower`](crate::control::follower::WaypointFollower)
 //!   turns in place then drives to each waypoint ([`MissionEvent::WaypointReached`]).
