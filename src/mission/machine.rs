@@ -54,6 +54,8 @@ const ESCAPE_TURN_RAD: f32 = 1.047;
 /// Escape speeds: slow, well inside any board's limits.
 const ESCAPE_SPEED_MM_S: i16 = 100;
 const ESCAPE_TURN_DEG_S: i16 = 20;
+/// Escapes tried before "nothing reachable" is believed without the robot having moved.
+const DONE_ESCAPES: u32 = 3;
 /// Longest escape manoeuvre.
 const ESCAPE_TIMEOUT: Duration = Duration::from_secs(6);
 
@@ -128,9 +130,11 @@ pub struct Mission<const N: usize> {
     holds_in_row: u32,
     hold_anchor: Point2,
     escape: Option<Escape>,
-    /// The selector found nothing reachable once; the mission ends if it still does after an
-    /// escape.
-    done_pending: bool,
+    /// Where the selector first found nothing reachable, and how many escapes were tried
+    /// since: the mission ends when it still finds nothing from [`ESCAPE_PROGRESS_M`] away, or
+    /// after [`DONE_ESCAPES`] escapes.
+    done_at: Option<Point2>,
+    done_escapes: u32,
 }
 
 impl<const N: usize> core::fmt::Debug for Mission<N> {
@@ -211,7 +215,8 @@ impl<const N: usize> Mission<N> {
             holds_in_row: 0,
             hold_anchor: start_map.position(),
             escape: None,
-            done_pending: false,
+            done_at: None,
+            done_escapes: 0,
             config,
         })
     }
@@ -652,9 +657,10 @@ impl<const N: usize> Mission<N> {
         self.holds_in_row
     }
 
-    /// Starts a slow manoeuvre away from the nearest laser return, the first of backing
-    /// away, turning away, turning the other way or driving away that the safety monitor's
-    /// corridor check allows on the latest scan. Nothing allowed: the mission just replans.
+    /// Starts a slow manoeuvre away from the nearest laser return, the first that the safety
+    /// monitor's corridor check allows on the latest scan: with the return ahead, turning away
+    /// from it, turning the other way, backing away, driving on; with it behind, driving away
+    /// first. Nothing allowed: the mission just replans.
     fn begin_escape(&mut self, now: Time, events: &mut Events<'_>) {
         if self.scan_time.is_none() {
             return;
@@ -686,8 +692,9 @@ impl<const N: usize> Mission<N> {
             speed_mm_s: 0,
             turn_rate_deg_s,
         };
+        // Turning in place first: backing up is blind behind the laser.
         let order = if p.x >= 0.0 {
-            [drive(-v), turn(away), turn(-away), drive(v)]
+            [turn(away), turn(-away), drive(-v), drive(v)]
         } else {
             [drive(v), turn(away), turn(-away), drive(-v)]
         };
@@ -980,11 +987,14 @@ impl<const N: usize> Mission<N> {
                 self.adopt(now, &d, events)
             }
             Ok(Outcome::Done) => {
-                if !self.done_pending {
-                    // Confirmed from a little further away first: a robot boxed in by a
-                    // fresh mark next to it (a smeared return, a bumper contact) sees nothing
-                    // reachable too.
-                    self.done_pending = true;
+                // Confirmed from a little further away first: a robot boxed in by a fresh
+                // mark next to it (a smeared return, a bumper contact) sees nothing
+                // reachable too.
+                let here = self.pose_map.position();
+                let first = *self.done_at.get_or_insert(here);
+                let moved = first.distance(here) >= ESCAPE_PROGRESS_M;
+                if !moved && self.done_escapes < DONE_ESCAPES {
+                    self.done_escapes += 1;
                     self.begin_escape(now, events);
                     if self.escape.is_some() {
                         self.state = MissionState::Deciding;
@@ -1040,7 +1050,8 @@ impl<const N: usize> Mission<N> {
         let _ = self.targets.extend_from_slice(&d.targets);
         self.replans_this_decision = 0;
         self.failed_in_row = 0;
-        self.done_pending = false;
+        self.done_at = None;
+        self.done_escapes = 0;
         events.stats.decisions += 1;
         events.push(MissionEvent::Decided {
             targets: d.targets.clone(),

@@ -23,7 +23,8 @@
 //!   transform at the start pose) and the first scan integrated.
 //! - **Deciding**: a decision by the configured selector ([`SelectorKind`]), computed inside
 //!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` ends the mission with
-//!   [`DoneReason::NothingReachable`] when it is still the answer after an escape (below); `NoFeasibleTarget` with the battery low ends it with
+//!   [`DoneReason::NothingReachable`] when it is still the answer 0.3 m away, or after three
+//!   escapes (below); `NoFeasibleTarget` with the battery low ends it with
 //!   [`DoneReason::BatteryExhausted`].
 //! - **Rotating / Driving**: the [`WaypointFollower`](crate::control::follower::WaypointFollower)
 //!   turns in place then drives to each waypoint ([`MissionEvent::WaypointReached`]).
@@ -37,10 +38,10 @@
 //!   mission decides again.
 //!   After two obstacle holds in a row without progress (no waypoint reached, less than
 //!   0.3 m moved: typically a robot too close to a wall to turn, whose every plan starts with
-//!   a command the monitor refuses), the robot first escapes: it backs away from the nearest
-//!   laser return (or turns away from it, or drives away when it is behind) at 100 mm/s or
-//!   20 deg/s for 0.25 m or 60°, each command still checked by the monitor, then replans
-//!   ([`MissionStats::escapes`]).
+//!   a command the monitor refuses), the robot first escapes: it turns in place away from the
+//!   nearest laser return (or, if the monitor refuses that, backs away; with the return
+//!   behind, it drives away) at 20 deg/s or 100 mm/s for 60° or 0.25 m, each command still
+//!   checked by the monitor, then replans ([`MissionStats::escapes`]).
 //! - **Yielding**: the thing in the way is another robot (its mark on the shared map is at
 //!   the obstacle). The robot with the higher id waits [`MissionConfig::yield_wait_s`], then
 //!   replans around; if no way around exists it steps out of the other robot's path and waits
