@@ -428,15 +428,34 @@ fn an_lms200_on_a_second_serial_line_feeds_the_mission() {
 #[test]
 #[ignore = "manual check: a house mission takes many minutes"]
 fn house_mission_manual_check() {
-    let sim = Sim::start("house", None, &[]);
     let dir = temp_dir("mission-house");
+    let truth_log = dir.join("truth.jsonl");
+    let sim = Sim::start("house", None, &["--truth-log", truth_log.to_str().unwrap()]);
     let log = dir.join("log");
+    // Another board (e.g. a larger battery) with PAPILLON_HOUSE_BOARD.
+    let house_board = std::env::var("PAPILLON_HOUSE_BOARD").ok();
     let began = Instant::now();
     let limit: u64 = std::env::var("PAPILLON_HOUSE_LIMIT_S")
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(1800);
-    let mut child = run(&sim.arcos_tcp(), &sim.laser(), &log, false);
+    let mut child = match &house_board {
+        Some(b) => papillon(
+            &[
+                "run",
+                "--board",
+                b,
+                "--tcp",
+                &sim.arcos_tcp(),
+                "--laser",
+                &sim.laser(),
+                "--log-dir",
+                log.to_str().unwrap(),
+            ],
+            &dir,
+        ),
+        None => run(&sim.arcos_tcp(), &sim.laser(), &log, false),
+    };
     // Past the limit the mission is stopped with SIGTERM and its saved map scored.
     while child.try_wait().unwrap().is_none() && began.elapsed().as_secs() < limit {
         std::thread::sleep(Duration::from_millis(500));
@@ -455,4 +474,22 @@ fn house_mission_manual_check() {
         state.counters.distance_m,
         state.finished
     );
+    // Odometry drift: the final pose estimate against the truth, in the map frame (the
+    // odometry frame anchored at the world's start pose).
+    if let Some(t) = read_truth(&truth_log).last() {
+        let start = house.start();
+        let (s, c) = (f64::from(start.theta)).sin_cos();
+        let (dx, dy) = (t.x_m - f64::from(start.x), t.y_m - f64::from(start.y));
+        let (x, y) = (c * dx + s * dy, -s * dx + c * dy);
+        let theta = t.theta_rad - f64::from(start.theta);
+        let p = &state.pose;
+        let heading_err = (f64::from(p.theta_rad) - theta + std::f64::consts::PI)
+            .rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI;
+        eprintln!(
+            "house mission: final pose error {:.2} m, {:.1} deg",
+            (f64::from(p.x_m) - x).hypot(f64::from(p.y_m) - y),
+            heading_err.to_degrees()
+        );
+    }
 }

@@ -351,6 +351,10 @@ fn pump(
 pub struct Truth {
     /// Wall-clock time of the sample \[s since the Unix epoch\].
     pub unix_s: f64,
+    /// True pose in the world \[m, m, rad\].
+    pub x_m: f64,
+    pub y_m: f64,
+    pub theta_rad: f64,
     /// True translational speed \[mm/s\].
     pub speed_mm_s: f64,
     /// True turn rate \[deg/s\].
@@ -373,6 +377,9 @@ pub fn read_truth(path: &Path) -> Vec<Truth> {
         .filter_map(|v| {
             Some(Truth {
                 unix_s: v["unix_s"].as_f64()?,
+                x_m: v["x_m"].as_f64()?,
+                y_m: v["y_m"].as_f64()?,
+                theta_rad: v["theta_rad"].as_f64()?,
                 speed_mm_s: v["speed_mm_s"].as_f64()?,
                 turn_deg_s: v["turn_deg_s"].as_f64()?,
             })
