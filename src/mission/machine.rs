@@ -658,9 +658,9 @@ impl<const N: usize> Mission<N> {
     }
 
     /// Starts a slow manoeuvre away from the nearest laser return, the first that the safety
-    /// monitor's corridor check allows on the latest scan: with the return ahead, turning away
-    /// from it, turning the other way, backing away, driving on; with it behind, driving away
-    /// first. Nothing allowed: the mission just replans.
+    /// monitor's corridor check allows on the latest scan: with the return ahead, backing away
+    /// (the monitor checks what the laser sees behind; the rear bumper the rest), turning away
+    /// from it, turning the other way, driving on; with it behind, driving away first. Nothing allowed: the mission just replans.
     fn begin_escape(&mut self, now: Time, events: &mut Events<'_>) {
         if self.scan_time.is_none() {
             return;
@@ -692,9 +692,10 @@ impl<const N: usize> Mission<N> {
             speed_mm_s: 0,
             turn_rate_deg_s,
         };
-        // Turning in place first: backing up is blind behind the laser.
+        // Backing away first: a turn alone leaves the robot where its plans start with the
+        // refused command again (end to end, turning first looped through 34 escapes).
         let order = if p.x >= 0.0 {
-            [turn(away), turn(-away), drive(-v), drive(v)]
+            [drive(-v), turn(away), turn(-away), drive(v)]
         } else {
             [drive(v), turn(away), turn(-away), drive(-v)]
         };

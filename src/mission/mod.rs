@@ -38,9 +38,9 @@
 //!   mission decides again.
 //!   After two obstacle holds in a row without progress (no waypoint reached, less than
 //!   0.3 m moved: typically a robot too close to a wall to turn, whose every plan starts with
-//!   a command the monitor refuses), the robot first escapes: it turns in place away from the
-//!   nearest laser return (or, if the monitor refuses that, backs away; with the return
-//!   behind, it drives away) at 20 deg/s or 100 mm/s for 60° or 0.25 m, each command still
+//!   a command the monitor refuses), the robot first escapes: it backs away from the nearest
+//!   laser return (or, if the monitor refuses that, turns away from it; with the return
+//!   behind, it drives away) at 100 mm/s or 20 deg/s for 0.25 m or 60°, each command still
 //!   checked by the monitor, then replans ([`MissionStats::escapes`]).
 //! - **Yielding**: the thing in the way is another robot (its mark on the shared map is at
 //!   the obstacle). The robot with the higher id waits [`MissionConfig::yield_wait_s`], then
