@@ -54,8 +54,6 @@ const ESCAPE_TURN_RAD: f32 = 1.047;
 /// Escape speeds: slow, well inside any board's limits.
 const ESCAPE_SPEED_MM_S: i16 = 100;
 const ESCAPE_TURN_DEG_S: i16 = 20;
-/// Escapes tried before "nothing reachable" is believed without the robot having moved.
-const DONE_ESCAPES: u32 = 3;
 /// Longest escape manoeuvre.
 const ESCAPE_TIMEOUT: Duration = Duration::from_secs(6);
 
@@ -130,11 +128,6 @@ pub struct Mission<const N: usize> {
     holds_in_row: u32,
     hold_anchor: Point2,
     escape: Option<Escape>,
-    /// Where the selector first found nothing reachable, and how many escapes were tried
-    /// since: the mission ends when it still finds nothing from [`ESCAPE_PROGRESS_M`] away, or
-    /// after [`DONE_ESCAPES`] escapes.
-    done_at: Option<Point2>,
-    done_escapes: u32,
 }
 
 impl<const N: usize> core::fmt::Debug for Mission<N> {
@@ -215,8 +208,6 @@ impl<const N: usize> Mission<N> {
             holds_in_row: 0,
             hold_anchor: start_map.position(),
             escape: None,
-            done_at: None,
-            done_escapes: 0,
             config,
         })
     }
@@ -657,10 +648,9 @@ impl<const N: usize> Mission<N> {
         self.holds_in_row
     }
 
-    /// Starts a slow manoeuvre away from the nearest laser return, the first that the safety
-    /// monitor's corridor check allows on the latest scan: with the return ahead, backing away
-    /// (the monitor checks what the laser sees behind; the rear bumper the rest), turning away
-    /// from it, turning the other way, driving on; with it behind, driving away first. Nothing allowed: the mission just replans.
+    /// Starts a slow manoeuvre away from the nearest laser return, the first of backing
+    /// away, turning away, turning the other way or driving away that the safety monitor's
+    /// corridor check allows on the latest scan. Nothing allowed: the mission just replans.
     fn begin_escape(&mut self, now: Time, events: &mut Events<'_>) {
         if self.scan_time.is_none() {
             return;
@@ -692,8 +682,6 @@ impl<const N: usize> Mission<N> {
             speed_mm_s: 0,
             turn_rate_deg_s,
         };
-        // Backing away first: a turn alone leaves the robot where its plans start with the
-        // refused command again (end to end, turning first looped through 34 escapes).
         let order = if p.x >= 0.0 {
             [drive(-v), turn(away), turn(-away), drive(v)]
         } else {
@@ -988,20 +976,6 @@ impl<const N: usize> Mission<N> {
                 self.adopt(now, &d, events)
             }
             Ok(Outcome::Done) => {
-                // Confirmed from a little further away first: a robot boxed in by a fresh
-                // mark next to it (a smeared return, a bumper contact) sees nothing
-                // reachable too.
-                let here = self.pose_map.position();
-                let first = *self.done_at.get_or_insert(here);
-                let moved = first.distance(here) >= ESCAPE_PROGRESS_M;
-                if !moved && self.done_escapes < DONE_ESCAPES {
-                    self.done_escapes += 1;
-                    self.begin_escape(now, events);
-                    if self.escape.is_some() {
-                        self.state = MissionState::Deciding;
-                        return false;
-                    }
-                }
                 self.finish(DoneReason::NothingReachable, events);
                 true
             }
@@ -1051,8 +1025,6 @@ impl<const N: usize> Mission<N> {
         let _ = self.targets.extend_from_slice(&d.targets);
         self.replans_this_decision = 0;
         self.failed_in_row = 0;
-        self.done_at = None;
-        self.done_escapes = 0;
         events.stats.decisions += 1;
         events.push(MissionEvent::Decided {
             targets: d.targets.clone(),

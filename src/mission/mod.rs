@@ -23,8 +23,7 @@
 //!   transform at the start pose) and the first scan integrated.
 //! - **Deciding**: a decision by the configured selector ([`SelectorKind`]), computed inside
 //!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` ends the mission with
-//!   [`DoneReason::NothingReachable`] when it is still the answer 0.3 m away, or after three
-//!   escapes (below); `NoFeasibleTarget` with the battery low ends it with
+//!   [`DoneReason::NothingReachable`]; `NoFeasibleTarget` with the battery low ends it with
 //!   [`DoneReason::BatteryExhausted`].
 //! - **Rotating / Driving**: the [`WaypointFollower`](crate::control::follower::WaypointFollower)
 //!   turns in place then drives to each waypoint ([`MissionEvent::WaypointReached`]).
@@ -39,9 +38,9 @@
 //!   After two obstacle holds in a row without progress (no waypoint reached, less than
 //!   0.3 m moved: typically a robot too close to a wall to turn, whose every plan starts with
 //!   a command the monitor refuses), the robot first escapes: it backs away from the nearest
-//!   laser return (or, if the monitor refuses that, turns away from it; with the return
-//!   behind, it drives away) at 100 mm/s or 20 deg/s for 0.25 m or 60°, each command still
-//!   checked by the monitor, then replans ([`MissionStats::escapes`]).
+//!   laser return (or turns away from it, or drives away when it is behind) at 100 mm/s or
+//!   20 deg/s for 0.25 m or 60°, each command still checked by the monitor, then replans
+//!   ([`MissionStats::escapes`]).
 //! - **Yielding**: the thing in the way is another robot (its mark on the shared map is at
 //!   the obstacle). The robot with the higher id waits [`MissionConfig::yield_wait_s`], then
 //!   replans around; if no way around exists it steps out of the other robot's path and waits
