@@ -68,7 +68,8 @@ struct RunArgs {
     /// TCP address of the robot (overrides the board).
     #[arg(long)]
     tcp: Option<String>,
-    /// Laser address host:port (overrides the board).
+    /// Laser endpoint (overrides the board): host:port of an LMS1xx, or the serial device of
+    /// an LMS200.
     #[arg(long)]
     laser: Option<String>,
     /// Directory for the mission state, telemetry and maps.
@@ -245,6 +246,9 @@ fn run(args: RunArgs) -> ExitCode {
     }
     if let Some(laser) = &args.laser {
         match Address::new(laser) {
+            Some(a) if board.laser_model() == Some(papillon::config::LaserModel::Lms200) => {
+                board.laser.port = Some(a);
+            }
             Some(a) => board.laser.address = Some(a),
             None => return too_long("--laser"),
         }

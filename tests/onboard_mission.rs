@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Output};
 use std::time::{Duration, Instant};
 
-use e2e::{Relay, Sim, papillon, signal, temp_dir, wait_bounded};
+use e2e::{Relay, Sim, papillon, read_truth, signal, temp_dir, unix_now_s, wait_bounded};
 use papillon::onboard::persist::{MapImage, MissionState, PGM_UNKNOWN, StateStore};
 use papillon_sim::cli::serve::MAP_RESOLUTION_M;
 use papillon_sim::world::World;
@@ -224,13 +224,25 @@ fn after_kill_9_the_saved_map_is_intact_and_resume_continues_from_it() {
 }
 
 /// 0.1 % of the robot's bytes corrupted for the whole mission, the laser silent for 3 s, and
-/// the robot link cut for 3 s: the robot stops each time and the mission still finishes.
+/// the robot link cut for 3 s: the robot stops each time and the mission still finishes. The
+/// robot's true velocity (the simulator's truth log) is zero from 0.5 s into the cut to its
+/// end.
 #[test]
 fn a_mission_survives_corruption_a_laser_dropout_and_a_link_cut() {
-    let sim = Sim::start("lab", None, &["--faults", "corrupt=0.001"]);
+    let dir = temp_dir("mission-faults");
+    let truth_log = dir.join("truth.jsonl");
+    let sim = Sim::start(
+        "lab",
+        None,
+        &[
+            "--faults",
+            "corrupt=0.001",
+            "--truth-log",
+            truth_log.to_str().unwrap(),
+        ],
+    );
     let arcos = Relay::start(&sim.arcos_tcp(), true);
     let laser = Relay::start(&sim.laser(), false);
-    let dir = temp_dir("mission-faults");
     let log = dir.join("log");
     let began = Instant::now();
     let child = run(&arcos.addr, &laser.addr, &log, false);
@@ -275,11 +287,39 @@ fn a_mission_survives_corruption_a_laser_dropout_and_a_link_cut() {
         std::thread::sleep(Duration::from_millis(50));
     }
 
-    // Link cut for 3 s.
+    // Link cut for 3 s, while the robot truly moves.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !read_truth(&truth_log)
+        .last()
+        .is_some_and(|t| t.moving() && unix_now_s() - t.unix_s < 0.1)
+    {
+        assert!(Instant::now() < deadline, "the robot never moved again");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let cut_unix_s = unix_now_s();
     let cut = Instant::now();
     arcos.cut();
     std::thread::sleep(Duration::from_secs(3));
+    let truth = read_truth(&truth_log);
     arcos.restore();
+    let before: Vec<_> = truth
+        .iter()
+        .filter(|t| (cut_unix_s - 0.1..cut_unix_s).contains(&t.unix_s))
+        .collect();
+    assert!(
+        before.iter().any(|t| t.moving()),
+        "not moving at the cut: {before:?}"
+    );
+    let stopped: Vec<_> = truth
+        .iter()
+        .filter(|t| (cut_unix_s + 0.5..=cut_unix_s + 3.0).contains(&t.unix_s))
+        .collect();
+    assert!(stopped.len() >= 50, "truth log too sparse: {stopped:?}");
+    assert!(
+        stopped.iter().all(|t| !t.moving()),
+        "the robot truly moved from 0.5 s into the cut: {:?}",
+        stopped.iter().find(|t| t.moving())
+    );
     // The simulator stops the robot when its link drops; the first status packet of the new
     // session shows it standing.
     let deadline = Instant::now() + Duration::from_secs(30);
@@ -321,21 +361,101 @@ fn a_mission_survives_corruption_a_laser_dropout_and_a_link_cut() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A P3-DX with an LMS200 on a second serial line (both ptys here): `papillon run` on a board
+/// naming an `lms200` gets its scans through the telegram session, maps and drives; SIGTERM
+/// then stops it cleanly.
+#[test]
+fn an_lms200_on_a_second_serial_line_feeds_the_mission() {
+    let dir = temp_dir("mission-lms200");
+    let robot_link = dir.join("robot0");
+    let laser_link = dir.join("lms200");
+    let sim = Sim::start_lms200("lab", &robot_link, &laser_link, &[]);
+    let mut board: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(board()).unwrap()).unwrap();
+    board["link"]["port"] = robot_link.to_str().unwrap().into();
+    board["laser"] = serde_json::json!({
+        "model": "lms200",
+        "port": laser_link.to_str().unwrap(),
+        "baud": 38400,
+        "beam_count": 181,
+        "first_angle_deg": -90.0,
+        "step_deg": 1.0,
+        "max_range_m": 4.0,
+        "min_range_m": 0.3,
+        "noise_fraction": 0.05,
+        "rate_hz": 10.0,
+        "mount": { "x_m": 0.021, "y_m": 0.0, "theta_deg": 0.0 }
+    });
+    let board_file = dir.join("board-lms200.json");
+    std::fs::write(&board_file, board.to_string()).unwrap();
+    let log = dir.join("log");
+    let child = papillon(
+        &[
+            "run",
+            "--board",
+            board_file.to_str().unwrap(),
+            "--log-dir",
+            log.to_str().unwrap(),
+        ],
+        &dir,
+    );
+    // Scans mapped and the robot driven: at least 1500 cells known and 0.5 m on odometry.
+    let deadline = Instant::now() + Duration::from_secs(90);
+    let state = loop {
+        if let Ok(Some((state, Some(map)))) = StateStore::open(&log).unwrap().load()
+            && known_cells(&map).len() >= 1500
+            && state.counters.distance_m >= 0.5
+        {
+            break state;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "no mapping and driving saved in {log:?}"
+        );
+        std::thread::sleep(Duration::from_millis(200));
+    };
+    assert!(state.counters.scans >= 20, "{:?}", state.counters);
+    signal(&child, libc::SIGTERM);
+    let out = wait_bounded(child, Duration::from_secs(20));
+    assert_exit_0(&out);
+    drop(sim);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// The manual check of the user guide: the same mission on the 24 m x 24 m `house`. Run with
 /// `cargo test -p papillon --test onboard_mission -- --ignored --nocapture house`; it prints the
 /// coverage and the durations.
 #[test]
 #[ignore = "manual check: a house mission takes many minutes"]
 fn house_mission_manual_check() {
-    let sim = Sim::start("house", None, &[]);
     let dir = temp_dir("mission-house");
+    let truth_log = dir.join("truth.jsonl");
+    let sim = Sim::start("house", None, &["--truth-log", truth_log.to_str().unwrap()]);
     let log = dir.join("log");
+    // Another board (e.g. a larger battery) with PAPILLON_HOUSE_BOARD.
+    let house_board = std::env::var("PAPILLON_HOUSE_BOARD").ok();
     let began = Instant::now();
     let limit: u64 = std::env::var("PAPILLON_HOUSE_LIMIT_S")
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(1800);
-    let mut child = run(&sim.arcos_tcp(), &sim.laser(), &log, false);
+    let mut child = match &house_board {
+        Some(b) => papillon(
+            &[
+                "run",
+                "--board",
+                b,
+                "--tcp",
+                &sim.arcos_tcp(),
+                "--laser",
+                &sim.laser(),
+                "--log-dir",
+                log.to_str().unwrap(),
+            ],
+            &dir,
+        ),
+        None => run(&sim.arcos_tcp(), &sim.laser(), &log, false),
+    };
     // Past the limit the mission is stopped with SIGTERM and its saved map scored.
     while child.try_wait().unwrap().is_none() && began.elapsed().as_secs() < limit {
         std::thread::sleep(Duration::from_millis(500));
@@ -354,4 +474,22 @@ fn house_mission_manual_check() {
         state.counters.distance_m,
         state.finished
     );
+    // Odometry drift: the final pose estimate against the truth, in the map frame (the
+    // odometry frame anchored at the world's start pose).
+    if let Some(t) = read_truth(&truth_log).last() {
+        let start = house.start();
+        let (s, c) = (f64::from(start.theta)).sin_cos();
+        let (dx, dy) = (t.x_m - f64::from(start.x), t.y_m - f64::from(start.y));
+        let (x, y) = (c * dx + s * dy, -s * dx + c * dy);
+        let theta = t.theta_rad - f64::from(start.theta);
+        let p = &state.pose;
+        let heading_err = (f64::from(p.theta_rad) - theta + std::f64::consts::PI)
+            .rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI;
+        eprintln!(
+            "house mission: final pose error {:.2} m, {:.1} deg",
+            (f64::from(p.x_m) - x).hypot(f64::from(p.y_m) - y),
+            heading_err.to_degrees()
+        );
+    }
 }

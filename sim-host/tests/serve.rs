@@ -215,6 +215,41 @@ fn watchdog_halts_after_two_silent_seconds_and_releases_on_next_command() {
     assert!(b.body.true_pose().x > x_halted + 0.2);
 }
 
+/// A FLASH watchdog set shorter (as ARCOScf allows) is reported in CONFIG and halts the robot
+/// that much sooner; the halt is a stop at the robot's deceleration.
+#[test]
+fn a_shorter_flash_watchdog_is_reported_and_halts_sooner() {
+    let mut b = Bench::new();
+    b.emu = ArcosEmulator::new("bench").with_watchdog_ms(250);
+    b.connect();
+    let config = b
+        .send(Command::Config(None))
+        .into_iter()
+        .find_map(|p| match p {
+            Packet::Config(c) => Some(c),
+            _ => None,
+        })
+        .expect("a CONFIG packet");
+    assert_eq!(config.watchdog_ms, 250);
+    b.send(Command::Enable(true));
+    // Commands every 100 ms keep it driving.
+    for _ in 0..20 {
+        b.send(Command::Vel(300));
+        b.run(0.1, None);
+    }
+    assert!(!b.emu.watchdog_halted());
+    assert!((b.body.speed_mm_s() - 300.0).abs() < 1.0);
+    // 0.2 s since the last command, then 0.3 s.
+    b.run(0.1, None);
+    assert!(!b.emu.watchdog_halted());
+    b.run(0.1, None);
+    assert!(b.emu.watchdog_halted());
+    // 300 mm/s at 300 mm/s² takes 1 s more to stop.
+    assert!(b.body.speed_mm_s() > 150.0, "{}", b.body.speed_mm_s());
+    b.run(1.1, None);
+    assert_eq!(b.body.speed_mm_s(), 0.0);
+}
+
 #[test]
 fn bare_packets_after_open_are_pulse_open_close_and_limits_apply() {
     let mut b = Bench::new();

@@ -43,6 +43,30 @@ const MAX_CONTACTS: usize = 16;
 const CONTACT_MEMORY: Duration = Duration::from_secs(120);
 /// Progress toward a waypoint smaller than this does not count \[m\].
 const PROGRESS_M: f32 = 0.05;
+/// After this many obstacle holds in a row without progress, the robot backs or turns away
+/// from the nearest laser return before planning again.
+const ESCAPE_AFTER_HOLDS: u32 = 2;
+/// Moving this far from where the holds began counts as progress \[m\].
+const ESCAPE_PROGRESS_M: f32 = 0.3;
+/// Distance driven (forward or backward) by one escape \[m\].
+const ESCAPE_DISTANCE_M: f32 = 0.25;
+/// Angle turned in place by one escape \[rad\] (60°).
+const ESCAPE_TURN_RAD: f32 = 1.047;
+/// Escape speeds: slow, well inside any board's limits.
+const ESCAPE_SPEED_MM_S: i16 = 100;
+const ESCAPE_TURN_DEG_S: i16 = 20;
+/// Longest escape manoeuvre.
+const ESCAPE_TIMEOUT: Duration = Duration::from_secs(6);
+
+/// A slow manoeuvre away from the nearest laser return, after repeated obstacle holds: the
+/// plans kept starting with a command the safety monitor refuses (the robot too close to a
+/// wall to turn, facing it). Every command still goes through the monitor.
+#[derive(Clone, Copy, Debug)]
+struct Escape {
+    command: MotionCommand,
+    start_odom: Pose2,
+    until: Time,
+}
 
 /// A decision computed ahead, from the end of the current path.
 #[derive(Clone, Debug)]
@@ -103,6 +127,10 @@ pub struct Mission<const N: usize> {
     contacts: heapless::Deque<(Point2, Point2, Time), MAX_CONTACTS>,
     trail: heapless::Deque<Point2, TRAIL_LEN>,
     last_step: Option<Time>,
+    /// Obstacle holds in a row without progress, and where the first of them happened.
+    holds_in_row: u32,
+    hold_anchor: Point2,
+    escape: Option<Escape>,
 }
 
 impl<const N: usize> core::fmt::Debug for Mission<N> {
@@ -181,6 +209,9 @@ impl<const N: usize> Mission<N> {
             contacts: heapless::Deque::new(),
             trail: heapless::Deque::new(),
             last_step: None,
+            holds_in_row: 0,
+            hold_anchor: start_map.position(),
+            escape: None,
             config,
         })
     }
@@ -259,6 +290,14 @@ impl<const N: usize> Mission<N> {
         self.scans_integrated += 1;
         self.path_dirty = true;
         self.publish(now, map)
+    }
+
+    /// A scan the caller does not trust for mapping (taken while the robot turned fast, when
+    /// a small error in the scan's time puts its walls in the wrong place): it keeps the
+    /// safety monitor's view fresh, and nothing else.
+    pub fn on_scan_unmapped(&mut self, now: Time, scan: &Scan) {
+        self.scan.clone_from(scan);
+        self.scan_time = Some(now);
     }
 
     /// Coverage measured by the caller (0..=1); the mission is done once it reaches the
@@ -432,6 +471,7 @@ impl<const N: usize> Mission<N> {
             self.follower.clear();
             self.ahead = None;
             self.yielding = None;
+            self.escape = None;
             self.ack_pending = false;
             return MotionCommand::ZERO;
         }
@@ -448,6 +488,11 @@ impl<const N: usize> Mission<N> {
             .is_some_and(|c| c >= self.config.coverage_target)
         {
             return self.finish(DoneReason::CoverageReached, events);
+        }
+        if self.escape.is_some()
+            && let Some(cmd) = self.escape_step(now)
+        {
+            return cmd;
         }
         // Up to a few transitions in one period, so that arriving and deciding, or replanning
         // and driving, do not cost a period each.
@@ -486,6 +531,7 @@ impl<const N: usize> Mission<N> {
         self.targets.clear();
         self.ahead = None;
         self.yielding = None;
+        self.escape = None;
         events.push(MissionEvent::Done(reason));
         MotionCommand::ZERO
     }
@@ -530,6 +576,12 @@ impl<const N: usize> Mission<N> {
             SafetyEvent::ObstacleAhead { point_base_m, .. } => {
                 let p = self.pose_map.transform_point(point_base_m);
                 self.mark_occupied(map, p);
+                if self.escape.take().is_some() {
+                    // The escape itself was refused: plan again; the next hold picks another
+                    // manoeuvre from the scan.
+                    self.enter_replanning(ReplanCause::ObstacleAhead);
+                    return;
+                }
                 if let Some(Yield::SteppingAside { other, .. }) = self.yielding {
                     self.follower.clear();
                     self.yielding = Some(Yield::Waiting {
@@ -541,7 +593,12 @@ impl<const N: usize> Mission<N> {
                 if running {
                     match self.robot_at(map, now, p) {
                         Some(other) => self.begin_conflict(now, other, events),
-                        None => self.enter_replanning(ReplanCause::ObstacleAhead),
+                        None => {
+                            self.enter_replanning(ReplanCause::ObstacleAhead);
+                            if self.count_hold() >= ESCAPE_AFTER_HOLDS {
+                                self.begin_escape(now, events);
+                            }
+                        }
                     }
                 }
             }
@@ -569,6 +626,7 @@ impl<const N: usize> Mission<N> {
                     let _ = self.contacts.push_back((a, b, now + CONTACT_MEMORY));
                 }
                 self.yielding = None;
+                self.escape = None;
                 if !matches!(self.state, MissionState::Done(_) | MissionState::Fault(_)) {
                     self.enter_replanning(ReplanCause::Contact);
                 }
@@ -586,6 +644,96 @@ impl<const N: usize> Mission<N> {
                 self.follower.clear();
             }
         }
+    }
+
+    /// Counts an obstacle hold: the number in a row since the robot last made progress
+    /// (reached a waypoint, or moved [`ESCAPE_PROGRESS_M`] from where the holds began).
+    fn count_hold(&mut self) -> u32 {
+        let here = self.pose_map.position();
+        if self.holds_in_row == 0 || self.hold_anchor.distance(here) >= ESCAPE_PROGRESS_M {
+            self.holds_in_row = 0;
+            self.hold_anchor = here;
+        }
+        self.holds_in_row += 1;
+        self.holds_in_row
+    }
+
+    /// Starts a slow manoeuvre away from the nearest laser return, the first of backing
+    /// away, turning away, turning the other way or driving away that the safety monitor's
+    /// corridor check allows on the latest scan. Nothing allowed: the mission just replans.
+    fn begin_escape(&mut self, now: Time, events: &mut Events<'_>) {
+        if self.scan_time.is_none() {
+            return;
+        }
+        let laser = &self.config.laser;
+        let mut nearest: Option<(f32, Point2)> = None;
+        for beam in self.scan.beams() {
+            let Some(r) = beam.range_m else { continue };
+            if !(r.is_finite() && r >= self.config.safety.min_valid_range_m) {
+                continue;
+            }
+            let in_laser =
+                Point2::new(r * math::cos(beam.angle_rad), r * math::sin(beam.angle_rad));
+            let p = laser.mount.transform_point(in_laser);
+            let d = math::hypot(p.x, p.y);
+            if nearest.is_none_or(|(best, _)| d < best) {
+                nearest = Some((d, p));
+            }
+        }
+        let Some((_, p)) = nearest else { return };
+        let (v, w) = (ESCAPE_SPEED_MM_S, ESCAPE_TURN_DEG_S);
+        // Turn so that the return ends up behind: away from the side it is on.
+        let away = if p.y > 0.0 { -w } else { w };
+        let drive = |speed_mm_s: i16| MotionCommand {
+            speed_mm_s,
+            turn_rate_deg_s: 0,
+        };
+        let turn = |turn_rate_deg_s: i16| MotionCommand {
+            speed_mm_s: 0,
+            turn_rate_deg_s,
+        };
+        let order = if p.x >= 0.0 {
+            [drive(-v), turn(away), turn(-away), drive(v)]
+        } else {
+            [drive(v), turn(away), turn(-away), drive(-v)]
+        };
+        let limits = *self.monitor.limits();
+        let Some(command) = order.into_iter().find(|&c| {
+            self.monitor
+                .obstacle_in_path(limits.clamp(c), &self.scan, laser)
+                .is_none()
+        }) else {
+            return;
+        };
+        self.escape = Some(Escape {
+            command,
+            start_odom: self.pose_odom,
+            until: now + ESCAPE_TIMEOUT,
+        });
+        events.stats.escapes += 1;
+    }
+
+    /// One period of the escape; `None` once it is over (the mission then replans).
+    fn escape_step(&mut self, now: Time) -> Option<MotionCommand> {
+        let e = self.escape?;
+        let travelled = e.start_odom.position().distance(self.pose_odom.position());
+        let turned = math::abs(normalize_angle(self.pose_odom.theta - e.start_odom.theta));
+        let done = if e.command.speed_mm_s != 0 {
+            travelled >= ESCAPE_DISTANCE_M
+        } else {
+            turned >= ESCAPE_TURN_RAD
+        };
+        if done || now >= e.until || matches!(self.monitor.state(), SafetyState::BackingOff { .. })
+        {
+            self.escape = None;
+            self.enter_replanning(ReplanCause::ObstacleAhead);
+            return None;
+        }
+        // The manoeuvre is a fresh decision of its own, taken after the hold.
+        let _ = self.monitor.acknowledge_replan();
+        self.ack_pending = false;
+        self.state = MissionState::Replanning;
+        Some(e.command)
     }
 
     /// Keeps the remaining waypoints of the path being dropped.
@@ -1067,6 +1215,7 @@ impl<const N: usize> Mission<N> {
         let (cmd, status) = self.follower.update(now, self.pose_map);
         match status {
             FollowStatus::WaypointReached(i) => {
+                self.holds_in_row = 0;
                 events.stats.waypoints_reached += 1;
                 events.push(MissionEvent::WaypointReached { index: i });
                 let w = self.follower.path()[i];
@@ -1075,6 +1224,7 @@ impl<const N: usize> Mission<N> {
                 }
             }
             FollowStatus::Arrived => {
+                self.holds_in_row = 0;
                 let last = self.follower.path().len().saturating_sub(1);
                 events.stats.waypoints_reached += 1;
                 events.push(MissionEvent::WaypointReached { index: last });

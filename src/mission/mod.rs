@@ -35,6 +35,12 @@
 //!   decision that needed more than [`MissionConfig::max_replans_per_decision`] replans, or
 //!   whose targets can no longer be reached, is dropped: its target is blacklisted and the
 //!   mission decides again.
+//!   After two obstacle holds in a row without progress (no waypoint reached, less than
+//!   0.3 m moved: typically a robot too close to a wall to turn, whose every plan starts with
+//!   a command the monitor refuses), the robot first escapes: it backs away from the nearest
+//!   laser return (or turns away from it, or drives away when it is behind) at 100 mm/s or
+//!   20 deg/s for 0.25 m or 60°, each command still checked by the monitor, then replans
+//!   ([`MissionStats::escapes`]).
 //! - **Yielding**: the thing in the way is another robot (its mark on the shared map is at
 //!   the obstacle). The robot with the higher id waits [`MissionConfig::yield_wait_s`], then
 //!   replans around; if no way around exists it steps out of the other robot's path and waits
@@ -362,6 +368,9 @@ pub struct MissionStats {
     pub decisions_ahead: u32,
     /// Decisions computed ahead that were used.
     pub decisions_ahead_used: u32,
+    /// Escapes: slow manoeuvres away from the nearest laser return after repeated obstacle
+    /// holds without progress.
+    pub escapes: u32,
 }
 
 /// The result of one control period.

@@ -1122,3 +1122,119 @@ fn two_robots_explore_one_shared_map_to_done() {
         assert!(closest > 0.45, "seed {seed}: robots came {closest} m close");
     }
 }
+
+/// The robot's outline (P3-DX box) at `pose` touches a wall of `world`.
+fn touches(world: &World, pose: Pose2) -> bool {
+    let (front, rear, half) = (0.21f32, -0.301f32, 0.2125f32);
+    let n = 30;
+    (0..=n).any(|k| {
+        let t = k as f32 / n as f32;
+        let x = rear + t * (front - rear);
+        let y = -half + t * 2.0 * half;
+        [
+            Point2::new(x, -half),
+            Point2::new(x, half),
+            Point2::new(front, y),
+            Point2::new(rear, y),
+        ]
+        .iter()
+        .any(|&p| world.is_occupied(pose.transform_point(p)))
+    })
+}
+
+/// A robot starting 2 cm from a wall, facing it (head on, at an angle, or into a corner),
+/// can neither drive nor turn in place: the safety monitor refuses every plan's first
+/// command. After two holds it backs (or turns) away slowly, plans again, and explores the
+/// two rooms to the end without ever touching a wall.
+#[test]
+fn a_robot_facing_a_wall_too_close_to_turn_backs_away_and_explores() {
+    let cases = [
+        (31u64, core::f32::consts::PI, false),
+        (32, 2.8, false),
+        (33, -2.8, false),
+        (34, -2.8, true),
+    ];
+    for (seed, heading, corner) in cases {
+        let config = MissionConfig::default();
+        let mut sim = Sim::new(two_rooms(), &config, seed);
+        // How far the outline reaches west and south of the centre at this heading.
+        let corners = [
+            (0.21f32, 0.2125f32),
+            (0.21, -0.2125),
+            (-0.301, 0.2125),
+            (-0.301, -0.2125),
+        ];
+        let reach = |f: fn(Point2) -> f32| {
+            corners
+                .iter()
+                .map(|&(x, y)| f(Pose2::new(0.0, 0.0, heading).transform_point(Point2::new(x, y))))
+                .fold(0.0f32, f32::max)
+        };
+        let west = reach(|p| -p.x);
+        let south = reach(|p| -p.y);
+        let gap = 0.02;
+        let y = if corner { 0.1 + south + gap } else { 2.5 };
+        let start = Pose2::new(0.1 + west + gap, y, heading);
+        assert!(!touches(&sim.world, start));
+        sim.add(config, start, Slip::thesis());
+        // Too close to turn in place: the turning circle (0.25 m + 0.05 m) holds the wall.
+        assert!(sim.world.clearance(start.position()) < 0.3);
+        while sim.secs() < 900.0 {
+            sim.period();
+            let pose = sim.bots[0].true_pose();
+            assert!(
+                !touches(&sim.world, pose),
+                "seed {seed}: touched a wall at {pose:?} at {} s",
+                sim.secs()
+            );
+            if matches!(sim.bots[0].mission.state(), MissionState::Done(_)) {
+                break;
+            }
+        }
+        let m = &sim.bots[0].mission;
+        assert_eq!(
+            m.state(),
+            MissionState::Done(DoneReason::NothingReachable),
+            "seed {seed} after {} s: {:?}",
+            sim.secs(),
+            m.stats()
+        );
+        assert!(m.stats().escapes >= 1, "seed {seed}: {:?}", m.stats());
+        assert!(m.stats().escapes <= 6, "seed {seed}: {:?}", m.stats());
+        let known = known_fraction(&sim);
+        assert!(
+            known > 0.97,
+            "seed {seed}: only {known} known, {:?}",
+            m.stats()
+        );
+    }
+}
+
+/// Scans given with [`Mission::on_scan_unmapped`] keep the safety monitor fresh (no stale
+/// fault, the robot keeps driving) and leave the map as it was.
+#[test]
+fn unmapped_scans_keep_the_robot_going_and_the_map_unchanged() {
+    let mut sim = cruising(21);
+    sim.bots[0].feed_scans = false;
+    let before = sim.map.grid.log_odds().to_vec();
+    let mut moved = 0;
+    for _ in 0..20 {
+        let pose = sim.bots[0].true_pose();
+        let laser = sim.bots[0].mission.config().laser;
+        let scan = sim.world.scan(pose, &laser, &[]);
+        sim.bots[0].mission.on_scan_unmapped(sim.now, &scan);
+        if moving(sim.period()[0]) {
+            moved += 1;
+        }
+        assert!(
+            !matches!(sim.bots[0].mission.state(), MissionState::Fault(_)),
+            "{:?}",
+            sim.bots[0].mission.state()
+        );
+    }
+    assert!(moved >= 15, "moved in {moved} of 20 periods");
+    assert!(
+        sim.map.grid.log_odds() == before.as_slice(),
+        "the map changed"
+    );
+}

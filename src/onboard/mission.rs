@@ -9,6 +9,12 @@
 //! - scans are integrated into the shared map, the first one after each status packet and
 //!   only if it came within [`SCAN_WINDOW_S`] (or one laser period) of it: a scan is placed
 //!   at the latest odometry pose, and a stale pose smears the map while the robot turns;
+//!   a scan after a status packet whose heading turned more than [`MAX_MAPPING_TURN_RAD`]
+//!   since the previous one (20 deg/s at the SIP's 100 ms) only feeds the safety monitor:
+//!   a loaded computer delivers scans tens of milliseconds late, which at the 60 deg/s of a
+//!   turn in place fans the walls out across the map (seen end to end under load: phantom
+//!   walls inside the lab, every path then cut, the robot turning in place until the battery
+//!   ran out);
 //! - the mission steps right after each status packet (at most every [`MIN_STEP_S`], at least
 //!   every [`STEP_FALLBACK_S`]), so a command is computed from the freshest pose; each new
 //!   command is handed to the runtime once; between periods the runtime is told to
@@ -63,6 +69,8 @@ pub const BUSY_STOP_S: f64 = 0.3;
 /// A scan is integrated only if it arrives within this long after a status packet (or one
 /// laser period, if longer) \[s\].
 pub const SCAN_WINDOW_S: f64 = 0.04;
+/// A turn between two status packets above which the next scan is not mapped \[rad\] (2°).
+pub const MAX_MAPPING_TURN_RAD: f32 = 0.035;
 /// The state to save is published at least this often \[s of mission time\].
 pub const PUBLISH_EVERY_S: f64 = 1.0;
 /// After `--resume`, odometry within this distance of the saved odometry counts as continued
@@ -245,6 +253,9 @@ impl CoreMission {
             scan_taken: false,
             scan_window_s: SCAN_WINDOW_S.max(1.0 / f64::from(board.laser.rate_hz.max(1.0))),
             trajectory_step_m: 0.1,
+            scans_integrated: 0,
+            last_heading: None,
+            turning: false,
         };
         std::thread::Builder::new()
             .name("mission".into())
@@ -374,6 +385,12 @@ struct Worker {
     /// How soon after a status packet a scan must arrive to be integrated \[s\].
     scan_window_s: f64,
     trajectory_step_m: f32,
+    /// Scans integrated into the map in this run.
+    scans_integrated: u64,
+    /// Heading of the latest status packet \[rad\], and whether the robot turned faster than
+    /// mapping allows since the one before.
+    last_heading: Option<f32>,
+    turning: bool,
 }
 
 impl Worker {
@@ -402,6 +419,11 @@ impl Worker {
                 self.last_flags = RobotFlags::from_sip(status.stall_bumpers, status.flags);
                 self.last_status_s = t_s;
                 self.scan_taken = false;
+                self.turning = self.last_heading.is_some_and(|h| {
+                    libm::fabsf(crate::geometry::normalize_angle(pose_odom.theta - h))
+                        > MAX_MAPPING_TURN_RAD
+                });
+                self.last_heading = Some(pose_odom.theta);
                 let start = self.start_pose(pose_odom);
                 let mission = match &mut self.mission {
                     Some(m) => m,
@@ -427,8 +449,13 @@ impl Worker {
                 }
                 self.scan_taken = true;
                 if let Some(m) = &mut self.mission {
-                    m.on_scan(time(t_s), &scan, &mut self.map)
-                        .map_err(|e| format!("scan integration: {e}"))?;
+                    if self.turning {
+                        m.on_scan_unmapped(time(t_s), &scan);
+                    } else {
+                        m.on_scan(time(t_s), &scan, &mut self.map)
+                            .map_err(|e| format!("scan integration: {e}"))?;
+                        self.scans_integrated += 1;
+                    }
                 }
             }
             Input::Fault => {
@@ -584,7 +611,7 @@ impl Worker {
                 energy_used_steps: base.energy_used_steps + stats.steps,
                 faults: base.faults + u64::from(stats.faults),
                 reconnects: base.reconnects,
-                scans: base.scans,
+                scans: base.scans + self.scans_integrated,
             },
             coverage: known_fraction(&self.map),
             finished,
@@ -599,6 +626,7 @@ impl Worker {
                 "decisions": stats.decisions,
                 "failed_decisions": stats.failed_decisions,
                 "replans": stats.replans,
+                "escapes": stats.escapes,
                 "faults": stats.faults,
                 "stopped_s": stats.stopped_s,
                 "safety": format!("{:?}", mission.monitor().state()),

@@ -8,8 +8,9 @@
 //! and apply the board's speed and acceleration limits.
 //!
 //! Safety rules this session enforces:
-//! - keep-alive: PULSE when nothing else was sent for 500 ms, so the firmware watchdog (2 s)
-//!   only fires when this program is really gone;
+//! - keep-alive: PULSE when nothing else was sent for 500 ms (a quarter of the firmware
+//!   watchdog if that is shorter), so the firmware watchdog (2 s by default) only fires when
+//!   this program or its link is really gone;
 //! - the session never repeats a velocity on its own; after [`ArcosClient::halt`] every
 //!   motion command is refused until [`ArcosClient::clear_fault`] (the mission calls it after a
 //!   fresh re-plan), so a stale velocity can never be re-sent after a fault;
@@ -342,6 +343,16 @@ impl ArcosClient {
         client.send(&ClientCommand::Config).await?;
         let config = client.await_config().await?;
         client.check_identity(&config.class, &config.subclass)?;
+        // A robot whose FLASH watchdog is shorter than four keep-alive periods gets PULSEs
+        // four times per watchdog period: a short watchdog (so that a cut serial line stops
+        // the robot quickly) is never tripped by a live program.
+        if config.watchdog_ms > 0 {
+            let quarter = Duration::from_millis(u64::from(config.watchdog_ms) / 4);
+            client.options.keepalive = client
+                .options
+                .keepalive
+                .min(quarter.max(client.options.command_spacing));
+        }
         client.config = Some(config);
         client.baud_switch = client.switch_baud().await?;
         Ok(client)

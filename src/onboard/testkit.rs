@@ -270,6 +270,8 @@ pub struct FakeRobotScript {
     pub sip_period: Duration,
     /// Stop sending status packets after this many (None: never stop).
     pub sip_limit: Option<u32>,
+    /// CONFIG Watchdog \[ms\].
+    pub watchdog_ms: u16,
 }
 
 impl Default for FakeRobotScript {
@@ -284,6 +286,7 @@ impl Default for FakeRobotScript {
             answers_config: true,
             sip_period: Duration::from_millis(100),
             sip_limit: None,
+            watchdog_ms: 2000,
         }
     }
 }
@@ -365,7 +368,7 @@ pub async fn run_fake_robot(mut stream: DuplexStream, script: FakeRobotScript, l
                                     trans_vel_top_mm_s: 1500,
                                     rot_acc_top_deg_s2: 300,
                                     trans_acc_top_mm_s2: 1000,
-                                    watchdog_ms: 2000,
+                                    watchdog_ms: script.watchdog_ms,
                                     rot_vel_max_deg_s: 100,
                                     trans_vel_max_mm_s: 750,
                                     sip_cycle_ms: 100,

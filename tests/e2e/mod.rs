@@ -67,8 +67,20 @@ impl Sim {
     /// Starts `serve` on `map` with the ARCOS link on loopback TCP (or on a pty symlink at
     /// `pty`) and the laser on a free loopback port, plus `extra` arguments.
     pub fn start(map: &str, pty: Option<&Path>, extra: &[&str]) -> Self {
+        Self::spawn(map, pty, "127.0.0.1:0", extra)
+    }
+
+    /// Starts `serve` on `map` with the ARCOS link on a pty symlink at `pty` and an LMS200 on
+    /// a second pty symlink at `laser`, plus `extra` arguments.
+    pub fn start_lms200(map: &str, pty: &Path, laser: &Path, extra: &[&str]) -> Self {
+        let mut args = vec!["--laser-model", "lms200"];
+        args.extend_from_slice(extra);
+        Self::spawn(map, Some(pty), laser.to_str().unwrap(), &args)
+    }
+
+    fn spawn(map: &str, pty: Option<&Path>, laser: &str, extra: &[&str]) -> Self {
         let mut cmd = Command::new(sim_binary());
-        cmd.args(["serve", "--map", map, "--laser", "127.0.0.1:0"]);
+        cmd.args(["serve", "--map", map, "--laser", laser]);
         match pty {
             Some(p) => cmd.arg("--pty").arg(p),
             None => cmd.args(["--tcp", "127.0.0.1:0"]),
@@ -332,4 +344,53 @@ fn pump(
             return;
         }
     }
+}
+
+/// One line of `papillon-sim serve --truth-log`: a robot's true state.
+#[derive(Clone, Copy, Debug)]
+pub struct Truth {
+    /// Wall-clock time of the sample \[s since the Unix epoch\].
+    pub unix_s: f64,
+    /// True pose in the world \[m, m, rad\].
+    pub x_m: f64,
+    pub y_m: f64,
+    pub theta_rad: f64,
+    /// True translational speed \[mm/s\].
+    pub speed_mm_s: f64,
+    /// True turn rate \[deg/s\].
+    pub turn_deg_s: f64,
+}
+
+impl Truth {
+    /// Whether the robot is moving at all.
+    pub fn moving(&self) -> bool {
+        self.speed_mm_s != 0.0 || self.turn_deg_s != 0.0
+    }
+}
+
+/// The samples of robot 0 in a truth log written so far (a partial last line is skipped).
+pub fn read_truth(path: &Path) -> Vec<Truth> {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    text.lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|v| v["robot"].as_u64() == Some(0))
+        .filter_map(|v| {
+            Some(Truth {
+                unix_s: v["unix_s"].as_f64()?,
+                x_m: v["x_m"].as_f64()?,
+                y_m: v["y_m"].as_f64()?,
+                theta_rad: v["theta_rad"].as_f64()?,
+                speed_mm_s: v["speed_mm_s"].as_f64()?,
+                turn_deg_s: v["turn_deg_s"].as_f64()?,
+            })
+        })
+        .collect()
+}
+
+/// Now, in seconds since the Unix epoch (the truth log's clock).
+pub fn unix_now_s() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64()
 }

@@ -67,7 +67,20 @@ pub struct Args {
     /// Robots sharing the world (1 to 16), served on consecutive endpoints.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=16))]
     pub robots: u8,
+    /// Write each robot's true pose and velocity to this file every 20 ms, as JSON lines:
+    /// `{"t_s","unix_s","robot","x_m","y_m","theta_rad","speed_mm_s","turn_deg_s",
+    /// "motors_enabled"}` (`t_s` since start, `unix_s` since the Unix epoch). The file is
+    /// created or truncated.
+    #[arg(long)]
+    pub truth_log: Option<PathBuf>,
+    /// The emulated firmware's watchdog \[ms\] (FLASH `Watchdog`, reported in CONFIG): with no
+    /// command for this long on an open session the robot halts at its deceleration.
+    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u16).range(100..))]
+    pub watchdog_ms: u16,
 }
+
+/// Period of the truth log \[s\].
+pub const TRUTH_PERIOD_S: f64 = 0.02;
 
 pub use crate::faults::{FaultSpecError, Faults};
 
@@ -83,6 +96,7 @@ pub enum LaserModel {
 /// The world and the robots, shared by the endpoint threads.
 struct Sim {
     world: World,
+    watchdog_ms: u16,
     bodies: Mutex<Vec<RobotBody>>,
     start: Instant,
     seed: u64,
@@ -212,6 +226,7 @@ fn serve(args: Args) -> Result<(), String> {
         .collect();
     let sim = Arc::new(Sim {
         world,
+        watchdog_ms: args.watchdog_ms,
         bodies: Mutex::new(bodies),
         start: Instant::now(),
         seed: args.seed,
@@ -220,9 +235,16 @@ fn serve(args: Args) -> Result<(), String> {
     });
     install_signal_handlers();
 
+    let truth = match &args.truth_log {
+        Some(path) => Some(io::BufWriter::new(
+            std::fs::File::create(path)
+                .map_err(|e| format!("cannot create truth log {}: {e}", path.display()))?,
+        )),
+        None => None,
+    };
     {
         let sim = Arc::clone(&sim);
-        thread::spawn(move || physics_loop(&sim));
+        thread::spawn(move || physics_loop(&sim, truth));
     }
 
     let mut links_to_remove = Vec::new();
@@ -312,7 +334,8 @@ fn serve(args: Args) -> Result<(), String> {
     Ok(())
 }
 
-fn physics_loop(sim: &Sim) {
+fn physics_loop(sim: &Sim, mut truth: Option<io::BufWriter<std::fs::File>>) {
+    let mut next_truth_s = 0.0;
     while !STOP.load(Ordering::SeqCst) {
         thread::sleep(Duration::from_millis(10));
         let now = sim.now_s();
@@ -326,6 +349,35 @@ fn physics_loop(sim: &Sim) {
         let dt = now - bodies[0].time_s();
         if dt > 0.0 {
             advance_all(&mut bodies, dt as f32, &sim.world, &[]);
+        }
+        if let Some(out) = truth.as_mut()
+            && now >= next_truth_s
+        {
+            next_truth_s = now + TRUTH_PERIOD_S;
+            let unix_s = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0.0, |d| d.as_secs_f64());
+            let mut lines = String::new();
+            for (i, b) in bodies.iter().enumerate() {
+                use std::fmt::Write as _;
+                let p = b.true_pose();
+                let _ = writeln!(
+                    lines,
+                    "{{\"t_s\":{now:.3},\"unix_s\":{unix_s:.3},\"robot\":{i},\"x_m\":{:.4},\"y_m\":{:.4},\"theta_rad\":{:.4},\"speed_mm_s\":{:.1},\"turn_deg_s\":{:.2},\"motors_enabled\":{}}}",
+                    p.x,
+                    p.y,
+                    p.theta,
+                    b.speed_mm_s(),
+                    b.turn_deg_s(),
+                    b.motors_enabled()
+                );
+            }
+            drop(bodies);
+            let written = out.write_all(lines.as_bytes());
+            if written.and_then(|()| out.flush()).is_err() {
+                eprintln!("papillon-sim serve: cannot write the truth log; it stops here");
+                truth = None;
+            }
         }
     }
 }
@@ -359,7 +411,7 @@ fn serve_arcos_tcp(sim: &Sim, robot: usize, mut stream: TcpStream) {
 /// idle) until EOF; a dropped link stops the robot and disables its motors. A TCP link
 /// (`drops_on_cut`) is closed when a `cut` fault begins; a serial line just goes silent.
 fn serve_arcos(sim: &Sim, robot: usize, io: &mut (impl Read + Write), drops_on_cut: bool) {
-    let mut emu = ArcosEmulator::new(ROBOT_NAME);
+    let mut emu = ArcosEmulator::new(ROBOT_NAME).with_watchdog_ms(sim.watchdog_ms);
     let link = sim.links.fetch_add(1, Ordering::SeqCst);
     let mut rng = random::seeded(sim.seed ^ (link + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
     arcos_session(sim, robot, io, &mut emu, &mut rng, drops_on_cut);

@@ -4,8 +4,9 @@
 //! p2os and AMRISim behaviour): the SYNC0/1/2 handshake answered with name, class `Pioneer`
 //! and subclass `p3dx-sh`; bare 0/1/2 packets read as SYNC before the connection and as
 //! PULSE/OPEN/CLOSE after it; motors disabled until `ENABLE 1`; a status packet every 100 ms;
-//! CONFIG and ENCODER packets on request; and the real firmware watchdog (no command for 2 s
-//! halts the robot, the next command resumes the last commanded motion).
+//! CONFIG and ENCODER packets on request; and the real firmware watchdog (no command for 2 s,
+//! or the period set with [`ArcosEmulator::with_watchdog_ms`], halts the robot at its
+//! deceleration; the next command resumes the last commanded motion).
 //!
 //! The emulator drives a [`RobotBody`] but does not step it: the caller advances the body
 //! and calls [`ArcosEmulator::tick`] with the same clock.
@@ -22,7 +23,7 @@ use crate::world::World;
 
 /// Status packet period \[s\] (CONFIG SIPcycle 100 ms).
 pub const SIP_PERIOD_S: f64 = 0.1;
-/// Firmware watchdog period \[s\] (CONFIG Watchdog 2000 ms).
+/// Firmware watchdog period \[s\] (CONFIG Watchdog 2000 ms), the FLASH default.
 pub const WATCHDOG_S: f64 = 2.0;
 /// Largest sonar range reported \[mm\] (also reported when nothing echoes).
 pub const SONAR_MAX_MM: u16 = 5000;
@@ -80,6 +81,7 @@ pub struct ArcosEmulator {
     host_baud: u8,
     commands: u64,
     watchdog_trips: u64,
+    watchdog_s: f64,
 }
 
 impl ArcosEmulator {
@@ -112,7 +114,23 @@ impl ArcosEmulator {
             host_baud: 0,
             commands: 0,
             watchdog_trips: 0,
+            watchdog_s: WATCHDOG_S,
         }
+    }
+
+    /// The same microcontroller with its FLASH watchdog set to `ms` milliseconds (the
+    /// `Watchdog` parameter, changed with ARCOScf on a real robot; CONFIG reports it). Zero
+    /// keeps the default.
+    pub fn with_watchdog_ms(mut self, ms: u16) -> Self {
+        if ms > 0 {
+            self.watchdog_s = f64::from(ms) / 1000.0;
+        }
+        self
+    }
+
+    /// The watchdog period \[s\].
+    pub fn watchdog_s(&self) -> f64 {
+        self.watchdog_s
     }
 
     /// The session state.
@@ -177,7 +195,7 @@ impl ArcosEmulator {
         if self.link != Link::Open {
             return;
         }
-        if !self.watchdog_halted && now_s - self.last_command_s >= WATCHDOG_S {
+        if !self.watchdog_halted && now_s - self.last_command_s >= self.watchdog_s {
             self.watchdog_halted = true;
             self.watchdog_trips += 1;
             body.stop();
@@ -270,7 +288,7 @@ impl ArcosEmulator {
             front_sonar: 1,
             low_battery_dv: 110,
             rev_count: 16570,
-            watchdog_ms: (WATCHDOG_S * 1000.0) as u16,
+            watchdog_ms: (self.watchdog_s * 1000.0).round() as u16,
             normal_mpacs: 1,
             rot_vel_max: self.max_turn_deg_s as u16,
             trans_vel_max: self.max_speed_mm_s as u16,

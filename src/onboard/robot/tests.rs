@@ -254,6 +254,36 @@ async fn status_events_arrive_and_pulses_keep_the_link_alive() {
 }
 
 #[tokio::test(start_paused = true)]
+async fn a_short_firmware_watchdog_gets_pulses_four_times_per_period() {
+    let script = FakeRobotScript {
+        watchdog_ms: 400,
+        ..FakeRobotScript::default()
+    };
+    let (link, log) = spawn_robot(script, None);
+    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+        .await
+        .unwrap();
+    let start = Instant::now();
+    while client
+        .next_event(start + Duration::from_millis(1000))
+        .await
+        .unwrap()
+        .is_some()
+    {}
+    let entries = log.lock().unwrap().clone();
+    let after: Vec<_> = entries.iter().filter(|e| e.0 > start).collect();
+    assert!(after.iter().all(|e| e.1 == 0), "only PULSE while idle");
+    assert!(
+        (9..=11).contains(&after.len()),
+        "{} pulses in 1 s",
+        after.len()
+    );
+    for w in after.windows(2) {
+        assert!(w[1].0 - w[0].0 <= Duration::from_millis(100) + Duration::from_millis(5));
+    }
+}
+
+#[tokio::test(start_paused = true)]
 async fn after_a_fault_motion_is_refused_and_never_resent() {
     let (link, log) = spawn_robot(FakeRobotScript::default(), None);
     let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
