@@ -5,7 +5,7 @@
 //! diagonal sqrt(2), no corner cutting, step cost times the entered cell's cost factor (see the
 //! [module root](super)). Heuristic: octile distance, consistent for these moves when every
 //! cost factor is at least 1, so the first time the goal is closed its cost is optimal and no
-//! cell is reopened. Ties on f are broken towards larger g (deeper nodes first), and cells
+//! cell is reopened. Ties on f go to the cell opened last (deeper nodes first), and cells
 //! opened at the open list's minimum f bypass the heap (a stack, expanded first); both cut work
 //! on open ground. Steps into cells that the expanded cell's parent reaches by a legal step
 //! are not relaxed when the step costs make that useless (see the search module), which
@@ -13,7 +13,7 @@
 //! slack, so the cost found is optimal up to float rounding (relative 1.2e-7); the Moving AI
 //! acceptance test checks lengths to 1e-3.
 //!
-//! Working memory (4-ary heap open list, g-values, parents, closed flags) has capacity `N`
+//! Working memory (radix heap open list, g-values, parents, closed flags) has capacity `N`
 //! and is reused across queries through generation stamps: a query neither clears nor
 //! allocates anything.
 
@@ -40,7 +40,7 @@ impl<const N: usize> Default for AStar<N> {
 }
 
 impl<const N: usize> AStar<N> {
-    /// A planner built on the stack (32 bytes per cell). For large `N` on a host prefer
+    /// A planner built on the stack (28 bytes per cell). For large `N` on a host prefer
     /// [`Self::new_boxed`].
     pub const fn new() -> Self {
         Self {

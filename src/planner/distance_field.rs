@@ -100,7 +100,7 @@ impl<const N: usize> Default for DistanceField<N> {
 }
 
 impl<const N: usize> DistanceField<N> {
-    /// An empty field built on the stack (34 bytes per cell). For large `N` on a host
+    /// An empty field built on the stack (30 bytes per cell). For large `N` on a host
     /// prefer [`Self::new_boxed`].
     pub const fn new() -> Self {
         Self {

@@ -1,7 +1,6 @@
 //! Working memory shared by A* and the distance field: per-cell g-values, parents and
-//! generation stamps, and an indexed 4-ary min-heap with decrease-key (the d-ary heap of
-//! Johnson, "Priority queues with update and finding minimum spanning trees", Information
-//! Processing Letters 4(3), 1975). Nothing is cleared between queries: a cell's entries are
+//! generation stamps, and a monotone radix heap with decrease-key (Ahuja, Mehlhorn, Orlin &
+//! Tarjan, "Faster algorithms for the shortest path problem", JACM 37(2), 1990). Nothing is cleared between queries: a cell's entries are
 //! valid only if its stamp carries the current generation.
 
 use super::traversability::{MOVES, Traversability};
@@ -26,28 +25,36 @@ struct Link {
     /// Parent cell times 8 plus the index in [`MOVES`] of the step from it
     /// (`NO_PARENT` for the source).
     parent: u32,
-    /// Heap position while open (or `ON_STACK`).
-    pos: u32,
+    /// The cell's row (its column follows from the index without a division).
+    row: u32,
 }
 
-/// An open-list entry: the cell and its row (its column follows from the index without a
-/// division).
+/// Open-list links of a cell: its key and its neighbours in a bucket list of the radix heap
+/// (or in the bypass stack).
 #[derive(Clone, Copy)]
-struct Entry {
-    key: u64,
-    idx: u32,
-    row: u32,
+struct QLink {
+    key: u32,
+    next: u32,
+    /// Previous cell in the bucket list, `NIL` at the head, `ON_STACK` on the bypass stack.
+    prev: u32,
 }
 
 const ZERO_NODE: Node = Node { stamp: 0, g: 0.0 };
 
-const ZERO_LINK: Link = Link { parent: 0, pos: 0 };
+const ZERO_LINK: Link = Link { parent: 0, row: 0 };
 
-const ZERO_ENTRY: Entry = Entry {
+const ZERO_QLINK: QLink = QLink {
     key: 0,
-    idx: 0,
-    row: 0,
+    next: 0,
+    prev: 0,
 };
+
+/// End of a list.
+const NIL: u32 = u32::MAX;
+
+/// Buckets of the radix heap: bucket 0 holds keys equal to the last key taken, bucket `b > 0`
+/// keys whose highest bit differing from it is bit `b - 1`.
+const BUCKETS: usize = 33;
 
 /// Relative slack of the bypass test, one unit in the last place of an f32. Along a straight
 /// diagonal run f stays constant in exact arithmetic but wobbles by rounding; the slack lets
@@ -56,8 +63,8 @@ const ZERO_ENTRY: Entry = Entry {
 /// times the optimum (1.2e-7 relative, the size of the rounding of the f32 sums themselves).
 const BYPASS_SLACK: f32 = 1.0 + f32::EPSILON;
 
-/// `pos` of a cell waiting on the bypass stack rather than in the heap.
-const ON_STACK: u32 = u32::MAX;
+/// `prev` of a cell waiting on the bypass stack rather than in the heap.
+const ON_STACK: u32 = u32::MAX - 1;
 
 /// A lower bound on the cost from a cell to the goal \[cells\].
 pub(crate) trait Heuristic: Copy {
@@ -115,19 +122,32 @@ impl<'a> StepCosts<'a> {
     }
 }
 
-/// Open list: a 4-ary heap growing from the front of `heap`, plus a bypass stack of cells
-/// growing from its back. A cell opened with f no greater than the open list's minimum (up to
-/// [`BYPASS_SLACK`]) would go straight to the top of the heap; it is pushed on the stack
-/// instead and expanded next, skipping two heap operations (one of the optimisations of Sun,
-/// Yeoh, Chen & Koenig, "Simple optimization techniques for A*-based search", AAMAS 2009). It
-/// pays on open ground, where straight runs keep f constant. Heap and stack never hold more
-/// than the open cells, fewer than `N`, so they share one array.
+/// Open list: a monotone radix heap (Ahuja, Mehlhorn, Orlin & Tarjan, "Faster algorithms for
+/// the shortest path problem", JACM 37(2), 1990) over the f32 bits of f, plus a bypass stack.
+/// The heap's buckets and the stack are intrusive lists through per-cell links, so insert and
+/// decrease-key are O(1) (unlink, relink) and taking the minimum scans only the lowest
+/// non-empty bucket, spreading it over the buckets below. A radix heap needs every key
+/// entering it to be at least the last key taken; the bypass guarantees that (see
+/// [`Self::relax`]). A cell opened with f no greater than the open list's minimum (up to
+/// [`BYPASS_SLACK`]) would be the next one taken anyway; it is pushed on the stack instead and
+/// expanded next (one of the optimisations of Sun, Yeoh, Chen & Koenig, "Simple optimization
+/// techniques for A*-based search", AAMAS 2009). It pays on open ground, where straight runs
+/// keep f constant.
 pub(crate) struct SearchMemory<const N: usize> {
     nodes: [Node; N],
     links: [Link; N],
-    heap: [Entry; N],
-    heap_len: usize,
-    stack_len: usize,
+    queue: [QLink; N],
+    /// First cell of each bucket list (`NIL` when empty).
+    buckets: [u32; BUCKETS],
+    /// A lower bound on each bucket's keys: the smallest key linked into it since it was
+    /// last empty (a cell may have left since).
+    mins: [u32; BUCKETS],
+    /// Bit `b` set when bucket `b` is not empty.
+    occupied: u64,
+    /// The last key taken from the heap; every key in it is at least this.
+    last: u32,
+    /// First cell of the bypass stack (`NIL` when empty).
+    stack: u32,
     /// New cells with f up to this bypass the heap: the f of the last cell taken from the
     /// heap (the open list's minimum then) times [`BYPASS_SLACK`].
     bypass_limit: f32,
@@ -145,9 +165,12 @@ impl<const N: usize> SearchMemory<N> {
         Self {
             nodes: [ZERO_NODE; N],
             links: [ZERO_LINK; N],
-            heap: [ZERO_ENTRY; N],
-            heap_len: 0,
-            stack_len: 0,
+            queue: [ZERO_QLINK; N],
+            buckets: [NIL; BUCKETS],
+            mins: [u32::MAX; BUCKETS],
+            occupied: 0,
+            last: 0,
+            stack: NIL,
             bypass_limit: 0.0,
             generation: 0,
         }
@@ -155,8 +178,11 @@ impl<const N: usize> SearchMemory<N> {
 
     /// Starts a query: new generation, empty heap.
     fn begin(&mut self) {
-        self.heap_len = 0;
-        self.stack_len = 0;
+        self.buckets = [NIL; BUCKETS];
+        self.mins = [u32::MAX; BUCKETS];
+        self.occupied = 0;
+        self.last = 0;
+        self.stack = NIL;
         self.bypass_limit = 0.0;
         if self.generation >= u32::MAX / 2 - 1 {
             self.nodes.fill(ZERO_NODE);
@@ -245,7 +271,7 @@ impl<const N: usize> SearchMemory<N> {
         let offsets = MOVES.map(|(dc, dr)| (dc as isize + dr as isize * w as isize) as usize);
         let steps = MOVES.map(|(dc, dr)| if dc != 0 && dr != 0 { DIAGONAL } else { 1.0 });
         let mut closed = 0u32;
-        while let Some(Entry { idx, row, .. }) = self.pop_and_close() {
+        while let Some((idx, row)) = self.pop_and_close() {
             closed += 1;
             let i = idx as usize;
             let row = row as usize;
@@ -302,14 +328,19 @@ impl<const N: usize> SearchMemory<N> {
         };
         self.links[i] = Link {
             parent: NO_PARENT,
-            pos: 0,
+            row: row as u32,
         };
-        self.push(make_key(key, 0.0), i, row);
+        self.insert(i, make_key(key));
     }
 
     /// Relaxes the edge `from -> to` with tentative cost `g`; `h` gives the heuristic of `to`
     /// (called only when `to` is opened or improved). `from` is the parent link: the cell
     /// index times 8 plus the step's index in [`MOVES`].
+    ///
+    /// A cell goes to the heap only with f above `bypass_limit`, which is at least the f of
+    /// the last key taken from the heap (the key is f's bits), so its key is larger, as the
+    /// radix heap needs. Any other cell, new or improved (f rounding can put a child's f just
+    /// below its parent's), goes on the stack.
     #[inline(always)]
     fn relax(&mut self, from: u32, to: usize, row: usize, g: f32, h: impl FnOnce() -> f32) {
         let seen = 2 * self.generation;
@@ -319,123 +350,154 @@ impl<const N: usize> SearchMemory<N> {
                 return;
             }
             node.g = g;
-            let link = &mut self.links[to];
-            link.parent = from;
-            if link.pos == ON_STACK {
+            self.links[to].parent = from;
+            if self.queue[to].prev == ON_STACK {
                 return; // expanded before any heap entry anyway
             }
-            let p = link.pos as usize;
-            self.heap[p].key = make_key(g + h(), g);
-            self.sift_up(p);
-        } else if node.stamp != seen + 1 {
             let f = g + h();
             if f <= self.bypass_limit {
-                *node = Node { stamp: seen, g };
-                self.links[to] = Link {
-                    parent: from,
-                    pos: ON_STACK,
-                };
-                self.stack_len += 1;
-                self.heap[N - self.stack_len] = Entry {
-                    key: 0,
-                    idx: to as u32,
-                    row: row as u32,
-                };
+                self.unlink(to);
+                self.push_stack(to);
             } else {
-                *node = Node { stamp: seen, g };
-                self.links[to] = Link {
-                    parent: from,
-                    pos: 0,
-                };
-                self.push(make_key(f, g), to, row);
+                self.decrease(to, make_key(f));
+            }
+        } else if node.stamp != seen + 1 {
+            *node = Node { stamp: seen, g };
+            self.links[to] = Link {
+                parent: from,
+                row: row as u32,
+            };
+            let f = g + h();
+            if f <= self.bypass_limit {
+                self.push_stack(to);
+            } else {
+                self.insert(to, make_key(f));
             }
         }
     }
 
-    /// Removes the best open cell and closes it.
     #[inline(always)]
-    fn pop_and_close(&mut self) -> Option<Entry> {
-        let top = if self.stack_len > 0 {
-            let top = self.heap[N - self.stack_len];
-            self.stack_len -= 1;
-            top
+    fn push_stack(&mut self, i: usize) {
+        self.queue[i] = QLink {
+            key: 0,
+            next: self.stack,
+            prev: ON_STACK,
+        };
+        self.stack = i as u32;
+    }
+
+    /// Bucket of `key` relative to the last key taken.
+    #[inline(always)]
+    fn bucket(&self, key: u32) -> usize {
+        (32 - (key ^ self.last).leading_zeros()) as usize
+    }
+
+    /// Puts cell `i` with `key` (at least the last key taken) in the heap.
+    #[inline(always)]
+    fn insert(&mut self, i: usize, key: u32) {
+        let b = self.bucket(key);
+        self.link(i, key, b);
+    }
+
+    #[inline(always)]
+    fn link(&mut self, i: usize, key: u32, b: usize) {
+        let head = self.buckets[b];
+        self.queue[i] = QLink {
+            key,
+            next: head,
+            prev: NIL,
+        };
+        if head != NIL {
+            self.queue[head as usize].prev = i as u32;
+        }
+        self.buckets[b] = i as u32;
+        self.mins[b] = self.mins[b].min(key);
+        self.occupied |= 1 << b;
+    }
+
+    /// Takes cell `i` out of its bucket.
+    #[inline(always)]
+    fn unlink(&mut self, i: usize) {
+        let QLink { key, next, prev } = self.queue[i];
+        if next != NIL {
+            self.queue[next as usize].prev = prev;
+        }
+        if prev != NIL {
+            self.queue[prev as usize].next = next;
         } else {
-            if self.heap_len == 0 {
+            let b = self.bucket(key);
+            self.buckets[b] = next;
+            if next == NIL {
+                self.occupied &= !(1 << b);
+                self.mins[b] = u32::MAX;
+            }
+        }
+    }
+
+    /// Lowers the key of heap cell `i` to `key` (at least the last key taken).
+    #[inline(always)]
+    fn decrease(&mut self, i: usize, key: u32) {
+        let b = self.bucket(key);
+        if b == self.bucket(self.queue[i].key) {
+            self.queue[i].key = key;
+            self.mins[b] = self.mins[b].min(key);
+        } else {
+            self.unlink(i);
+            self.link(i, key, b);
+        }
+    }
+
+    /// Removes the best open cell and closes it; returns its index and row.
+    #[inline(always)]
+    fn pop_and_close(&mut self) -> Option<(u32, u32)> {
+        let i = if self.stack != NIL {
+            let i = self.stack;
+            self.stack = self.queue[i as usize].next;
+            i
+        } else {
+            if self.occupied == 0 {
                 return None;
             }
-            let top = self.heap[0];
-            self.bypass_limit = f32::from_bits((top.key >> 32) as u32) * BYPASS_SLACK;
-            self.heap_len -= 1;
-            if self.heap_len > 0 {
-                self.heap[0] = self.heap[self.heap_len];
-                self.sift_down(0);
+            while self.occupied & 1 == 0 {
+                self.redistribute();
             }
-            top
-        };
-        self.nodes[top.idx as usize].stamp = 2 * self.generation + 1;
-        Some(top)
-    }
-
-    #[inline(always)]
-    fn push(&mut self, key: u64, i: usize, row: usize) {
-        // Each cell is in the heap at most once, so `heap_len < N` here.
-        let p = self.heap_len;
-        self.heap_len += 1;
-        self.heap[p] = Entry {
-            key,
-            idx: i as u32,
-            row: row as u32,
-        };
-        self.sift_up(p);
-    }
-
-    #[inline(always)]
-    fn sift_up(&mut self, p: usize) {
-        let len = self.heap_len;
-        sift_up(&mut self.heap[..len], &mut self.links, p);
-    }
-
-    /// Fills the hole at `p` with the entry moved there: Floyd's bottom-up variant (the hole
-    /// sinks to a leaf along the smallest children, then the entry rises), which saves the
-    /// comparisons against the entry on the way down.
-    #[inline]
-    fn sift_down(&mut self, mut p: usize) {
-        let len = self.heap_len;
-        // Working on the slice of live entries lets the compiler drop the bounds checks that
-        // the `< heap.len()` tests already imply.
-        let heap = &mut self.heap[..len];
-        let links = &mut self.links;
-        let e = heap[p];
-        loop {
-            let first = 4 * p + 1;
-            let child = if let Some(c) = heap.get(first..first + 4) {
-                // Smallest of four, as two independent pairs then their winners.
-                let a = (c[1].key < c[0].key) as usize;
-                let b = 2 + (c[3].key < c[2].key) as usize;
-                first + if c[b].key < c[a].key { b } else { a }
-            } else if first < heap.len() {
-                let mut child = first;
-                for c in first + 1..heap.len() {
-                    if heap[c].key < heap[child].key {
-                        child = c;
-                    }
-                }
-                child
+            let i = self.buckets[0];
+            let next = self.queue[i as usize].next;
+            self.buckets[0] = next;
+            if next != NIL {
+                self.queue[next as usize].prev = NIL;
             } else {
-                break;
-            };
-            // SAFETY: `child < heap.len()` (tested above); `p` is the start, checked by the
-            // read of `e`, or an earlier child; the cell index of every heap entry passed a
-            // checked access to `links` when it was pushed (`open_source`, `relax`).
-            unsafe {
-                let down = *heap.get_unchecked(child);
-                *heap.get_unchecked_mut(p) = down;
-                links.get_unchecked_mut(down.idx as usize).pos = p as u32;
+                self.occupied &= !1;
+                self.mins[0] = u32::MAX;
             }
-            p = child;
+            self.bypass_limit = f32::from_bits(self.last) * BYPASS_SLACK;
+            i
+        };
+        let i = i as usize;
+        self.nodes[i].stamp = 2 * self.generation + 1;
+        Some((i as u32, self.links[i].row))
+    }
+
+    /// Makes the lower bound of the lowest non-empty bucket's keys the last key taken and
+    /// spreads that bucket over the lower ones (the cells with that key, if any, land in
+    /// bucket 0). The bound is at least the previous last key and shares its bits above the
+    /// bucket's, as every key of the bucket does, so keys in higher buckets keep their
+    /// buckets and this bucket's keys all fall lower.
+    #[cold]
+    #[inline(never)]
+    fn redistribute(&mut self) {
+        let b = self.occupied.trailing_zeros() as usize;
+        self.last = self.mins[b];
+        let mut c = self.buckets[b];
+        self.buckets[b] = NIL;
+        self.mins[b] = u32::MAX;
+        self.occupied &= !(1 << b);
+        while c != NIL {
+            let q = self.queue[c as usize];
+            let to = self.bucket(q.key);
+            self.link(c as usize, q.key, to);
+            c = q.next;
         }
-        heap[p] = e;
-        sift_up(heap, links, p);
     }
 
     /// Writes the path ending at `end` (following parents back to the source) into `out`,
@@ -524,34 +586,14 @@ const fn skip_after() -> [[u8; 256]; 8] {
     table
 }
 
-/// Moves the entry at `p` up `heap` until its parent's key is no larger, recording every
-/// entry's new position in `links`.
-#[inline(always)]
-fn sift_up(heap: &mut [Entry], links: &mut [Link], mut p: usize) {
-    let e = heap[p];
-    while p > 0 {
-        let parent = (p - 1) / 4;
-        // SAFETY: `parent < p < heap.len()` (`p` was checked by the read of `e`), and the
-        // cell index of every heap entry passed a checked access to `links` when it was
-        // pushed (`open_source`, `relax`).
-        let up = unsafe { *heap.get_unchecked(parent) };
-        if up.key <= e.key {
-            break;
-        }
-        unsafe {
-            *heap.get_unchecked_mut(p) = up;
-            links.get_unchecked_mut(up.idx as usize).pos = p as u32;
-        }
-        p = parent;
-    }
-    heap[p] = e;
-    links[e.idx as usize].pos = p as u32;
-}
-
-/// Heap key: f first (non-negative floats order like their bits), then larger g first.
+/// Heap key: the bits of f (non-negative floats order like their bits). Cells with equal keys
+/// leave in the reverse order of arrival in their bucket, which favours the cells opened
+/// last, the deeper ones. (A tie-break on g in the low half of a 64-bit key, as a comparison
+/// heap would use, spreads equal-f cells over up to 32 more buckets and costs more in moves
+/// between buckets than it saves in expansions.)
 #[inline]
-fn make_key(f: f32, g: f32) -> u64 {
-    ((f.to_bits() as u64) << 32) | (!g.to_bits()) as u64
+fn make_key(f: f32) -> u32 {
+    f.to_bits()
 }
 
 /// Octile distance between cells `(c0, r0)` and `(c1, r1)` \[cells\]: the exact cost on an
