@@ -304,22 +304,8 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         req: &DecisionRequest<'_, N>,
         targets: &[Point2],
     ) -> Evaluation {
-        self.waypoint_len = 0;
-        self.viewpoint_len = 0;
-        self.target_len = 0;
-        let mut eval = Evaluation {
-            status: CandidateStatus::Feasible,
-            gain_cells: 0,
-            energy_steps: 0.0,
-            path_length_m: 0.0,
-            fitness: WORST_FITNESS,
-        };
-        if let Err(status) = self.plan(req, targets, &mut eval) {
-            eval.status = status;
-            return eval;
-        }
-        if eval.energy_steps > self.budget_steps {
-            eval.status = CandidateStatus::OverBudget;
+        let mut eval = self.plan_targets(req, targets);
+        if eval.status != CandidateStatus::Feasible {
             return eval;
         }
         if let Err(status) = self.sample_viewpoints() {
