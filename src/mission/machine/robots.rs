@@ -394,7 +394,7 @@ impl<const N: usize> Mission<N> {
             ..self.config.explore
         };
         let (mut objective, _) = ws.parts();
-        objective.prepare(&req, &config).ok()?;
+        objective.prepare_plan(&req, &config).ok()?;
         let geom = *map.grid.geometry();
         let mut best: Option<(f32, Point2)> = None;
         for i in 0..geom.cell_count() {
@@ -413,7 +413,7 @@ impl<const N: usize> Mission<N> {
             }
         }
         let (_, target) = best?;
-        let eval = objective.evaluate_targets(&req, &[target]);
+        let eval = objective.plan_targets(&req, &[target]);
         if eval.status != CandidateStatus::Feasible {
             return None;
         }
