@@ -15,11 +15,14 @@
 //! codes and move masks of the traversability layer are copied at the start, so later changes
 //! to the layer do not leak into a sweep in progress.
 //!
-//! Working memory of capacity `N` is reused across sweeps through generation stamps.
+//! The open list is a bucket queue of unit width (Dial, "Algorithm 360: shortest-path forest
+//! with topological ordering", CACM 12(11), 1969): every step costs at least one cell, so the
+//! lowest bucket's cells are final and no heap has to be kept in order. Working memory of
+//! capacity `N` is reused across sweeps through generation stamps.
 
 use core::cell::UnsafeCell;
 
-use super::search::{SearchMemory, StepCosts, Zero};
+use super::search::{DIAGONAL, SearchMemory, StepCosts, Zero};
 use super::traversability::CODE_BLOCKED;
 use super::{PlanError, PlannedPath, Planner, Traversability, path_length_m};
 use crate::grid::{Cell, GridGeometry};
@@ -190,7 +193,14 @@ impl<const N: usize> DistanceField<N> {
         sweep.unknown_factor = trav.unknown_factor();
         sweep.uniform = trav.uniform_costs();
         sweep.done = false;
-        sweep.memory.start(s, sweep.width, Zero);
+        let largest_factor = if sweep.uniform {
+            1.0
+        } else {
+            sweep.unknown_factor.max(1.0)
+        };
+        sweep
+            .memory
+            .start_sweep(s, sweep.width, n, DIAGONAL * largest_factor);
         self.geometry = Some(*trav.geometry());
         self.source = source;
         Ok(())

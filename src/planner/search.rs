@@ -1,7 +1,10 @@
 //! Working memory shared by A* and the distance field: per-cell g-values, parents and
-//! generation stamps, and a monotone radix heap with decrease-key (Ahuja, Mehlhorn, Orlin &
-//! Tarjan, "Faster algorithms for the shortest path problem", JACM 37(2), 1990). Nothing is cleared between queries: a cell's entries are
-//! valid only if its stamp carries the current generation.
+//! generation stamps, and the open list. A* keeps a monotone radix heap with decrease-key
+//! (Ahuja, Mehlhorn, Orlin & Tarjan, "Faster algorithms for the shortest path problem", JACM
+//! 37(2), 1990); the distance field's Dijkstra sweep keeps a bucket queue of unit width
+//! (Dial, "Algorithm 360: shortest-path forest with topological ordering", CACM 12(11),
+//! 1969). Nothing is cleared between queries: a cell's entries are valid only if its stamp
+//! carries the current generation.
 
 use super::traversability::{MOVES, Traversability};
 
@@ -65,6 +68,19 @@ const BYPASS_SLACK: f32 = 1.0 + f32::EPSILON;
 
 /// `prev` of a cell waiting on the bypass stack rather than in the heap.
 const ON_STACK: u32 = u32::MAX - 1;
+
+/// Slots of the bucket queue, a power of two: bucket `b` (costs in `[b, b + 1)` cells) lives
+/// in slot `b % SLOTS`. The open cells' costs span less than the largest step plus one, so
+/// steps of up to `SLOTS - 2` cells keep every open bucket in its own slot.
+const SLOTS: usize = 64;
+
+/// Largest step cost \[cells\] the bucket queue takes; beyond it the sweep keeps the radix
+/// heap.
+const MAX_BUCKET_STEP: f32 = (SLOTS - 2) as f32;
+
+/// Largest cost \[cells\] a bucket index may reach (it is a `u32`, kept well clear of the
+/// top).
+const MAX_BUCKET_COST: f32 = (1u32 << 31) as f32;
 
 /// A lower bound on the cost from a cell to the goal \[cells\].
 pub(crate) trait Heuristic: Copy {
@@ -151,6 +167,14 @@ pub(crate) struct SearchMemory<const N: usize> {
     /// New cells with f up to this bypass the heap: the f of the last cell taken from the
     /// heap (the open list's minimum then) times [`BYPASS_SLACK`].
     bypass_limit: f32,
+    /// The open list is the bucket queue ([`Self::start_sweep`]), not the radix heap.
+    bucketed: bool,
+    /// First cell of each bucket-queue slot (`NIL` when empty).
+    slots: [u32; SLOTS],
+    /// Bucket the queue takes cells from: no open cell lies in a lower one.
+    cursor: u32,
+    /// Cells in the bucket queue.
+    queued: u32,
     generation: u32,
 }
 
@@ -172,6 +196,10 @@ impl<const N: usize> SearchMemory<N> {
             last: 0,
             stack: NIL,
             bypass_limit: 0.0,
+            bucketed: false,
+            slots: [NIL; SLOTS],
+            cursor: 0,
+            queued: 0,
             generation: 0,
         }
     }
@@ -184,6 +212,10 @@ impl<const N: usize> SearchMemory<N> {
         self.last = 0;
         self.stack = NIL;
         self.bypass_limit = 0.0;
+        self.bucketed = false;
+        self.slots = [NIL; SLOTS];
+        self.cursor = 0;
+        self.queued = 0;
         if self.generation >= u32::MAX / 2 - 1 {
             self.nodes.fill(ZERO_NODE);
             self.generation = 0;
@@ -235,6 +267,28 @@ impl<const N: usize> SearchMemory<N> {
         self.open_source(source, sr, h.at(sc, sr));
     }
 
+    /// Starts a Dijkstra sweep from `source` (a passable cell of a grid of `cells` cells,
+    /// `width` wide) whose steps cost at most `max_step` cells. The open list is then a
+    /// bucket queue of unit width (Dial 1969): every step costs at least one cell, so the
+    /// cells of the lowest bucket are final when it is reached and each queue operation is
+    /// O(1), with no heap to reorder. The costs found are those of any Dijkstra sweep, bit
+    /// for bit (a cell's cost is the least sum over its final neighbours); among equally
+    /// short paths the parents may differ from the radix heap's. Falls back to the radix heap
+    /// when the steps or the grid are too large for the buckets.
+    pub(crate) fn start_sweep(&mut self, source: usize, width: usize, cells: usize, max_step: f32) {
+        self.start(source, width, Zero);
+        let fits = max_step <= MAX_BUCKET_STEP && (cells as f32) * max_step < MAX_BUCKET_COST;
+        if fits {
+            // Move the source from the heap to bucket 0.
+            self.buckets = [NIL; BUCKETS];
+            self.mins = [u32::MAX; BUCKETS];
+            self.occupied = 0;
+            self.bucketed = true;
+            self.bypass_limit = -1.0;
+            self.bucket_link(source, 0);
+        }
+    }
+
     /// Runs the search started by [`Self::start`] (or left by an earlier call) until `target`
     /// is closed or nothing is open; returns the number of cells closed by this call and
     /// whether `target` was reached. Every closed cell is expanded before the call returns,
@@ -247,17 +301,18 @@ impl<const N: usize> SearchMemory<N> {
         target: usize,
         h: impl Heuristic,
     ) -> (u32, bool) {
-        if costs.uniform {
-            self.run::<true>(costs, target, h)
-        } else {
-            self.run::<false>(costs, target, h)
+        match (costs.uniform, self.bucketed) {
+            (true, false) => self.run::<true, false>(costs, target, h),
+            (false, false) => self.run::<false, false>(costs, target, h),
+            (true, true) => self.run::<true, true>(costs, target, h),
+            (false, true) => self.run::<false, true>(costs, target, h),
         }
     }
 
     /// [`Self::resume`]; `UNIFORM`: every step costs its plain length (no cost factor to
-    /// look up).
+    /// look up); `BUCKETED`: the open list is the bucket queue.
     #[inline(always)]
-    fn run<const UNIFORM: bool>(
+    fn run<const UNIFORM: bool, const BUCKETED: bool>(
         &mut self,
         costs: &StepCosts<'_>,
         target: usize,
@@ -271,7 +326,11 @@ impl<const N: usize> SearchMemory<N> {
         let offsets = MOVES.map(|(dc, dr)| (dc as isize + dr as isize * w as isize) as usize);
         let steps = MOVES.map(|(dc, dr)| if dc != 0 && dr != 0 { DIAGONAL } else { 1.0 });
         let mut closed = 0u32;
-        while let Some((idx, row)) = self.pop_and_close() {
+        while let Some((idx, row)) = if BUCKETED {
+            self.bucket_pop_and_close()
+        } else {
+            self.pop_and_close()
+        } {
             closed += 1;
             let i = idx as usize;
             let row = row as usize;
@@ -301,7 +360,11 @@ impl<const N: usize> SearchMemory<N> {
                         let (dc, dr) = MOVES[$k];
                         let tc = col.wrapping_add(dc as usize);
                         let tr = row.wrapping_add(dr as usize);
-                        self.relax(idx << 3 | $k, to, tr, gi + step, || h.at(tc, tr));
+                        if BUCKETED {
+                            self.bucket_relax(idx << 3 | $k, to, tr, gi + step);
+                        } else {
+                            self.relax(idx << 3 | $k, to, tr, gi + step, || h.at(tc, tr));
+                        }
                     }
                 };
             }
@@ -374,6 +437,88 @@ impl<const N: usize> SearchMemory<N> {
                 self.insert(to, make_key(f));
             }
         }
+    }
+
+    /// [`Self::relax`] for the bucket queue (no heuristic: the key is g).
+    #[inline(always)]
+    fn bucket_relax(&mut self, from: u32, to: usize, row: usize, g: f32) {
+        let seen = 2 * self.generation;
+        let node = &mut self.nodes[to];
+        if node.stamp == seen {
+            if g >= node.g {
+                return;
+            }
+            node.g = g;
+            self.links[to].parent = from;
+            let b = g as u32;
+            if b != self.queue[to].key {
+                self.bucket_unlink(to);
+                self.bucket_link(to, b);
+            }
+        } else if node.stamp != seen + 1 {
+            *node = Node { stamp: seen, g };
+            self.links[to] = Link {
+                parent: from,
+                row: row as u32,
+            };
+            self.bucket_link(to, g as u32);
+        }
+    }
+
+    /// Puts cell `i` in bucket `b` (at least the cursor's).
+    #[inline(always)]
+    fn bucket_link(&mut self, i: usize, b: u32) {
+        let slot = b as usize % SLOTS;
+        let head = self.slots[slot];
+        self.queue[i] = QLink {
+            key: b,
+            next: head,
+            prev: NIL,
+        };
+        if head != NIL {
+            self.queue[head as usize].prev = i as u32;
+        }
+        self.slots[slot] = i as u32;
+        self.queued += 1;
+    }
+
+    /// Takes cell `i` out of its bucket.
+    #[inline(always)]
+    fn bucket_unlink(&mut self, i: usize) {
+        let QLink { key, next, prev } = self.queue[i];
+        if next != NIL {
+            self.queue[next as usize].prev = prev;
+        }
+        if prev != NIL {
+            self.queue[prev as usize].next = next;
+        } else {
+            self.slots[key as usize % SLOTS] = next;
+        }
+        self.queued -= 1;
+    }
+
+    /// Removes a cell of the lowest non-empty bucket and closes it; returns its index and
+    /// row.
+    #[inline(always)]
+    fn bucket_pop_and_close(&mut self) -> Option<(u32, u32)> {
+        if self.queued == 0 {
+            return None;
+        }
+        let mut slot = self.cursor as usize % SLOTS;
+        while self.slots[slot] == NIL {
+            self.cursor = self.cursor.wrapping_add(1);
+            slot = self.cursor as usize % SLOTS;
+        }
+        let i = self.slots[slot];
+        let next = self.queue[i as usize].next;
+        self.slots[slot] = next;
+        if next != NIL {
+            self.queue[next as usize].prev = NIL;
+        }
+        self.queued -= 1;
+        let i = i as usize;
+        self.nodes[i].stamp = 2 * self.generation + 1;
+        Some((i as u32, self.links[i].row))
     }
 
     #[inline(always)]

@@ -486,3 +486,68 @@ fn planners_are_interchangeable() {
     let y = cost(&mut DistanceField::<CAP>::new(), &trav, a, b);
     assert!((x - y).abs() < 1e-5);
 }
+
+/// The distance field's bucket queue settles every cell at the cost the radix heap finds, bit
+/// for bit, and closes the same cells; with steps too long for the buckets (a large Unknown
+/// cost factor) the sweep keeps the radix heap and still agrees with the reference.
+#[test]
+fn the_bucket_queue_finds_the_radix_heap_costs_bit_for_bit() {
+    use super::search::{DIAGONAL, SearchMemory, StepCosts, Zero};
+    let mut rng = random::seeded(17);
+    let mut radix = SearchMemory::<CAP>::new_boxed();
+    let mut buckets = SearchMemory::<CAP>::new_boxed();
+    let mut field = DistanceField::<CAP>::new();
+    let mut checked_cells = 0;
+    for (case, factor) in [1.0f32, 1.0, 1.6, 2.9, 30.0, 43.0, 45.0, 250.0]
+        .into_iter()
+        .cycle()
+        .take(48)
+        .enumerate()
+    {
+        let (mut grid, mut trav) = random_grid(&mut rng, [0.1, 0.25][case % 2]);
+        let config = TraversabilityConfig {
+            unknown_policy: UnknownPolicy::Traversable {
+                cost_factor: factor,
+            },
+            ..trav.config()
+        };
+        trav.set_config(config).unwrap();
+        grid.set_class(0, CellClass::Unknown, &mut trav);
+        let Some(start) = random_passable(&mut rng, &trav) else {
+            continue;
+        };
+        let g = *trav.geometry();
+        let s = g.index(start).unwrap();
+        let costs = StepCosts::of(&trav);
+        radix.start(s, g.width, Zero);
+        let (closed_radix, _) = radix.resume(&costs, usize::MAX, Zero);
+        buckets.start_sweep(s, g.width, g.cell_count(), DIAGONAL * factor);
+        let (closed_buckets, _) = buckets.resume(&costs, usize::MAX, Zero);
+        assert_eq!(closed_radix, closed_buckets, "case {case}");
+        let (gr, gb) = (radix.generation(), buckets.generation());
+        for i in 0..g.cell_count() {
+            assert_eq!(radix.is_closed_in(i, gr), buckets.is_closed_in(i, gb));
+            if radix.is_closed_in(i, gr) {
+                assert_eq!(radix.g(i).to_bits(), buckets.g(i).to_bits(), "case {case}");
+                checked_cells += 1;
+            }
+        }
+        // And the field built on it agrees with the reference Dijkstra.
+        field.compute(&trav, start).unwrap();
+        let factor_of = |c: i32, r: i32| trav.cost_factor(Cell::new(c, r));
+        for _ in 0..3 {
+            let Some(goal) = random_passable(&mut rng, &trav) else {
+                continue;
+            };
+            let expected = brute_force(32, 24, &factor_of, start, goal).map(|c| c * 0.1);
+            match (expected, field.distance_to(goal)) {
+                (Some(e), Some(d)) => assert!((e - d).abs() <= 1e-4 * e.max(1.0), "case {case}"),
+                (e, d) => assert_eq!(e, d, "case {case}"),
+            }
+        }
+    }
+    assert!(
+        checked_cells > 10_000,
+        "only {checked_cells} cells compared"
+    );
+}
