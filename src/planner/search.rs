@@ -468,31 +468,15 @@ impl<const N: usize> SearchMemory<N> {
     /// Puts cell `i` in bucket `b` (at least the cursor's).
     #[inline(always)]
     fn bucket_link(&mut self, i: usize, b: u32) {
-        let slot = b as usize % SLOTS;
-        let head = self.slots[slot];
-        self.queue[i] = QLink {
-            key: b,
-            next: head,
-            prev: NIL,
-        };
-        if head != NIL {
-            self.queue[head as usize].prev = i as u32;
-        }
-        self.slots[slot] = i as u32;
+        push_front(&mut self.queue, &mut self.slots[b as usize % SLOTS], i, b);
         self.queued += 1;
     }
 
     /// Takes cell `i` out of its bucket.
     #[inline(always)]
     fn bucket_unlink(&mut self, i: usize) {
-        let QLink { key, next, prev } = self.queue[i];
-        if next != NIL {
-            self.queue[next as usize].prev = prev;
-        }
-        if prev != NIL {
-            self.queue[prev as usize].next = next;
-        } else {
-            self.slots[key as usize % SLOTS] = next;
+        if let Some(next) = remove(&mut self.queue, i) {
+            self.slots[self.queue[i].key as usize % SLOTS] = next;
         }
         self.queued -= 1;
     }
@@ -509,14 +493,8 @@ impl<const N: usize> SearchMemory<N> {
             self.cursor = self.cursor.wrapping_add(1);
             slot = self.cursor as usize % SLOTS;
         }
-        let i = self.slots[slot];
-        let next = self.queue[i as usize].next;
-        self.slots[slot] = next;
-        if next != NIL {
-            self.queue[next as usize].prev = NIL;
-        }
+        let i = pop_front(&mut self.queue, &mut self.slots[slot]);
         self.queued -= 1;
-        let i = i as usize;
         self.nodes[i].stamp = 2 * self.generation + 1;
         Some((i as u32, self.links[i].row))
     }
@@ -546,16 +524,7 @@ impl<const N: usize> SearchMemory<N> {
 
     #[inline(always)]
     fn link(&mut self, i: usize, key: u32, b: usize) {
-        let head = self.buckets[b];
-        self.queue[i] = QLink {
-            key,
-            next: head,
-            prev: NIL,
-        };
-        if head != NIL {
-            self.queue[head as usize].prev = i as u32;
-        }
-        self.buckets[b] = i as u32;
+        push_front(&mut self.queue, &mut self.buckets[b], i, key);
         self.mins[b] = self.mins[b].min(key);
         self.occupied |= 1 << b;
     }
@@ -563,14 +532,8 @@ impl<const N: usize> SearchMemory<N> {
     /// Takes cell `i` out of its bucket.
     #[inline(always)]
     fn unlink(&mut self, i: usize) {
-        let QLink { key, next, prev } = self.queue[i];
-        if next != NIL {
-            self.queue[next as usize].prev = prev;
-        }
-        if prev != NIL {
-            self.queue[prev as usize].next = next;
-        } else {
-            let b = self.bucket(key);
+        if let Some(next) = remove(&mut self.queue, i) {
+            let b = self.bucket(self.queue[i].key);
             self.buckets[b] = next;
             if next == NIL {
                 self.occupied &= !(1 << b);
@@ -596,8 +559,8 @@ impl<const N: usize> SearchMemory<N> {
     #[inline(always)]
     fn pop_and_close(&mut self) -> Option<(u32, u32)> {
         let i = if self.stack != NIL {
-            let i = self.stack;
-            self.stack = self.queue[i as usize].next;
+            let i = self.stack as usize;
+            self.stack = self.queue[i].next;
             i
         } else {
             if self.occupied == 0 {
@@ -606,19 +569,14 @@ impl<const N: usize> SearchMemory<N> {
             while self.occupied & 1 == 0 {
                 self.redistribute();
             }
-            let i = self.buckets[0];
-            let next = self.queue[i as usize].next;
-            self.buckets[0] = next;
-            if next != NIL {
-                self.queue[next as usize].prev = NIL;
-            } else {
+            let i = pop_front(&mut self.queue, &mut self.buckets[0]);
+            if self.buckets[0] == NIL {
                 self.occupied &= !1;
                 self.mins[0] = u32::MAX;
             }
             self.bypass_limit = f32::from_bits(self.last) * BYPASS_SLACK;
             i
         };
-        let i = i as usize;
         self.nodes[i].stamp = 2 * self.generation + 1;
         Some((i as u32, self.links[i].row))
     }
@@ -677,6 +635,48 @@ impl<const N: usize> SearchMemory<N> {
         }
         Ok(len)
     }
+}
+
+/// Prepends cell `i`, with `key`, to the open-list bucket whose first cell is `head`.
+#[inline(always)]
+fn push_front(queue: &mut [QLink], head: &mut u32, i: usize, key: u32) {
+    queue[i] = QLink {
+        key,
+        next: *head,
+        prev: NIL,
+    };
+    if *head != NIL {
+        queue[*head as usize].prev = i as u32;
+    }
+    *head = i as u32;
+}
+
+/// Takes cell `i` out of its bucket; if it was the first cell, returns the bucket's new
+/// first cell for the caller to store.
+#[inline(always)]
+fn remove(queue: &mut [QLink], i: usize) -> Option<u32> {
+    let QLink { next, prev, .. } = queue[i];
+    if next != NIL {
+        queue[next as usize].prev = prev;
+    }
+    if prev != NIL {
+        queue[prev as usize].next = next;
+        None
+    } else {
+        Some(next)
+    }
+}
+
+/// Takes the first cell of the (non-empty) bucket whose first cell is `head`.
+#[inline(always)]
+fn pop_front(queue: &mut [QLink], head: &mut u32) -> usize {
+    let i = *head as usize;
+    let next = queue[i].next;
+    *head = next;
+    if next != NIL {
+        queue[next as usize].prev = NIL;
+    }
+    i
 }
 
 /// The orthogonal steps of a move mask (west, east, south, north).
