@@ -46,6 +46,9 @@ const PROGRESS_M: f32 = 0.05;
 /// After this many obstacle holds in a row without progress, the robot backs or turns away
 /// from the nearest laser return before planning again.
 const ESCAPE_AFTER_HOLDS: u32 = 2;
+/// A robot that moved this far since the first replan counted against its decision has made
+/// progress: its replans count afresh \[m\].
+const REPLAN_PROGRESS_M: f32 = 1.0;
 /// Moving this far from where the holds began counts as progress \[m\].
 const ESCAPE_PROGRESS_M: f32 = 0.3;
 /// Distance driven (forward or backward) by one escape \[m\].
@@ -102,6 +105,8 @@ pub struct Mission<const N: usize> {
     goal_failures: u32,
     goal_retry_at: Time,
     replans_this_decision: u32,
+    /// Where the robot stood at the first replan counted in `replans_this_decision`.
+    replans_from: Point2,
     failed_in_row: u32,
     replan_cause: ReplanCause,
     /// A robot involved in the conflict being resolved.
@@ -192,6 +197,7 @@ impl<const N: usize> Mission<N> {
             goal_failures: 0,
             goal_retry_at: Time::ZERO,
             replans_this_decision: 0,
+            replans_from: Point2::new(0.0, 0.0),
             failed_in_row: 0,
             replan_cause: ReplanCause::ObstacleAhead,
             conflict_robot: None,
@@ -1099,6 +1105,14 @@ impl<const N: usize> Mission<N> {
         if self.targets.is_empty() {
             self.state = MissionState::Deciding;
             return;
+        }
+        // Replans count against the decision only while the robot gets nowhere: one that
+        // moved on since the first counted replan starts a fresh count.
+        let here = self.pose_map.position();
+        if self.replans_this_decision == 0 || here.distance(self.replans_from) >= REPLAN_PROGRESS_M
+        {
+            self.replans_this_decision = 0;
+            self.replans_from = here;
         }
         self.replans_this_decision += 1;
         if self.replans_this_decision > self.config.max_replans_per_decision {

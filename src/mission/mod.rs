@@ -32,9 +32,10 @@
 //! - **Replanning**: a fresh path from the current pose to the decision's remaining targets.
 //!   Caused by the safety monitor (obstacle ahead: the return is added to the map; contact or
 //!   stall: once the monitor has backed off), by a cut path, or by the end of a fault. A
-//!   decision that needed more than [`MissionConfig::max_replans_per_decision`] replans, or
-//!   whose targets can no longer be reached, is dropped: its target is blacklisted and the
-//!   mission decides again.
+//!   decision that needed more than [`MissionConfig::max_replans_per_decision`] replans
+//!   without the robot getting anywhere (less than 1 m from where the first of them was
+//!   made: a robot that moved on counts afresh), or whose targets can no longer be reached,
+//!   is dropped: its target is blacklisted and the mission decides again.
 //!   After two obstacle holds in a row without progress (no waypoint reached, less than
 //!   0.3 m moved: typically a robot too close to a wall to turn, whose every plan starts with
 //!   a command the monitor refuses), the robot first escapes: it backs away from the nearest
@@ -157,7 +158,8 @@ pub struct MissionConfig {
     pub limits: Limits,
     /// How long the robot with the higher id waits when another robot blocks it \[s\].
     pub yield_wait_s: f32,
-    /// Replans one decision may need before it is dropped and the mission decides again.
+    /// Replans one decision may need without progress (within 1 m of where the first of them
+    /// was made) before it is dropped and the mission decides again.
     pub max_replans_per_decision: u32,
     /// Without progress toward the current waypoint for this long, the path counts as blocked
     /// \[s\].

@@ -867,6 +867,56 @@ fn a_door_closing_across_the_path_causes_a_replan() {
     );
 }
 
+/// Replans count against a decision only while the robot gets nowhere: posts appearing one
+/// after another across a long path cut it more often than the limit of replans, but the
+/// robot moves on between cuts, so the goal is kept and reached (were every replan counted,
+/// it would be dropped and adopted again as a new decision).
+#[test]
+fn replans_after_progress_do_not_drop_the_decision() {
+    let config = frontier_config();
+    let limit = config.max_replans_per_decision as usize;
+    let world = World::new(12.0, 4.0);
+    let mut sim = Sim::new(world.clone(), &config, 8);
+    world.reveal(&mut sim.map);
+    sim.add(config, Pose2::new(1.0, 2.0, 0.0), Slip::none());
+    let goal = Point2::new(11.0, 2.0);
+    sim.bots[0].mission.go_to(&[goal]).unwrap();
+    // Each post appears 1.5 m ahead of the robot, across the straight line to the goal.
+    let mut posts = [2.6f32, 3.8, 5.0, 6.2, 7.4, 8.6, 9.8]
+        .into_iter()
+        .peekable();
+    while sim.secs() < 200.0 {
+        sim.period();
+        let p = sim.bots[0].true_pose().position();
+        if let Some(&x) = posts.peek()
+            && p.x > x - 1.5
+        {
+            sim.world.fill(x - 0.15, 1.85, x + 0.15, 2.15, true);
+            posts.next();
+        }
+        assert!(sim.world.clearance(p) > 0.18, "hit a post at {p:?}");
+        if p.distance(goal) < 0.1 {
+            break;
+        }
+    }
+    assert!(posts.peek().is_none(), "not every post was placed");
+    let bot = &sim.bots[0];
+    let end = bot.true_pose().position();
+    assert!(end.distance(goal) < 0.1, "stopped at {end:?}");
+    let count = |f: fn(&MissionEvent) -> bool| bot.log.iter().filter(|(_, e)| f(e)).count();
+    let cut = count(|e| {
+        matches!(
+            e,
+            MissionEvent::Replanned {
+                cause: ReplanCause::PathBlocked
+            }
+        )
+    });
+    let decided = count(|e| matches!(e, MissionEvent::Decided { .. }));
+    assert!(cut > limit, "{cut} cuts");
+    assert_eq!(decided, 1, "the goal was dropped and adopted again");
+}
+
 /// Battery: a mission with a small battery ends BatteryExhausted, having driven about what
 /// it had.
 #[test]
