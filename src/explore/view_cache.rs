@@ -12,10 +12,18 @@
 //!
 //! **Representation**: the Unknown cells one viewpoint (cell, direction of its first beam)
 //! sees are stored as a window of `2R + 1` rows of 128 bits centred on its cell (`R` the range
-//! in cells, at most [`MAX_VIEW_RADIUS_CELLS`]). A candidate's gain is the population count of
-//! the bitwise OR of its viewpoints' windows in a grid-sized bit set, so a cell seen from
-//! several viewpoints counts once (the "bitmap" union of classic visibility-based coverage
-//! planners; here it replaces per-cell generation stamps).
+//! in cells, at most [`MAX_VIEW_RADIUS_CELLS`]), with the rows where it sees nothing at either
+//! end noted so as to skip them. A candidate's gain is the population count of the bitwise OR
+//! of its viewpoints' windows in a grid-sized bit set, so a cell seen from several viewpoints
+//! counts once (the "bitmap" union of classic visibility-based coverage planners; here it
+//! replaces per-cell generation stamps).
+//!
+//! **Bit sheets**: the grid's Unknown and Occupied cells and the union are bit sets laid out
+//! row by row with a whole number of 64-bit words per row and a margin of zero bits (one word
+//! west of column 0, at least two east of the last column, [`SHEET_MARGIN_ROWS`] rows south
+//! and north). A window then starts at the same word and bit offset in every one of its rows,
+//! and never reaches past the sheet: a window row is three word reads and a shift, with no
+//! test for the grid's edges (cells off the grid read as neither Unknown nor Occupied).
 //!
 //! **Fast case**: when no Occupied cell lies among the cells the fan's templates cover, no beam
 //! is stopped, and the window is the fan's cells (precomputed per direction) AND the grid's
@@ -24,14 +32,14 @@
 //! **Cache**: an open-addressing table keyed by (cell, direction), cleared in O(1) per decision
 //! by a generation number. When the table or its arena is full, a window is computed into
 //! scratch space and used without being stored: the same result, only slower. Nothing is
-//! allocated; every capacity is a constant (15.1 MB in all, built on the heap by
+//! allocated; every capacity is a constant (15.6 MB in all, built on the heap by
 //! [`ViewCache::new_boxed`] on a host).
 //!
 //! The cache also carries the decision's [`BlockedBoxes`], with which the objective prunes
 //! its paths to waypoints without walking every line of sight (same waypoints).
 
 use crate::geometry::{Point2, Pose2};
-use crate::grid::{Cell, CellClass, GridGeometry, OccupancyGrid};
+use crate::grid::{Cell, GridGeometry, OccupancyGrid};
 use crate::math;
 use crate::planner::BlockedBoxes;
 use crate::raycast;
@@ -51,14 +59,18 @@ pub const MAX_VIEWS: usize = 8192;
 pub const VIEW_ROWS: usize = 1 << 19;
 /// Largest grid the cache handles \[cells\].
 pub const MAX_GRID_CELLS: usize = 1 << 20;
+/// Words of each bit sheet: a grid of `width` x `height` cells takes
+/// `(height + 2 * SHEET_MARGIN_ROWS) * (width.div_ceil(64) + 3)` (2 576 for a 240 x 240 grid,
+/// 21 888 for 1024 x 1024).
+pub const SHEET_WORDS: usize = 1 << 15;
+/// Rows of zero bits south and north of the grid in a bit sheet (at least the view radius).
+pub const SHEET_MARGIN_ROWS: usize = 64;
 
 const MAX_WINDOW_ROWS: usize = 2 * MAX_VIEW_RADIUS_CELLS + 1;
-const GRID_WORDS: usize = MAX_GRID_CELLS / 64 + 4;
-/// The union bit set holds bit `i + UNION_PAD` for cell `i`, so that a window reaching west of
-/// column 0 on row 0 still starts at a non-negative bit.
-const UNION_PAD: i64 = 128;
-const UNION_WORDS: usize = GRID_WORDS + 8;
 const TABLE_SLOTS: usize = 2 * MAX_VIEWS;
+/// Rows `[first, last]` of a window holding its non-zero rows (`first > last`: none).
+type Extent = [u8; 2];
+const NO_ROWS: Extent = [1, 0];
 
 /// Counters of the current decision.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -109,25 +121,30 @@ pub struct ViewCache {
     beams: usize,
     beam_direction: [u16; MAX_BEAMS],
     template: [[i8; 2]; MAX_TEMPLATE_CELLS],
-    /// Per template cell: its window word (`2 * row + half`) and bit, for the walk.
-    template_word: [u16; MAX_TEMPLATE_CELLS],
-    template_bit: [u64; MAX_TEMPLATE_CELLS],
+    /// Per template cell: its window word (`2 * row + half`) times 256 plus its bit in that
+    /// word, for the walk.
+    template_spot: [u16; MAX_TEMPLATE_CELLS],
     template_start: [u32; MAX_DIRECTIONS + 1],
+    /// Per direction `j`: how many first cells its template shares with direction `j + 1`'s.
+    shared_prefix: [u16; MAX_DIRECTIONS],
     fan_ready: [bool; MAX_DIRECTIONS],
     fans: [u128; FAN_ROWS],
-    // The decision's grid.
+    // The decision's grid, as bit sheets of `stride` words per row.
     ready: bool,
     geometry: GridGeometry,
-    unknown: [u64; GRID_WORDS],
-    occupied: [u64; GRID_WORDS],
-    union: [u64; UNION_WORDS],
+    stride: usize,
+    unknown: [u64; SHEET_WORDS],
+    occupied: [u64; SHEET_WORDS],
+    union: [u64; SHEET_WORDS],
     // The cache.
     generation: u32,
     table: [Slot; TABLE_SLOTS],
     entries: usize,
     entry_limit: usize,
     views: [u128; VIEW_ROWS],
+    extents: [Extent; MAX_VIEWS],
     scratch: [u128; MAX_WINDOW_ROWS],
+    scratch_extent: Extent,
     stats: ViewCacheStats,
     /// Blocked-cell counts of the decision's traversability layer.
     pub(crate) boxes: BlockedBoxes,
@@ -145,40 +162,35 @@ impl core::fmt::Debug for ViewCache {
     }
 }
 
-/// 128 bits of a flat bit set from bit `p` on (bits outside the set read as 0).
-#[inline]
-fn read128(bits: &[u64], p: i64) -> u128 {
-    let w = p.div_euclid(64);
-    let s = p.rem_euclid(64) as u32;
-    let get = |i: i64| -> u128 {
-        if i >= 0 && (i as usize) < bits.len() {
-            bits[i as usize] as u128
-        } else {
-            0
-        }
-    };
-    let lo = get(w) | (get(w + 1) << 64);
-    if s == 0 {
-        lo
+/// The 128 bits of a bit sheet from bit `shift` (below 64) of word `at` on (the sheet must
+/// hold the words `at` to `at + 2`).
+#[inline(always)]
+fn read128(sheet: &[u64], at: usize, shift: u32) -> u128 {
+    let w: &[u64; 3] = sheet[at..at + 3].try_into().unwrap_or(&[0; 3]);
+    let (lo, hi) = if shift == 0 {
+        (w[0], w[1])
     } else {
-        (lo >> s) | (get(w + 2) << (128 - s))
-    }
+        (
+            w[0] >> shift | w[1] << (64 - shift),
+            w[1] >> shift | w[2] << (64 - shift),
+        )
+    };
+    lo as u128 | (hi as u128) << 64
 }
 
-/// ORs `v` into a flat bit set at bit `q` on (the set must hold the words `q / 64` to
-/// `q / 64 + 2`).
+/// ORs `v` into a bit sheet from bit `shift` (below 64) of word `at` on (the sheet must hold
+/// the words `at` to `at + 2`).
 #[inline(always)]
-fn or128(bits: &mut [u64], q: usize, v: u128) {
-    let w = q / 64;
-    let s = (q % 64) as u32;
-    if s == 0 {
-        bits[w] |= v as u64;
-        bits[w + 1] |= (v >> 64) as u64;
+fn or128(sheet: &mut [u64], at: usize, shift: u32, v: u128) {
+    let (lo, hi) = (v as u64, (v >> 64) as u64);
+    let w = &mut sheet[at..at + 3];
+    if shift == 0 {
+        w[0] |= lo;
+        w[1] |= hi;
     } else {
-        let shifted = v << s;
-        bits[w] |= shifted as u64;
-        bits[w + 1] |= (shifted >> 64) as u64;
-        bits[w + 2] |= (v >> (128 - s)) as u64;
+        w[0] |= lo << shift;
+        w[1] |= hi << shift | lo >> (64 - shift);
+        w[2] |= hi >> (64 - shift);
     }
 }
 
@@ -196,7 +208,7 @@ const EMPTY_SLOT: Slot = Slot {
 };
 
 impl ViewCache {
-    /// An empty cache, for a `static` without an allocator (15.1 MB: on a host prefer
+    /// An empty cache, for a `static` without an allocator (15.6 MB: on a host prefer
     /// [`Self::new_boxed`]).
     pub const fn new() -> Self {
         Self {
@@ -214,9 +226,9 @@ impl ViewCache {
             beams: 0,
             beam_direction: [0; MAX_BEAMS],
             template: [[0; 2]; MAX_TEMPLATE_CELLS],
-            template_word: [0; MAX_TEMPLATE_CELLS],
-            template_bit: [0; MAX_TEMPLATE_CELLS],
+            template_spot: [0; MAX_TEMPLATE_CELLS],
             template_start: [0; MAX_DIRECTIONS + 1],
+            shared_prefix: [0; MAX_DIRECTIONS],
             fan_ready: [false; MAX_DIRECTIONS],
             fans: [0; FAN_ROWS],
             ready: false,
@@ -226,15 +238,18 @@ impl ViewCache {
                 resolution_m: 0.0,
                 origin: Point2::new(0.0, 0.0),
             },
-            unknown: [0; GRID_WORDS],
-            occupied: [0; GRID_WORDS],
-            union: [0; UNION_WORDS],
+            stride: 0,
+            unknown: [0; SHEET_WORDS],
+            occupied: [0; SHEET_WORDS],
+            union: [0; SHEET_WORDS],
             generation: 0,
             table: [EMPTY_SLOT; TABLE_SLOTS],
             entries: 0,
             entry_limit: MAX_VIEWS,
             views: [0; VIEW_ROWS],
+            extents: [NO_ROWS; MAX_VIEWS],
             scratch: [0; MAX_WINDOW_ROWS],
+            scratch_extent: NO_ROWS,
             stats: ViewCacheStats {
                 hits: 0,
                 misses: 0,
@@ -245,7 +260,7 @@ impl ViewCache {
         }
     }
 
-    /// An empty cache built directly on the heap (15.1 MB).
+    /// An empty cache built directly on the heap (15.6 MB).
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
         // SAFETY: every field is an integer, a float, a bool, an array or a plain struct of
@@ -277,8 +292,8 @@ impl ViewCache {
     /// Starts a decision on `grid` seen by `laser`. Returns `false` when the cached model
     /// cannot serve this grid or laser (range above [`MAX_VIEW_RADIUS_CELLS`], more than
     /// [`MAX_DIRECTIONS`] directions or [`MAX_BEAMS`] beams, templates over
-    /// [`MAX_TEMPLATE_CELLS`], grid over [`MAX_GRID_CELLS`]); the objective then traces the
-    /// beams instead.
+    /// [`MAX_TEMPLATE_CELLS`], grid over [`MAX_GRID_CELLS`] or its bit sheets over
+    /// [`SHEET_WORDS`]); the objective then traces the beams instead.
     pub(crate) fn begin<const N: usize>(
         &mut self,
         grid: &OccupancyGrid<N>,
@@ -305,17 +320,31 @@ impl ViewCache {
         if !self.templates_ok {
             return false;
         }
-        let words = cells / 64 + 1;
+        let (w, h) = (geometry.width, geometry.height);
+        let stride = w.div_ceil(64) + 3;
+        let words = (h + 2 * SHEET_MARGIN_ROWS) * stride;
+        if words > SHEET_WORDS {
+            return false;
+        }
         self.unknown[..words].fill(0);
         self.occupied[..words].fill(0);
-        self.union[..words + 8].fill(0);
-        for i in 0..cells {
-            match grid.class(i) {
-                CellClass::Unknown => self.unknown[i / 64] |= 1 << (i % 64),
-                CellClass::Occupied => self.occupied[i / 64] |= 1 << (i % 64),
-                CellClass::Free => {}
+        self.union[..words].fill(0);
+        // Column c of row r is bit c % 64 of word `(r + margin) * stride + 1 + c / 64`.
+        let log_odds = grid.log_odds();
+        for r in 0..h {
+            let at = (r + SHEET_MARGIN_ROWS) * stride + 1;
+            for (i, run) in log_odds[r * w..(r + 1) * w].chunks(64).enumerate() {
+                let (mut unknown, mut occupied) = (0u64, 0u64);
+                for (b, &l) in run.iter().enumerate() {
+                    // `CellClass::of_log_odds` without branches.
+                    unknown |= (!(l > 0.0 || l < 0.0) as u64) << b;
+                    occupied |= ((l > 0.0) as u64) << b;
+                }
+                self.unknown[at + i] = unknown;
+                self.occupied[at + i] = occupied;
             }
         }
+        self.stride = stride;
         self.generation = self.generation.wrapping_add(1);
         if self.generation == 0 {
             for s in self.table.iter_mut() {
@@ -387,11 +416,14 @@ impl ViewCache {
         if radius as usize > MAX_VIEW_RADIUS_CELLS {
             return false;
         }
+        for j in 0..m {
+            let (a, b) = (self.template_of(j), self.template_of((j + 1) % m));
+            self.shared_prefix[j] = a.iter().zip(b).take_while(|(x, y)| x == y).count() as u16;
+        }
         for t in 0..n {
             let [dc, dr] = self.template[t];
             let (k, bit) = ((dr as i32 + radius) as u16, (dc as i32 + radius) as u32);
-            self.template_word[t] = 2 * k + (bit / 64) as u16;
-            self.template_bit[t] = 1 << (bit % 64);
+            self.template_spot[t] = (2 * k + (bit / 64) as u16) << 8 | (bit % 64) as u16;
         }
         self.directions = m;
         self.beams = beams;
@@ -433,6 +465,7 @@ impl ViewCache {
         first: usize,
         mut visit: impl FnMut(usize),
     ) {
+        use crate::grid::CellClass;
         let g = grid.geometry();
         for b in 0..self.beams {
             let j = (first + self.beam_direction[b] as usize) % self.directions;
@@ -471,78 +504,139 @@ impl ViewCache {
         true
     }
 
+    /// Where the window of a viewpoint at `cell` starts in the bit sheets: the word of its
+    /// first row and the bit in that word (the same in every row).
+    #[inline]
+    fn sheet_origin(&self, cell: Cell) -> (usize, u32) {
+        // Cells are inside the grid, so both are non-negative (the margins exceed the radius).
+        let col = (cell.col as i64 - self.radius as i64 + 64) as usize;
+        let row = (cell.row as i64 - self.radius as i64 + SHEET_MARGIN_ROWS as i64) as usize;
+        (row * self.stride + col / 64, (col % 64) as u32)
+    }
+
     /// Computes the window of (`cell`, `first`) into the entry or the scratch rows.
     fn compute(&mut self, cell: Cell, first: usize, at: Window) {
         let rows = self.rows;
-        let r = self.radius as i64;
-        let (w, h) = (self.geometry.width as i64, self.geometry.height as i64);
-        let (col0, row0) = (cell.col as i64 - r, cell.row as i64 - r);
-        // Window columns inside the grid: bits lo..hi.
-        let lo = (-col0).clamp(0, rows as i64) as u32;
-        let hi = (w - col0).clamp(0, rows as i64) as u32;
-        let below = |n: u32| {
-            if n >= 128 {
-                u128::MAX
-            } else {
-                (1u128 << n) - 1
-            }
-        };
-        let col_mask = below(hi) & !below(lo);
-        // Window rows inside the grid.
-        let k0 = (-row0).clamp(0, rows as i64) as usize;
-        let k1 = (h - row0).clamp(0, rows as i64) as usize;
+        let stride = self.stride;
+        let (origin, shift) = self.sheet_origin(cell);
         let fan_ok = self.ensure_fan(first);
-        let dst = match at {
-            Window::Entry(e) => &mut self.views[e * rows..(e + 1) * rows],
-            Window::Scratch => &mut self.scratch[..rows],
+        let (dst, extent) = match at {
+            Window::Entry(e) => (
+                &mut self.views[e * rows..(e + 1) * rows],
+                &mut self.extents[e],
+            ),
+            Window::Scratch => (&mut self.scratch[..rows], &mut self.scratch_extent),
         };
-        dst.fill(0);
         if fan_ok {
             let fan = &self.fans[first * rows..(first + 1) * rows];
-            let blocked = (k0..k1).any(|k| {
-                let p = (row0 + k as i64) * w + col0;
-                fan[k] & col_mask != 0 && read128(&self.occupied, p) & col_mask & fan[k] != 0
-            });
-            if !blocked {
-                for k in k0..k1 {
-                    let bits = fan[k] & col_mask;
-                    if bits != 0 {
-                        let p = (row0 + k as i64) * w + col0;
-                        dst[k] = bits & read128(&self.unknown, p);
-                    }
+            let mut blocked = false;
+            let mut seen = NO_ROWS;
+            for (k, (out, &cover)) in dst.iter_mut().zip(fan).enumerate() {
+                *out = 0;
+                if cover == 0 {
+                    continue;
                 }
+                let at = origin + k * stride;
+                if read128(&self.occupied, at, shift) & cover != 0 {
+                    blocked = true;
+                    break;
+                }
+                *out = read128(&self.unknown, at, shift) & cover;
+                if *out != 0 {
+                    if seen[0] > seen[1] {
+                        seen[0] = k as u8;
+                    }
+                    seen[1] = k as u8;
+                }
+            }
+            if !blocked {
+                *extent = seen;
                 self.stats.unobstructed += 1;
                 return;
             }
         }
+        self.walk_beams(origin, shift, first, at);
+    }
+
+    /// Computes the window of a viewpoint whose beams may stop early (at the sheet position
+    /// `origin`, `shift`, with first direction `first`) by walking each beam.
+    #[inline(never)]
+    fn walk_beams(&mut self, origin: usize, shift: u32, first: usize, at: Window) {
+        let rows = self.rows;
+        let stride = self.stride;
         // Some beam may stop early: walk each beam over the window's Occupied and Unknown
         // bits (cells outside the grid are neither, and a beam that left the grid never
         // comes back, so walking on past the edge adds nothing).
-        let mut occupied = [0u64; 2 * MAX_WINDOW_ROWS];
-        let mut unknown = [0u64; 2 * MAX_WINDOW_ROWS];
-        let mut seen = [0u64; 2 * MAX_WINDOW_ROWS];
-        for k in k0..k1 {
-            let p = (row0 + k as i64) * w + col0;
-            let o = read128(&self.occupied, p) & col_mask;
-            let u = read128(&self.unknown, p) & col_mask;
+        // Word `2 * row + half` of the window (at most 253: a byte indexes them).
+        let mut occupied = [0u64; 256];
+        let mut unknown = [0u64; 256];
+        // Cells some beam reached: Free or Unknown.
+        let mut passed = [0u64; 256];
+        for k in 0..rows {
+            let at = origin + k * stride;
+            let o = read128(&self.occupied, at, shift);
+            let u = read128(&self.unknown, at, shift);
             (occupied[2 * k], occupied[2 * k + 1]) = (o as u64, (o >> 64) as u64);
             (unknown[2 * k], unknown[2 * k + 1]) = (u as u64, (u >> 64) as u64);
         }
+        // A beam stops at the first Occupied cell of its template (at `stop`, the template's
+        // length if none). The next beam's template shares its first `shared` cells: if the
+        // stop is among them, the next beam stops there too and reaches no new cell;
+        // otherwise it passes them (already marked) and is walked from the first cell that
+        // differs.
+        let mut last: Option<(usize, usize)> = None;
         for b in 0..self.beams {
             let j = (first + self.beam_direction[b] as usize) % self.directions;
-            let range = self.template_start[j] as usize..self.template_start[j + 1] as usize;
-            let words = &self.template_word[range.clone()];
-            let bits = &self.template_bit[range];
-            for (&word, &bit) in words.iter().zip(bits) {
-                let word = word as usize;
+            let (start, end) = (
+                self.template_start[j] as usize,
+                self.template_start[j + 1] as usize,
+            );
+            let from = match last {
+                None => 0,
+                Some((i, stop)) => {
+                    let shared = if i == j {
+                        end - start
+                    } else if (i + 1) % self.directions == j {
+                        self.shared_prefix[i] as usize
+                    } else {
+                        0
+                    };
+                    if stop < shared {
+                        last = Some((j, stop));
+                        continue;
+                    }
+                    shared
+                }
+            };
+            let mut stop = end - start;
+            for (t, &spot) in self.template_spot[start + from..end].iter().enumerate() {
+                let word = (spot >> 8) as usize;
+                let bit = 1u64 << (spot & 63);
                 if occupied[word] & bit != 0 {
+                    stop = from + t;
                     break;
                 }
-                seen[word] |= unknown[word] & bit;
+                passed[word] |= bit;
             }
+            last = Some((j, stop));
         }
+        let seen = |i: usize| passed[i] & unknown[i];
+        let (dst, extent) = match at {
+            Window::Entry(e) => (
+                &mut self.views[e * rows..(e + 1) * rows],
+                &mut self.extents[e],
+            ),
+            Window::Scratch => (&mut self.scratch[..rows], &mut self.scratch_extent),
+        };
+        *extent = NO_ROWS;
         for (k, out) in dst.iter_mut().enumerate() {
-            *out = seen[2 * k] as u128 | (seen[2 * k + 1] as u128) << 64;
+            *out = seen(2 * k) as u128 | (seen(2 * k + 1) as u128) << 64;
+            if *out != 0 {
+                if extent[0] > extent[1] {
+                    extent[0] = k as u8;
+                }
+                extent[1] = k as u8;
+            }
         }
     }
 
@@ -591,8 +685,7 @@ impl ViewCache {
     pub(crate) fn gain(&mut self, laser: &LaserConfig, viewpoints: &[Pose2]) -> u32 {
         debug_assert!(self.ready);
         let rows = self.rows;
-        let r = self.radius as i64;
-        let w = self.geometry.width as i64;
+        let stride = self.stride;
         let mut lo = usize::MAX;
         let mut hi = 0usize;
         for &vp in viewpoints {
@@ -600,23 +693,20 @@ impl ViewCache {
                 continue;
             };
             let at = self.window(cell, first);
-            let src = match at {
-                Window::Entry(e) => &self.views[e * rows..(e + 1) * rows],
-                Window::Scratch => &self.scratch[..rows],
+            let (src, [k0, k1]) = match at {
+                Window::Entry(e) => (&self.views[e * rows..(e + 1) * rows], self.extents[e]),
+                Window::Scratch => (&self.scratch[..rows], self.scratch_extent),
             };
-            let (col0, row0) = (cell.col as i64 - r, cell.row as i64 - r);
-            // Window bits are set only for cells inside the grid, so every non-zero row
-            // starts at a bit between UNION_PAD - radius and UNION_PAD + cells.
-            let start = |k: usize| ((row0 + k as i64) * w + col0 + UNION_PAD) as usize;
-            let Some(first) = src.iter().position(|&b| b != 0) else {
+            if k0 > k1 {
                 continue;
-            };
-            let last = src.iter().rposition(|&b| b != 0).unwrap_or(first);
-            lo = lo.min(start(first) / 64);
-            hi = hi.max(start(last) / 64 + 2);
-            for (k, &bits) in src.iter().enumerate().take(last + 1).skip(first) {
+            }
+            let (k0, k1) = (k0 as usize, k1 as usize);
+            let (origin, shift) = self.sheet_origin(cell);
+            lo = lo.min(origin + k0 * stride);
+            hi = hi.max(origin + k1 * stride + 2);
+            for (k, &bits) in src.iter().enumerate().take(k1 + 1).skip(k0) {
                 if bits != 0 {
-                    or128(&mut self.union, start(k), bits);
+                    or128(&mut self.union, origin + k * stride, shift, bits);
                 }
             }
         }
@@ -629,3 +719,4 @@ impl ViewCache {
         gain
     }
 }
+
