@@ -720,3 +720,90 @@ impl ViewCache {
     }
 }
 
+
+#[cfg(all(test, feature = "std"))]
+mod tests {
+    use super::*;
+    use crate::grid::{CellClass, LogOddsBounds};
+    use crate::random::{below, range_f32, seeded};
+
+    const W: usize = 70;
+    const H: usize = 45;
+
+    /// Random Occupied (8 %), Free (40 %) and Unknown cells, seeded.
+    fn grid(seed: u64) -> std::boxed::Box<OccupancyGrid<{ W * H }>> {
+        let g = GridGeometry::new(W, H, 0.1, Point2::new(-1.0, 2.0)).unwrap();
+        let mut grid = OccupancyGrid::new_boxed(g, LogOddsBounds::default()).unwrap();
+        let mut rng = seeded(seed);
+        for i in 0..W * H {
+            let x = range_f32(&mut rng, 0.0, 1.0);
+            if x < 0.08 {
+                grid.set_class(i, CellClass::Occupied, &mut ());
+            } else if x < 0.48 {
+                grid.set_class(i, CellClass::Free, &mut ());
+            }
+        }
+        grid
+    }
+
+    /// Lasers whose beams take consecutive directions, skip or repeat one, or wrap round.
+    fn lasers() -> [LaserConfig; 4] {
+        let tau = 2.0 * core::f32::consts::PI;
+        [
+            LaserConfig::thesis(),
+            LaserConfig::lms1xx(),
+            // 100.49 beams per turn: 100 directions, and every ~100th beam repeats one.
+            LaserConfig {
+                beam_count: 260,
+                step_rad: tau / 100.49,
+                max_range_m: 2.5,
+                ..LaserConfig::thesis()
+            },
+            // 99.51 beams per turn: 100 directions, and every ~100th beam skips one.
+            LaserConfig {
+                beam_count: 250,
+                step_rad: tau / 99.51,
+                first_angle_rad: 0.3,
+                max_range_m: 1.7,
+                ..LaserConfig::thesis()
+            },
+        ]
+    }
+
+    #[test]
+    fn gains_equal_the_cells_the_beams_reach_for_any_laser() {
+        let mut cache = ViewCache::new_boxed();
+        let mut rng = seeded(5);
+        let mut blocked = 0;
+        for seed in 0..3 {
+            let grid = grid(40 + seed);
+            let g = *grid.geometry();
+            for laser in lasers() {
+                assert!(cache.begin(&*grid, &laser));
+                for _ in 0..150 {
+                    let views = 1 + below(&mut rng, 3);
+                    let mut poses = [Pose2::default(); 3];
+                    for p in poses.iter_mut().take(views) {
+                        let c = g.cell(below(&mut rng, W * H));
+                        let at = g.cell_center(c);
+                        *p = Pose2::new(at.x, at.y, range_f32(&mut rng, -4.0, 4.0));
+                    }
+                    let mut seen = std::collections::HashSet::new();
+                    for &p in &poses[..views] {
+                        let Some((cell, first)) = cache.key_of(&laser, p) else {
+                            continue;
+                        };
+                        cache.visit_visible_unknown(&*grid, cell, first, |i| {
+                            seen.insert(i);
+                        });
+                    }
+                    let gain = cache.gain(&laser, &poses[..views]);
+                    assert_eq!(gain as usize, seen.len(), "{laser:?} {:?}", &poses[..views]);
+                }
+                let stats = cache.stats();
+                blocked += stats.misses + stats.overflows - stats.unobstructed;
+            }
+        }
+        assert!(blocked > 100, "{blocked}");
+    }
+}
