@@ -162,19 +162,26 @@ impl core::fmt::Debug for ViewCache {
     }
 }
 
+/// Bits `shift..shift + 64` (`shift` below 64) of the 128-bit number `hi:lo` (one
+/// double-width shift).
+#[inline(always)]
+fn shift_down(hi: u64, lo: u64, shift: u32) -> u64 {
+    (((hi as u128) << 64 | lo as u128) >> (shift & 63)) as u64
+}
+
+/// Bits `64 - shift..128 - shift` (`shift` below 64) of the 128-bit number `hi:lo` (one
+/// double-width shift).
+#[inline(always)]
+fn shift_up(hi: u64, lo: u64, shift: u32) -> u64 {
+    ((((hi as u128) << 64 | lo as u128) << (shift & 63)) >> 64) as u64
+}
+
 /// The 128 bits of a bit sheet from bit `shift` (below 64) of word `at` on (the sheet must
 /// hold the words `at` to `at + 2`).
 #[inline(always)]
 fn read128(sheet: &[u64], at: usize, shift: u32) -> u128 {
-    let w: &[u64; 3] = sheet[at..at + 3].try_into().unwrap_or(&[0; 3]);
-    let (lo, hi) = if shift == 0 {
-        (w[0], w[1])
-    } else {
-        (
-            w[0] >> shift | w[1] << (64 - shift),
-            w[1] >> shift | w[2] << (64 - shift),
-        )
-    };
+    let w = &sheet[at..at + 3];
+    let (lo, hi) = (shift_down(w[1], w[0], shift), shift_down(w[2], w[1], shift));
     lo as u128 | (hi as u128) << 64
 }
 
@@ -188,8 +195,8 @@ fn or128(sheet: &mut [u64], at: usize, shift: u32, v: u128) {
         w[0] |= lo;
         w[1] |= hi;
     } else {
-        w[0] |= lo << shift;
-        w[1] |= hi << shift | lo >> (64 - shift);
+        w[0] |= lo << (shift & 63);
+        w[1] |= shift_up(hi, lo, shift);
         w[2] |= hi >> (64 - shift);
     }
 }
