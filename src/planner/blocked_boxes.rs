@@ -77,12 +77,13 @@ impl BlockedBoxes {
         let codes = trav.codes();
         let stride = w + 1;
         self.sums[..stride].fill(0);
-        for r in 0..h {
+        for (r, row) in codes[..w * h].chunks_exact(w.max(1)).enumerate() {
+            let (below, this) = self.sums[r * stride..(r + 2) * stride].split_at_mut(stride);
+            this[0] = 0;
             let mut row_sum = 0u32;
-            self.sums[(r + 1) * stride] = 0;
-            for c in 0..w {
-                row_sum += (codes[r * w + c] == CODE_BLOCKED) as u32;
-                self.sums[(r + 1) * stride + c + 1] = self.sums[r * stride + c + 1] + row_sum;
+            for ((sum, &under), &code) in this[1..].iter_mut().zip(&below[1..]).zip(row) {
+                row_sum += (code == CODE_BLOCKED) as u32;
+                *sum = under + row_sum;
             }
         }
         self.width = w;
