@@ -201,6 +201,18 @@ fn or128(sheet: &mut [u64], at: usize, shift: u32, v: u128) {
     }
 }
 
+/// The Unknown and the Occupied cells among eight log-odds, as bits 0 to 7
+/// ([`crate::grid::CellClass::of_log_odds`] without branches, which vector compares serve).
+#[inline(always)]
+fn classes_of_eight(l: &[f32; 8]) -> (u64, u64) {
+    let (mut unknown, mut occupied) = (0u64, 0u64);
+    for (b, &l) in l.iter().enumerate() {
+        unknown |= (!(l > 0.0 || l < 0.0) as u64) << b;
+        occupied |= ((l > 0.0) as u64) << b;
+    }
+    (unknown, occupied)
+}
+
 impl Default for ViewCache {
     fn default() -> Self {
         Self::new()
@@ -342,8 +354,15 @@ impl ViewCache {
             let at = (r + SHEET_MARGIN_ROWS) * stride + 1;
             for (i, run) in log_odds[r * w..(r + 1) * w].chunks(64).enumerate() {
                 let (mut unknown, mut occupied) = (0u64, 0u64);
-                for (b, &l) in run.iter().enumerate() {
-                    // `CellClass::of_log_odds` without branches.
+                let eights = run.chunks_exact(8);
+                let tail = eights.remainder();
+                for (k, eight) in eights.enumerate() {
+                    let (u, o) = classes_of_eight(eight.try_into().unwrap_or(&[0.0; 8]));
+                    unknown |= u << (8 * k);
+                    occupied |= o << (8 * k);
+                }
+                for (b, &l) in tail.iter().enumerate() {
+                    let b = run.len() - tail.len() + b;
                     unknown |= (!(l > 0.0 || l < 0.0) as u64) << b;
                     occupied |= ((l > 0.0) as u64) << b;
                 }
