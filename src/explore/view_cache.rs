@@ -29,10 +29,17 @@
 //! is stopped, and the window is the fan's cells (precomputed per direction) AND the grid's
 //! Unknown cells, a few word operations per row instead of a walk.
 //!
+//! **Beam walk** (otherwise), with two shortcuts that give the same cells: a group of
+//! [`SECTOR_BEAMS`] consecutive beams whose templates (their "sector", precomputed per
+//! direction) meet no Occupied cell passes all its cells at once; and a beam is walked only
+//! from the first cell where its template leaves the previous beam's (if the previous beam
+//! stopped before that cell, this one stops at the same cell and reaches nothing new). The
+//! cells the beams pass, AND the Unknown cells, are the window.
+//!
 //! **Cache**: an open-addressing table keyed by (cell, direction), cleared in O(1) per decision
 //! by a generation number. When the table or its arena is full, a window is computed into
 //! scratch space and used without being stored: the same result, only slower. Nothing is
-//! allocated; every capacity is a constant (15.6 MB in all, built on the heap by
+//! allocated; every capacity is a constant (16.0 MB in all, built on the heap by
 //! [`ViewCache::new_boxed`] on a host).
 //!
 //! The cache also carries the decision's [`BlockedBoxes`], with which the objective prunes
@@ -65,6 +72,11 @@ pub const MAX_GRID_CELLS: usize = 1 << 20;
 pub const SHEET_WORDS: usize = 1 << 15;
 /// Rows of zero bits south and north of the grid in a bit sheet (at least the view radius).
 pub const SHEET_MARGIN_ROWS: usize = 64;
+
+/// Consecutive beams whose templates are tested together in a beam walk.
+pub const SECTOR_BEAMS: usize = 8;
+/// Rows of the per-direction sector windows (all directions' together; 1 MB).
+pub const SECTOR_ROWS: usize = 1 << 16;
 
 const MAX_WINDOW_ROWS: usize = 2 * MAX_VIEW_RADIUS_CELLS + 1;
 const TABLE_SLOTS: usize = 2 * MAX_VIEWS;
@@ -129,6 +141,13 @@ pub struct ViewCache {
     shared_prefix: [u16; MAX_DIRECTIONS],
     fan_ready: [bool; MAX_DIRECTIONS],
     fans: [u128; FAN_ROWS],
+    /// Per direction `j`: the cells of the templates of directions `j` to
+    /// `j + SECTOR_BEAMS - 1` (at `sectors[j * rows..]`), and the rows they cover.
+    sectors_ready: bool,
+    sectors: [u128; SECTOR_ROWS],
+    sector_rows: [Extent; MAX_DIRECTIONS],
+    /// Per group of [`SECTOR_BEAMS`] beams: whether their directions are consecutive.
+    group_consecutive: [bool; MAX_BEAMS / SECTOR_BEAMS + 1],
     // The decision's grid, as bit sheets of `stride` words per row.
     ready: bool,
     geometry: GridGeometry,
@@ -227,7 +246,7 @@ const EMPTY_SLOT: Slot = Slot {
 };
 
 impl ViewCache {
-    /// An empty cache, for a `static` without an allocator (15.6 MB: on a host prefer
+    /// An empty cache, for a `static` without an allocator (16.0 MB: on a host prefer
     /// [`Self::new_boxed`]).
     pub const fn new() -> Self {
         Self {
@@ -250,6 +269,10 @@ impl ViewCache {
             shared_prefix: [0; MAX_DIRECTIONS],
             fan_ready: [false; MAX_DIRECTIONS],
             fans: [0; FAN_ROWS],
+            sectors_ready: false,
+            sectors: [0; SECTOR_ROWS],
+            sector_rows: [NO_ROWS; MAX_DIRECTIONS],
+            group_consecutive: [false; MAX_BEAMS / SECTOR_BEAMS + 1],
             ready: false,
             geometry: GridGeometry {
                 width: 0,
@@ -279,7 +302,7 @@ impl ViewCache {
         }
     }
 
-    /// An empty cache built directly on the heap (15.6 MB).
+    /// An empty cache built directly on the heap (16.0 MB).
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
         // SAFETY: every field is an integer, a float, a bool, an array or a plain struct of
@@ -455,7 +478,42 @@ impl ViewCache {
         self.beams = beams;
         self.radius = radius as usize;
         self.rows = 2 * self.radius + 1;
+        self.build_sectors();
         true
+    }
+
+    /// Builds the sectors, if they fit in [`SECTOR_ROWS`].
+    fn build_sectors(&mut self) {
+        let (m, rows, r) = (self.directions, self.rows, self.radius as i32);
+        self.sectors_ready = m * rows <= SECTOR_ROWS;
+        if !self.sectors_ready {
+            return;
+        }
+        for j in 0..m {
+            let mut sector = [0u128; MAX_WINDOW_ROWS];
+            for i in 0..SECTOR_BEAMS {
+                for &[dc, dr] in self.template_of((j + i) % m) {
+                    sector[(dr as i32 + r) as usize] |= 1 << (dc as i32 + r);
+                }
+            }
+            let first = sector.iter().position(|&b| b != 0).unwrap_or(rows);
+            let last = sector.iter().rposition(|&b| b != 0).unwrap_or(0);
+            self.sector_rows[j] = if first <= last {
+                [first as u8, last as u8]
+            } else {
+                NO_ROWS
+            };
+            self.sectors[j * rows..(j + 1) * rows].copy_from_slice(&sector[..rows]);
+        }
+        for (g, consecutive) in self.group_consecutive.iter_mut().enumerate() {
+            let beams = g * SECTOR_BEAMS..(g + 1) * SECTOR_BEAMS;
+            *consecutive = beams.end <= self.beams
+                && beams.clone().skip(1).all(|b| {
+                    let step = self.beam_direction[b] as usize + m
+                        - self.beam_direction[b - 1] as usize;
+                    step % m == 1
+                });
+        }
     }
 
     /// The direction index of a beam at `angle` \[rad\].
@@ -585,7 +643,8 @@ impl ViewCache {
     }
 
     /// Computes the window of a viewpoint whose beams may stop early (at the sheet position
-    /// `origin`, `shift`, with first direction `first`) by walking each beam.
+    /// `origin`, `shift`, with first direction `first`) by walking its beams (see the
+    /// [module documentation](self)); out of line, so that the fast case stays small.
     #[inline(never)]
     fn walk_beams(&mut self, origin: usize, shift: u32, first: usize, at: Window) {
         let rows = self.rows;
@@ -611,8 +670,35 @@ impl ViewCache {
         // otherwise it passes them (already marked) and is walked from the first cell that
         // differs.
         let mut last: Option<(usize, usize)> = None;
-        for b in 0..self.beams {
+        let mut b = 0;
+        while b < self.beams {
             let j = (first + self.beam_direction[b] as usize) % self.directions;
+            // A group of beams whose templates meet no Occupied cell passes all their cells.
+            if self.sectors_ready
+                && b % SECTOR_BEAMS == 0
+                && self.group_consecutive[b / SECTOR_BEAMS]
+            {
+                let sector = &self.sectors[j * rows..(j + 1) * rows];
+                let [k0, k1] = self.sector_rows[j];
+                let (k0, k1) = (k0 as usize, k1 as usize);
+                let clear = (k0..=k1).all(|k| {
+                    let cells = sector[k];
+                    occupied[2 * k] & cells as u64 | occupied[2 * k + 1] & (cells >> 64) as u64
+                        == 0
+                });
+                if clear {
+                    for (k, &cells) in sector.iter().enumerate().take(k1 + 1).skip(k0) {
+                        passed[2 * k] |= cells as u64;
+                        passed[2 * k + 1] |= (cells >> 64) as u64;
+                    }
+                    let j = (j + SECTOR_BEAMS - 1) % self.directions;
+                    let length = self.template_start[j + 1] - self.template_start[j];
+                    last = Some((j, length as usize));
+                    b += SECTOR_BEAMS;
+                    continue;
+                }
+            }
+            b += 1;
             let (start, end) = (
                 self.template_start[j] as usize,
                 self.template_start[j + 1] as usize,
