@@ -232,6 +232,42 @@ fn classes_of_eight(l: &[f32; 8]) -> (u64, u64) {
     (unknown, occupied)
 }
 
+/// The window of a viewpoint whose fan (`fan`, one 128-bit row per window row) meets no
+/// Occupied cell: its fan's Unknown cells, written into `window`. `occupied` and `unknown` are
+/// the bit sheets from the window's first word on (`stride` words per row, the window at bit
+/// `shift`). Returns `false`, leaving `window` partly written, if the fan meets an Occupied
+/// cell.
+#[inline(always)]
+fn fan_window(
+    occupied: &[u64],
+    unknown: &[u64],
+    stride: usize,
+    shift: u32,
+    fan: &[u128],
+    window: &mut [u128],
+) -> bool {
+    for (k, (out, &cover)) in window.iter_mut().zip(fan).enumerate() {
+        let at = k * stride;
+        if read128(occupied, at, shift) & cover != 0 {
+            return false;
+        }
+        *out = read128(unknown, at, shift) & cover;
+    }
+    true
+}
+
+/// The first and last non-empty rows of a window.
+#[inline]
+fn extent_of(window: &[u128]) -> Extent {
+    match window.iter().position(|&b| b != 0) {
+        Some(first) => {
+            let last = window.iter().rposition(|&b| b != 0).unwrap_or(first);
+            [first as u8, last as u8]
+        }
+        None => NO_ROWS,
+    }
+}
+
 impl Default for ViewCache {
     fn default() -> Self {
         Self::new()
@@ -613,28 +649,10 @@ impl ViewCache {
         };
         if fan_ok {
             let fan = &self.fans[first * rows..(first + 1) * rows];
-            let mut blocked = false;
-            let mut seen = NO_ROWS;
-            for (k, (out, &cover)) in dst.iter_mut().zip(fan).enumerate() {
-                *out = 0;
-                if cover == 0 {
-                    continue;
-                }
-                let at = origin + k * stride;
-                if read128(&self.occupied, at, shift) & cover != 0 {
-                    blocked = true;
-                    break;
-                }
-                *out = read128(&self.unknown, at, shift) & cover;
-                if *out != 0 {
-                    if seen[0] > seen[1] {
-                        seen[0] = k as u8;
-                    }
-                    seen[1] = k as u8;
-                }
-            }
-            if !blocked {
-                *extent = seen;
+            let sheet = origin..origin + (rows - 1) * stride + 3;
+            let (occupied, unknown) = (&self.occupied[sheet.clone()], &self.unknown[sheet]);
+            if fan_window(occupied, unknown, stride, shift, fan, dst) {
+                *extent = extent_of(dst);
                 self.stats.unobstructed += 1;
                 return;
             }
@@ -740,16 +758,10 @@ impl ViewCache {
             ),
             Window::Scratch => (&mut self.scratch[..rows], &mut self.scratch_extent),
         };
-        *extent = NO_ROWS;
         for (k, out) in dst.iter_mut().enumerate() {
             *out = seen(2 * k) as u128 | (seen(2 * k + 1) as u128) << 64;
-            if *out != 0 {
-                if extent[0] > extent[1] {
-                    extent[0] = k as u8;
-                }
-                extent[1] = k as u8;
-            }
         }
+        *extent = extent_of(dst);
     }
 
     /// The window of (`cell`, `first`): from the cache, or computed (and stored if room).
