@@ -810,8 +810,8 @@ impl ViewCache {
         debug_assert!(self.ready);
         let rows = self.rows;
         let stride = self.stride;
-        let mut lo = usize::MAX;
-        let mut hi = 0usize;
+        // Sheet rows the windows touched.
+        let (mut lo, mut hi) = (usize::MAX, 0usize);
         for &vp in viewpoints {
             let Some((cell, first)) = self.key_of(laser, vp) else {
                 continue;
@@ -826,24 +826,27 @@ impl ViewCache {
             }
             let (k0, k1) = (k0 as usize, k1 as usize);
             let (origin, shift) = self.sheet_origin(cell);
-            lo = lo.min(origin + k0 * stride);
-            hi = hi.max(origin + k1 * stride + 2);
-            for (k, &bits) in src.iter().enumerate().take(k1 + 1).skip(k0) {
-                if bits != 0 {
-                    or128(&mut self.union, origin + k * stride, shift, bits);
-                }
+            let row0 = origin / stride;
+            (lo, hi) = (lo.min(row0 + k0), hi.max(row0 + k1));
+            let union = &mut self.union[origin + k0 * stride..origin + k1 * stride + 3];
+            for (k, &bits) in src[k0..=k1].iter().enumerate() {
+                or128(union, k * stride, shift, bits);
             }
         }
         if lo > hi {
             return 0;
         }
-        let touched = &mut self.union[lo..=hi];
-        let gain = touched.iter().map(|x| x.count_ones()).sum();
-        touched.fill(0);
+        // Window bits are all on the grid: only the grid's words of each row can be set.
+        let grid_words = self.geometry.width.div_ceil(64);
+        let mut gain = 0;
+        for row in self.union[lo * stride..(hi + 1) * stride].chunks_exact_mut(stride) {
+            let words = &mut row[1..1 + grid_words];
+            gain += words.iter().map(|x| x.count_ones()).sum::<u32>();
+            words.fill(0);
+        }
         gain
     }
 }
-
 
 #[cfg(all(test, feature = "std"))]
 mod tests {
