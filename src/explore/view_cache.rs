@@ -79,6 +79,8 @@ pub const SECTOR_BEAMS: usize = 8;
 pub const SECTOR_ROWS: usize = 1 << 16;
 
 const MAX_WINDOW_ROWS: usize = 2 * MAX_VIEW_RADIUS_CELLS + 1;
+/// Viewpoints whose table slots a gain reads ahead at once.
+const GAIN_BATCH: usize = 32;
 const TABLE_SLOTS: usize = 2 * MAX_VIEWS;
 /// Rows `[first, last]` of a window holding its non-zero rows (`first > last`: none).
 type Extent = [u8; 2];
@@ -545,8 +547,8 @@ impl ViewCache {
             let beams = g * SECTOR_BEAMS..(g + 1) * SECTOR_BEAMS;
             *consecutive = beams.end <= self.beams
                 && beams.clone().skip(1).all(|b| {
-                    let step = self.beam_direction[b] as usize + m
-                        - self.beam_direction[b - 1] as usize;
+                    let step =
+                        self.beam_direction[b] as usize + m - self.beam_direction[b - 1] as usize;
                     step % m == 1
                 });
         }
@@ -562,7 +564,13 @@ impl ViewCache {
     /// The viewpoint's cell and the direction of its first beam; `None` if the laser is
     /// outside the grid (such a scan counts nothing).
     pub(crate) fn key_of(&self, laser: &LaserConfig, viewpoint: Pose2) -> Option<(Cell, usize)> {
-        let pose = viewpoint.compose(laser.mount);
+        let m = laser.mount;
+        let pose = if m.x == 0.0 && m.y == 0.0 {
+            // A laser on the robot's centre: the same pose without the rotation of (0, 0).
+            Pose2::new(viewpoint.x, viewpoint.y, viewpoint.theta + m.theta)
+        } else {
+            viewpoint.compose(m)
+        };
         let cell = self.geometry.cell_at(pose.position())?;
         Some((cell, self.direction_of(pose.theta + laser.first_angle_rad)))
     }
@@ -701,8 +709,7 @@ impl ViewCache {
                 let (k0, k1) = (k0 as usize, k1 as usize);
                 let clear = (k0..=k1).all(|k| {
                     let cells = sector[k];
-                    occupied[2 * k] & cells as u64 | occupied[2 * k + 1] & (cells >> 64) as u64
-                        == 0
+                    occupied[2 * k] & cells as u64 | occupied[2 * k + 1] & (cells >> 64) as u64 == 0
                 });
                 if clear {
                     for (k, &cells) in sector.iter().enumerate().take(k1 + 1).skip(k0) {
@@ -765,12 +772,18 @@ impl ViewCache {
     }
 
     /// The window of (`cell`, `first`): from the cache, or computed (and stored if room).
-    fn window(&mut self, cell: Cell, first: usize) -> Window {
+    /// The table slot where the search for (`cell`, `first`) starts, and the cell's index.
+    #[inline]
+    fn slot_of(&self, cell: Cell, first: usize) -> (usize, u32) {
         let index = cell.row as u32 * self.geometry.width as u32 + cell.col as u32;
+        let h = index.wrapping_mul(0x9E37_79B1) ^ (first as u32).wrapping_mul(0x85EB_CA77);
+        (h as usize & (TABLE_SLOTS - 1), index)
+    }
+
+    fn window(&mut self, cell: Cell, first: usize) -> Window {
+        let (mut h, index) = self.slot_of(cell, first);
         let direction = first as u32;
         let mask = TABLE_SLOTS - 1;
-        let mut h =
-            (index.wrapping_mul(0x9E37_79B1) ^ direction.wrapping_mul(0x85EB_CA77)) as usize & mask;
         let limit = self
             .entry_limit
             .min(VIEW_ROWS / self.rows.max(1))
@@ -812,25 +825,39 @@ impl ViewCache {
         let stride = self.stride;
         // Sheet rows the windows touched.
         let (mut lo, mut hi) = (usize::MAX, 0usize);
-        for &vp in viewpoints {
-            let Some((cell, first)) = self.key_of(laser, vp) else {
-                continue;
-            };
-            let at = self.window(cell, first);
-            let (src, [k0, k1]) = match at {
-                Window::Entry(e) => (&self.views[e * rows..(e + 1) * rows], self.extents[e]),
-                Window::Scratch => (&self.scratch[..rows], self.scratch_extent),
-            };
-            if k0 > k1 {
-                continue;
+        for batch in viewpoints.chunks(GAIN_BATCH) {
+            let mut keys = [(Cell::new(0, 0), 0usize); GAIN_BATCH];
+            let mut n = 0;
+            for &vp in batch {
+                if let Some(key) = self.key_of(laser, vp) {
+                    keys[n] = key;
+                    n += 1;
+                }
             }
-            let (k0, k1) = (k0 as usize, k1 as usize);
-            let (origin, shift) = self.sheet_origin(cell);
-            let row0 = origin / stride;
-            (lo, hi) = (lo.min(row0 + k0), hi.max(row0 + k1));
-            let union = &mut self.union[origin + k0 * stride..origin + k1 * stride + 3];
-            for (k, &bits) in src[k0..=k1].iter().enumerate() {
-                or128(union, k * stride, shift, bits);
+            // Read each key's first table slot ahead: independent loads, which the processor
+            // overlaps, so that the searches below find the table in the cache.
+            let mut ahead = 0u32;
+            for &(cell, first) in &keys[..n] {
+                ahead ^= self.table[self.slot_of(cell, first).0].generation;
+            }
+            core::hint::black_box(ahead);
+            for &(cell, first) in &keys[..n] {
+                let at = self.window(cell, first);
+                let (src, [k0, k1]) = match at {
+                    Window::Entry(e) => (&self.views[e * rows..(e + 1) * rows], self.extents[e]),
+                    Window::Scratch => (&self.scratch[..rows], self.scratch_extent),
+                };
+                if k0 > k1 {
+                    continue;
+                }
+                let (k0, k1) = (k0 as usize, k1 as usize);
+                let (origin, shift) = self.sheet_origin(cell);
+                let row0 = origin / stride;
+                (lo, hi) = (lo.min(row0 + k0), hi.max(row0 + k1));
+                let union = &mut self.union[origin + k0 * stride..origin + k1 * stride + 3];
+                for (k, &bits) in src[k0..=k1].iter().enumerate() {
+                    or128(union, k * stride, shift, bits);
+                }
             }
         }
         if lo > hi {
