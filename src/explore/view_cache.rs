@@ -228,7 +228,7 @@ fn or128(sheet: &mut [u64], at: usize, shift: u32, v: u128) {
 fn classes_of_eight(l: &[f32; 8]) -> (u64, u64) {
     let (mut unknown, mut occupied) = (0u64, 0u64);
     for (b, &l) in l.iter().enumerate() {
-        unknown |= (!(l > 0.0 || l < 0.0) as u64) << b;
+        unknown |= ((l == 0.0 || l.is_nan()) as u64) << b;
         occupied |= ((l > 0.0) as u64) << b;
     }
     (unknown, occupied)
@@ -424,7 +424,7 @@ impl ViewCache {
                 }
                 for (b, &l) in tail.iter().enumerate() {
                     let b = run.len() - tail.len() + b;
-                    unknown |= (!(l > 0.0 || l < 0.0) as u64) << b;
+                    unknown |= ((l == 0.0 || l.is_nan()) as u64) << b;
                     occupied |= ((l > 0.0) as u64) << b;
                 }
                 self.unknown[at + i] = unknown;
