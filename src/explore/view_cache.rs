@@ -162,6 +162,8 @@ pub struct ViewCache {
     table: [Slot; TABLE_SLOTS],
     entries: usize,
     entry_limit: usize,
+    /// Windows the arena holds (`VIEW_ROWS / rows`, at most [`MAX_VIEWS`]).
+    arena_views: usize,
     views: [u128; VIEW_ROWS],
     extents: [Extent; MAX_VIEWS],
     scratch: [u128; MAX_WINDOW_ROWS],
@@ -326,6 +328,7 @@ impl ViewCache {
             table: [EMPTY_SLOT; TABLE_SLOTS],
             entries: 0,
             entry_limit: MAX_VIEWS,
+            arena_views: 0,
             views: [0; VIEW_ROWS],
             extents: [NO_ROWS; MAX_VIEWS],
             scratch: [0; MAX_WINDOW_ROWS],
@@ -516,6 +519,7 @@ impl ViewCache {
         self.beams = beams;
         self.radius = radius as usize;
         self.rows = 2 * self.radius + 1;
+        self.arena_views = (VIEW_ROWS / self.rows).min(MAX_VIEWS);
         self.build_sectors();
         true
     }
@@ -558,7 +562,15 @@ impl ViewCache {
     #[inline]
     fn direction_of(&self, angle: f32) -> usize {
         let delta = 2.0 * core::f32::consts::PI / self.directions as f32;
-        (math::round(angle / delta) as i64).rem_euclid(self.directions as i64) as usize
+        let (j, m) = (math::round(angle / delta) as i64, self.directions as i64);
+        // Angles within a turn either side of 0 (the usual case) need no division.
+        if (0..m).contains(&j) {
+            j as usize
+        } else if (-m..0).contains(&j) {
+            (j + m) as usize
+        } else {
+            j.rem_euclid(m) as usize
+        }
     }
 
     /// The viewpoint's cell and the direction of its first beam; `None` if the laser is
@@ -784,10 +796,7 @@ impl ViewCache {
         let (mut h, index) = self.slot_of(cell, first);
         let direction = first as u32;
         let mask = TABLE_SLOTS - 1;
-        let limit = self
-            .entry_limit
-            .min(VIEW_ROWS / self.rows.max(1))
-            .min(MAX_VIEWS);
+        let limit = self.entry_limit.min(self.arena_views);
         for _ in 0..TABLE_SLOTS {
             let slot = self.table[h];
             if slot.generation != self.generation {
