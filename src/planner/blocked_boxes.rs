@@ -77,12 +77,13 @@ impl BlockedBoxes {
         let codes = trav.codes();
         let stride = w + 1;
         self.sums[..stride].fill(0);
-        for r in 0..h {
+        for (r, row) in codes[..w * h].chunks_exact(w.max(1)).enumerate() {
+            let (below, this) = self.sums[r * stride..(r + 2) * stride].split_at_mut(stride);
+            this[0] = 0;
             let mut row_sum = 0u32;
-            self.sums[(r + 1) * stride] = 0;
-            for c in 0..w {
-                row_sum += (codes[r * w + c] == CODE_BLOCKED) as u32;
-                self.sums[(r + 1) * stride + c + 1] = self.sums[r * stride + c + 1] + row_sum;
+            for ((sum, &under), &code) in this[1..].iter_mut().zip(&below[1..]).zip(row) {
+                row_sum += (code == CODE_BLOCKED) as u32;
+                *sum = under + row_sum;
             }
         }
         self.width = w;
@@ -111,17 +112,20 @@ impl BlockedBoxes {
         // Coordinates in units of 1 / 2^(depth + 1) cell, so that the centres and every
         // midpoint are integers.
         let depth = depth.min(20);
-        let scale = 1i64 << (depth + 1);
-        let half = scale / 2;
-        let centre = |c: Cell| (c.col as i64 * scale + half, c.row as i64 * scale + half);
-        self.cover(centre(a), centre(b), scale, depth)
+        let bits = depth + 1;
+        let half = 1i64 << depth;
+        let centre = |c: Cell| ((c.col as i64) << bits | half, (c.row as i64) << bits | half);
+        self.cover(centre(a), centre(b), bits, depth)
     }
 
-    fn cover(&self, p: (i64, i64), q: (i64, i64), scale: i64, depth: u32) -> bool {
+    /// `cover` on coordinates in units of `1 / 2^bits` cell.
+    fn cover(&self, p: (i64, i64), q: (i64, i64), bits: u32, depth: u32) -> bool {
         // A point on the line x = X touches the cells on both sides of it: columns from
-        // ceil(min x) - 1 to floor(max x) hold every touched cell (likewise rows).
-        let lo = |a: i64, b: i64| (a.min(b) + scale - 1).div_euclid(scale) - 1;
-        let hi = |a: i64, b: i64| a.max(b).div_euclid(scale);
+        // ceil(min x) - 1 to floor(max x) hold every touched cell (likewise rows). (An
+        // arithmetic shift right is a division rounding down.)
+        let scale = 1i64 << bits;
+        let lo = |a: i64, b: i64| ((a.min(b) + scale - 1) >> bits) - 1;
+        let hi = |a: i64, b: i64| a.max(b) >> bits;
         let (c0, c1) = (lo(p.0, q.0), hi(p.0, q.0));
         let (r0, r1) = (lo(p.1, q.1), hi(p.1, q.1));
         let fits = |v: i64| v >= i32::MIN as i64 && v <= i32::MAX as i64;
@@ -134,7 +138,7 @@ impl BlockedBoxes {
             return false;
         }
         let m = ((p.0 + q.0) / 2, (p.1 + q.1) / 2);
-        self.cover(p, m, scale, depth - 1) && self.cover(m, q, scale, depth - 1)
+        self.cover(p, m, bits, depth - 1) && self.cover(m, q, bits, depth - 1)
     }
 
     /// Whether columns `c0..=c1` x rows `r0..=r1` lie in the grid and hold no blocked cell.
