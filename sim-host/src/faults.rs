@@ -178,6 +178,15 @@ impl Faults {
         self.laser_dropouts.iter().any(|w| w.contains(t_s))
     }
 
+    /// Applies a laser dropout to a laser's output at `t_s`: `out` holds `replies` bytes of
+    /// replies to the client's requests, then the scans the laser streamed on its own. While
+    /// the laser is silent the replies still go out and the streamed scans do not.
+    pub fn silence_laser(&self, t_s: f64, out: &mut Vec<u8>, replies: usize) {
+        if self.laser_silent(t_s) {
+            out.truncate(replies);
+        }
+    }
+
     /// Whether the e-stop is pressed at `t_s`.
     pub fn estop_pressed(&self, t_s: f64) -> bool {
         self.estops.iter().any(|w| w.contains(t_s))

@@ -255,26 +255,12 @@ fn serve(args: Args) -> Result<(), String> {
             String::new()
         };
         if let Some(link) = &args.pty {
-            let link = if n > 1 {
-                PathBuf::from(format!("{}-{robot}", link.display()))
-            } else {
-                link.clone()
-            };
-            let (master, slave_path, slave) = open_pty().map_err(|e| format!("openpty: {e}"))?;
-            make_symlink(&link, &slave_path)?;
+            let link = robot_link(link, robot, n);
             println!(
-                "{label}arcos pty {} -> {}",
-                link.display(),
-                slave_path.display()
+                "{label}arcos {}",
+                serve_on_pty(&sim, &link, robot, arcos_on_pty)?
             );
             links_to_remove.push(link);
-            let sim = Arc::clone(&sim);
-            thread::spawn(move || {
-                // Holding the slave open keeps the master readable between client sessions.
-                let _slave = slave;
-                let mut master = std::fs::File::from(master);
-                serve_arcos(&sim, robot, &mut master, false);
-            });
         }
         if let Some(addr) = &args.tcp {
             let addr = offset_addr(addr, robot)?;
@@ -298,26 +284,12 @@ fn serve(args: Args) -> Result<(), String> {
             }
             LaserModel::Lms200 => {
                 let link = args.laser.as_deref().unwrap_or("/tmp/papillon-sim-lms200");
-                let link = if n > 1 {
-                    PathBuf::from(format!("{link}-{robot}"))
-                } else {
-                    PathBuf::from(link)
-                };
-                let (master, slave_path, slave) =
-                    open_pty().map_err(|e| format!("openpty: {e}"))?;
-                make_symlink(&link, &slave_path)?;
+                let link = robot_link(Path::new(link), robot, n);
                 println!(
-                    "{label}laser lms200 pty {} -> {}",
-                    link.display(),
-                    slave_path.display()
+                    "{label}laser lms200 {}",
+                    serve_on_pty(&sim, &link, robot, serve_lms200)?
                 );
                 links_to_remove.push(link);
-                let sim = Arc::clone(&sim);
-                thread::spawn(move || {
-                    let _slave = slave;
-                    let mut master = std::fs::File::from(master);
-                    serve_lms200(&sim, robot, &mut master);
-                });
             }
         }
     }
@@ -392,6 +364,44 @@ fn accept_loop(
         let sim = Arc::clone(&sim);
         thread::spawn(move || serve(&sim, robot, stream));
     }
+}
+
+/// The link of robot `robot` of `n`: `link` itself for one robot, `link-ROBOT` for several.
+fn robot_link(link: &Path, robot: usize, n: usize) -> PathBuf {
+    if n > 1 {
+        PathBuf::from(format!("{}-{robot}", link.display()))
+    } else {
+        link.to_path_buf()
+    }
+}
+
+/// Opens a pty, links `link` to its slave and serves robot `robot`'s device on the master with
+/// `serve` in a thread of its own. Returns the line announcing it (`pty LINK -> SLAVE`).
+fn serve_on_pty(
+    sim: &Arc<Sim>,
+    link: &Path,
+    robot: usize,
+    serve: fn(&Sim, usize, &mut std::fs::File),
+) -> Result<String, String> {
+    let (master, slave_path, slave) = open_pty().map_err(|e| format!("openpty: {e}"))?;
+    make_symlink(link, &slave_path)?;
+    let sim = Arc::clone(sim);
+    thread::spawn(move || {
+        // Holding the slave open keeps the master readable between client sessions.
+        let _slave = slave;
+        let mut master = std::fs::File::from(master);
+        serve(&sim, robot, &mut master);
+    });
+    Ok(format!(
+        "pty {} -> {}",
+        link.display(),
+        slave_path.display()
+    ))
+}
+
+/// Serves robot `robot`'s microcontroller on a pty master.
+fn arcos_on_pty(sim: &Sim, robot: usize, master: &mut std::fs::File) {
+    serve_arcos(sim, robot, master, false);
 }
 
 fn serve_arcos_tcp(sim: &Sim, robot: usize, mut stream: TcpStream) {
@@ -496,9 +506,7 @@ fn serve_laser(sim: &Sim, robot: usize, mut stream: TcpStream) {
         emu.receive(now, &buf[..n], |c| sim.scan(robot, c), &mut out);
         let replies = out.len();
         emu.tick(now, |c| sim.scan(robot, c), &mut out);
-        if sim.faults.laser_silent(now) {
-            out.truncate(replies); // replies still come; streamed scans do not
-        }
+        sim.faults.silence_laser(now, &mut out, replies);
         if !out.is_empty() {
             if stream.write_all(&out).is_err() {
                 return;
@@ -524,9 +532,7 @@ fn serve_lms200(sim: &Sim, robot: usize, io: &mut (impl Read + Write)) {
         emu.receive(now, &buf[..n], &mut out);
         let replies = out.len();
         emu.tick(now, |c| sim.scan(robot, c), &mut out);
-        if sim.faults.laser_silent(now) {
-            out.truncate(replies);
-        }
+        sim.faults.silence_laser(now, &mut out, replies);
         if !out.is_empty() {
             let _ = write_some(io, &out);
             out.clear();
