@@ -229,22 +229,19 @@ impl Lms1xxClient {
     }
 
     async fn next_reply(&mut self, deadline: Instant) -> Result<Option<LaserReply>, LaserError> {
-        loop {
-            if let Some(r) = self.replies.pop_front() {
-                return Ok(Some(r));
-            }
-            let read = tokio::time::timeout_at(deadline, self.link.read(&mut self.buf)).await;
-            let n = match read {
-                Err(_) => return Ok(None),
-                Ok(r) => r?,
-            };
-            if n == 0 {
-                return Err(LaserError::Closed);
-            }
-            let mut out = Vec::new();
-            self.codec.decode(&self.buf[..n], &self.laser, &mut out);
-            self.replies.extend(out);
-        }
+        let (codec, laser) = (&mut self.codec, &self.laser);
+        next_decoded(
+            &mut *self.link,
+            &mut self.buf,
+            &mut self.replies,
+            deadline,
+            |bytes, replies| {
+                let mut out = Vec::new();
+                codec.decode(bytes, laser, &mut out);
+                replies.extend(out);
+            },
+        )
+        .await
     }
 
     /// The next scan and its arrival time, or `None` at `deadline` (a dropout when it
@@ -280,6 +277,31 @@ impl Lms1xxClient {
         let r = self.send(LaserRequest::SubscribeScans(false)).await;
         let _ = self.link.shutdown().await;
         r
+    }
+}
+
+/// The next decoded item of a laser link, or `None` at `deadline`: takes the first of
+/// `pending`, else reads the link into `buf` and lets `decode` append what the bytes complete.
+/// A link closed by the laser is [`LaserError::Closed`].
+pub(crate) async fn next_decoded<T>(
+    link: &mut dyn RobotLink,
+    buf: &mut [u8],
+    pending: &mut std::collections::VecDeque<T>,
+    deadline: Instant,
+    mut decode: impl FnMut(&[u8], &mut std::collections::VecDeque<T>),
+) -> Result<Option<T>, LaserError> {
+    loop {
+        if let Some(item) = pending.pop_front() {
+            return Ok(Some(item));
+        }
+        let n = match tokio::time::timeout_at(deadline, link.read(buf)).await {
+            Err(_) => return Ok(None),
+            Ok(read) => read?,
+        };
+        if n == 0 {
+            return Err(LaserError::Closed);
+        }
+        decode(&buf[..n], pending);
     }
 }
 

@@ -11,10 +11,10 @@
 
 use std::time::Duration;
 
-use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::io::AsyncWriteExt;
 use tokio::time::Instant;
 
-use super::laser::LaserError;
+use super::laser::{LaserError, next_decoded};
 use super::link::RobotLink;
 use crate::sensor::{LaserConfig, Scan};
 use crate::wire::lms200::{
@@ -172,30 +172,26 @@ impl Lms200Client {
     }
 
     async fn next(&mut self, deadline: Instant) -> Result<Option<Reply>, LaserError> {
-        loop {
-            if let Some(r) = self.events.pop_front() {
-                return Ok(Some(r));
-            }
-            let read = tokio::time::timeout_at(deadline, self.link.read(&mut self.buf)).await;
-            let n = match read {
-                Err(_) => return Ok(None),
-                Ok(r) => r?,
-            };
-            if n == 0 {
-                return Err(LaserError::Closed);
-            }
-            let mut input = &self.buf[..n];
-            while let Some(event) = self.decoder.decode(&mut input) {
-                self.events.push_back(match event {
-                    Event::Ack => Reply::Ack,
-                    Event::Nack => Reply::Nack,
-                    Event::Telegram(t) => match Response::parse(&t) {
-                        Ok(r) => Reply::Telegram(Box::new(r)),
-                        Err(_) => Reply::Bad,
-                    },
-                });
-            }
-        }
+        let decoder = &mut self.decoder;
+        next_decoded(
+            &mut *self.link,
+            &mut self.buf,
+            &mut self.events,
+            deadline,
+            |mut input, events| {
+                while let Some(event) = decoder.decode(&mut input) {
+                    events.push_back(match event {
+                        Event::Ack => Reply::Ack,
+                        Event::Nack => Reply::Nack,
+                        Event::Telegram(t) => match Response::parse(&t) {
+                            Ok(r) => Reply::Telegram(Box::new(r)),
+                            Err(_) => Reply::Bad,
+                        },
+                    });
+                }
+            },
+        )
+        .await
     }
 
     /// The next scan and its arrival time, or `None` at `deadline`.
@@ -252,7 +248,7 @@ mod tests {
     use super::*;
     use crate::onboard::link::DuplexLink;
     use crate::wire::lms200::{MeasuredValues, RangeUnit, Telegram};
-    use tokio::io::DuplexStream;
+    use tokio::io::{AsyncReadExt, DuplexStream};
 
     fn telegram(r: &Response) -> Vec<u8> {
         let mut buf = [0u8; MAX_TELEGRAM_LEN];
