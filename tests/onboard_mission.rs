@@ -348,6 +348,7 @@ fn a_mission_survives_corruption_a_laser_dropout_and_a_link_cut() {
     let telemetry = std::fs::read_to_string(log.join("telemetry.jsonl")).unwrap();
     assert!(telemetry.contains("no laser scan within the stale timeout"));
     assert!(telemetry.contains("\"kind\":\"reconnect\""));
+    assert!(state.counters.reconnects >= 1, "{:?}", state.counters);
     let bad: u64 = telemetry
         .lines()
         .filter(|l| l.contains("\"kind\":\"link\""))

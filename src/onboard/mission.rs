@@ -161,6 +161,7 @@ enum Input {
     Status(f64, RobotStatus),
     Scan(f64, Box<Scan>),
     Fault,
+    Reconnected,
     Step(f64),
 }
 
@@ -254,6 +255,7 @@ impl CoreMission {
             scan_window_s: SCAN_WINDOW_S.max(1.0 / f64::from(board.laser.rate_hz.max(1.0))),
             trajectory_step_m: 0.1,
             scans_integrated: 0,
+            reconnects: 0,
             last_heading: None,
             turning: false,
         };
@@ -290,6 +292,10 @@ impl MissionDriver for CoreMission {
         // Only a plan made after the fault counts (the runtime may pass an older time).
         self.fault_at_s = Some(t_s.max(self.last_step_s));
         let _ = self.tx.send(Input::Fault);
+    }
+
+    fn on_reconnect(&mut self) {
+        let _ = self.tx.send(Input::Reconnected);
     }
 
     fn replanned(&self) -> bool {
@@ -387,6 +393,8 @@ struct Worker {
     trajectory_step_m: f32,
     /// Scans integrated into the map in this run.
     scans_integrated: u64,
+    /// Link reconnections in this run.
+    reconnects: u64,
     /// Heading of the latest status packet \[rad\], and whether the robot turned faster than
     /// mapping allows since the one before.
     last_heading: Option<f32>,
@@ -466,6 +474,7 @@ impl Worker {
                     m.on_odometry(time(self.last_status_s), self.odometry.pose_odom(), flags);
                 }
             }
+            Input::Reconnected => self.reconnects += 1,
             Input::Step(t_s) => self.step(t_s),
         }
         Ok(())
@@ -610,7 +619,7 @@ impl Worker {
                 distance_m: base.distance_m + stats.distance_m,
                 energy_used_steps: base.energy_used_steps + stats.steps,
                 faults: base.faults + u64::from(stats.faults),
-                reconnects: base.reconnects,
+                reconnects: base.reconnects + self.reconnects,
                 scans: base.scans + self.scans_integrated,
             },
             coverage: known_fraction(&self.map),

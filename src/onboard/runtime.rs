@@ -84,6 +84,8 @@ pub trait MissionDriver: Send {
     fn on_scan(&mut self, t_s: f64, scan: &Scan);
     /// The runtime stopped the robot for `fault`; the mission must re-plan before moving.
     fn on_fault(&mut self, t_s: f64, fault: Fault);
+    /// The runtime lost a link and is connecting again (the saved counters count it).
+    fn on_reconnect(&mut self);
     /// Whether the mission has re-planned since its last fault (the runtime then clears the
     /// latch and lets motion through again).
     fn replanned(&self) -> bool;
@@ -454,6 +456,7 @@ pub async fn run_with(
                     break r;
                 }
                 reconnects += 1;
+                mission.on_reconnect();
                 let (state, map) = mission.snapshot();
                 tracing::warn!(
                     robot = robot_lost,
@@ -978,6 +981,7 @@ mod pump_tests {
             self.fault_at = Some(t_s);
             self.replanned = false;
         }
+        fn on_reconnect(&mut self) {}
         fn replanned(&self) -> bool {
             self.replanned
         }
@@ -1241,6 +1245,7 @@ mod reconnect_tests {
         faults: Vec<(f64, Fault)>,
         fault_at: Option<f64>,
         now_s: f64,
+        reconnects: u64,
     }
 
     impl MissionDriver for Mission {
@@ -1249,6 +1254,9 @@ mod reconnect_tests {
         fn on_fault(&mut self, t_s: f64, fault: Fault) {
             self.faults.push((t_s, fault));
             self.fault_at = Some(t_s);
+        }
+        fn on_reconnect(&mut self) {
+            self.reconnects += 1;
         }
         fn replanned(&self) -> bool {
             self.fault_at.is_none_or(|f| self.now_s - f > 0.2)
@@ -1271,6 +1279,7 @@ mod reconnect_tests {
                 mission_time_s: self.now_s,
                 counters: crate::onboard::persist::Counters {
                     faults: self.faults.len() as u64,
+                    reconnects: self.reconnects,
                     ..Default::default()
                 },
                 ..MissionState::default()
@@ -1303,6 +1312,7 @@ mod reconnect_tests {
                     faults: Vec::new(),
                     fault_at: None,
                     now_s: 0.0,
+                    reconnects: 0,
                 }) as Box<dyn MissionDriver>))
             },
             std::future::pending(),
@@ -1312,6 +1322,7 @@ mod reconnect_tests {
         assert_eq!(outcome, RunOutcome::Finished);
         let (state, _) = StateStore::open(&dir).unwrap().load().unwrap().unwrap();
         assert_eq!(state.counters.faults, 1, "one link fault");
+        assert_eq!(state.counters.reconnects, 1, "one reconnection");
         assert!(
             state.mission_time_s > 1.0,
             "mission time runs on across the reconnection: {} s",
