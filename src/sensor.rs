@@ -60,9 +60,25 @@ impl core::fmt::Display for ScanError {
 impl core::error::Error for ScanError {}
 
 /// A laser scan: beams in increasing angle order, as the laser delivered them.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Debug, Default, PartialEq)]
 pub struct Scan {
     beams: heapless::Vec<Beam, MAX_BEAMS>,
+}
+
+impl Clone for Scan {
+    fn clone(&self) -> Self {
+        Self {
+            beams: self.beams.clone(),
+        }
+    }
+
+    /// Copies only the beams `source` holds, not the whole capacity (a mission keeps its last
+    /// scan this way at every scan).
+    fn clone_from(&mut self, source: &Self) {
+        self.beams.clear();
+        // Both hold at most MAX_BEAMS beams.
+        let _ = self.beams.extend_from_slice(&source.beams);
+    }
 }
 
 impl Scan {
