@@ -469,6 +469,28 @@ mod tests {
     }
 
     #[test]
+    fn clone_from_takes_the_sources_beams_only() {
+        let beam = |i: usize| Beam {
+            angle_rad: i as f32 * 0.01,
+            range_m: (i % 3 != 0).then_some(i as f32),
+        };
+        let mut long = Scan::new();
+        let mut short = Scan::new();
+        for i in 0..10 {
+            long.push(beam(i)).unwrap();
+        }
+        for i in 0..4 {
+            short.push(beam(100 + i)).unwrap();
+        }
+        let mut kept = long.clone();
+        assert_eq!(kept, long);
+        kept.clone_from(&short);
+        assert_eq!(kept, short);
+        kept.clone_from(&long);
+        assert_eq!(kept, long);
+    }
+
+    #[test]
     fn a_walled_room_shows_occupied_walls_and_a_free_interior() {
         let mut g = grid();
         let mut laser = LaserConfig::thesis();
