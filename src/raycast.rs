@@ -281,7 +281,10 @@ impl RayCells {
         let width = self.width;
         let (step_col, step_row) = (self.step_col, self.step_row);
         let (mut left_col, mut left_row) = (self.left_col, self.left_row);
-        let (end_col, end_row) = (self.col + step_col * left_col, self.row + step_row * left_row);
+        let (end_col, end_row) = (
+            self.col + step_col * left_col,
+            self.row + step_row * left_row,
+        );
         let cell = |left_col: i64, left_row: i64| {
             Cell::new(
                 (end_col - step_col * left_col) as i32,
