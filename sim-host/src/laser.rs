@@ -41,7 +41,7 @@ fn cast_ray_along(
     let r = g.resolution_m;
     // Work in cell units from the grid origin.
     let (px, py) = ((origin.x - g.origin.x) / r, (origin.y - g.origin.y) / r);
-    let cell = Cell::new(px.floor() as i32, py.floor() as i32);
+    let cell = Cell::new(math::floor(px) as i32, math::floor(py) as i32);
     if world.is_blocked(cell) {
         return Some(0.0);
     }
