@@ -55,7 +55,7 @@ pub fn powf(x: f32, y: f32) -> f32 {
 /// cell.
 #[inline]
 pub fn floor(x: f32) -> f32 {
-    if !(abs(x) < 8_388_608.0) {
+    if x.is_nan() || abs(x) >= 8_388_608.0 {
         return x;
     }
     let t = x as i32 as f32;

@@ -78,7 +78,7 @@ pub fn traverse(
         return ray.walk_inside(visit);
     }
     let mut visited = 0;
-    while let Some((cell, index)) = ray.next() {
+    for (cell, index) in ray.by_ref() {
         visited += 1;
         if visit(cell, index).is_break() {
             return Traversal {

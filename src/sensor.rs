@@ -472,7 +472,7 @@ mod tests {
     fn clone_from_takes_the_sources_beams_only() {
         let beam = |i: usize| Beam {
             angle_rad: i as f32 * 0.01,
-            range_m: (i % 3 != 0).then_some(i as f32),
+            range_m: (!i.is_multiple_of(3)).then_some(i as f32),
         };
         let mut long = Scan::new();
         let mut short = Scan::new();
