@@ -47,9 +47,25 @@ pub fn powf(x: f32, y: f32) -> f32 {
 }
 
 /// Largest integer not greater than `x`.
+///
+/// Exact, so the same as every correct floor (libm's included): from 2^23 on every `f32` is an
+/// integer (and NaN and infinities pass through); below, truncating through an `i32` is exact
+/// and is one too high for negative non-integers. Integers, `-0.0` among them, come back
+/// unchanged. Inline instead of a libm call: grid walks floor every point they convert to a
+/// cell.
 #[inline]
 pub fn floor(x: f32) -> f32 {
-    libm::floorf(x)
+    if x.is_nan() || abs(x) >= 8_388_608.0 {
+        return x;
+    }
+    let t = x as i32 as f32;
+    if t == x {
+        x
+    } else if t > x {
+        t - 1.0
+    } else {
+        t
+    }
 }
 
 /// Smallest integer not less than `x`.
@@ -74,4 +90,52 @@ pub fn hypot(x: f32, y: f32) -> f32 {
 #[inline]
 pub fn abs(x: f32) -> f32 {
     libm::fabsf(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::random::{below, seeded};
+    use rand_core::Rng;
+
+    #[test]
+    fn floor_is_libms_floor_bit_for_bit() {
+        let same = |x: f32| {
+            let (got, want) = (floor(x), libm::floorf(x));
+            assert!(
+                got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+                "floor({x:e}) = {got:e}, want {want:e}"
+            );
+        };
+        for x in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            -1.5,
+            2.999_999_8,
+            -2.999_999_8,
+            8_388_607.5,
+            -8_388_607.5,
+            8_388_608.0,
+            -8_388_609.0,
+            1e30,
+            -1e30,
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ] {
+            same(x);
+        }
+        // Random bit patterns cover every exponent; small values cover the usual grid range.
+        let mut rng = seeded(3);
+        for _ in 0..200_000 {
+            same(f32::from_bits(rng.next_u32()));
+            same((below(&mut rng, 2_000_001) as f32 - 1_000_000.0) / 64.0);
+        }
+    }
 }

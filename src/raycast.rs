@@ -74,13 +74,11 @@ pub fn traverse(
 ) -> Traversal {
     let mut ray = RayCells::new(geom, from, to);
     // A walk that stays inside the grid skips the checks for leaving it.
-    let inside = ray.stays_inside();
+    if ray.stays_inside() {
+        return ray.walk_inside(visit);
+    }
     let mut visited = 0;
-    while let Some((cell, index)) = if inside {
-        ray.next_inside()
-    } else {
-        ray.next()
-    } {
+    for (cell, index) in ray.by_ref() {
         visited += 1;
         if visit(cell, index).is_break() {
             return Traversal {
@@ -272,22 +270,94 @@ impl RayCells {
             && (0..self.height).contains(&end_row)
     }
 
-    /// The next cell of a walk that [stays inside](Self::stays_inside) the grid: what
-    /// [`Iterator::next`] would give, without the checks for leaving the grid.
+    /// The rest of a walk that [stays inside](Self::stays_inside) the grid, handed to `visit`:
+    /// the cells [`Iterator::next`] would give, in the same order and by the same choices as
+    /// [`Self::advance`], without the checks for leaving the grid. While both axes have steps
+    /// left, each step compares the two crossings; once one axis is done, the rest is a
+    /// straight run along the other. The walk keeps only the flat index and the steps left;
+    /// the cell is worked out from them (for free when `visit` does not look at it).
     #[inline(always)]
-    fn next_inside(&mut self) -> Option<(Cell, usize)> {
-        if self.finished {
-            return None;
+    fn walk_inside(&mut self, mut visit: impl FnMut(Cell, usize) -> ControlFlow<()>) -> Traversal {
+        let width = self.width;
+        let (step_col, step_row) = (self.step_col, self.step_row);
+        let (mut left_col, mut left_row) = (self.left_col, self.left_row);
+        let (end_col, end_row) = (
+            self.col + step_col * left_col,
+            self.row + step_row * left_row,
+        );
+        let cell = |left_col: i64, left_row: i64| {
+            Cell::new(
+                (end_col - step_col * left_col) as i32,
+                (end_row - step_row * left_row) as i32,
+            )
+        };
+        let mut index = (self.row * width + self.col) as usize;
+        let (index_step_x, index_step_y) = (step_col as isize, (step_row * width) as isize);
+        let (inc_x, inc_y) = (self.inc_x, self.inc_y);
+        let (mut next_x, mut next_y) = (self.next_x, self.next_y);
+        // At an exact corner (equal crossings): moving north-east or south-west the walk
+        // steps diagonally; south-east the corner belongs to the east neighbour, north-west
+        // to the north one (see `advance`).
+        let (corner_x, corner_y) = (
+            step_col == step_row || step_col > 0,
+            step_col == step_row || step_col < 0,
+        );
+        let stopped = |visited| Traversal {
+            visited,
+            end: TraversalEnd::Stopped,
+        };
+        let mut visited = 0;
+        self.finished = true;
+        while left_col > 0 && left_row > 0 {
+            visited += 1;
+            if visit(cell(left_col, left_row), index).is_break() {
+                return stopped(visited);
+            }
+            let (step_x, step_y) = if next_x < next_y {
+                (true, false)
+            } else if next_y < next_x {
+                (false, true)
+            } else {
+                (corner_x, corner_y)
+            };
+            if step_x {
+                index = index.wrapping_add_signed(index_step_x);
+                left_col -= 1;
+                next_x += inc_x;
+            }
+            if step_y {
+                index = index.wrapping_add_signed(index_step_y);
+                left_row -= 1;
+                next_y += inc_y;
+            }
         }
-        let (col, row) = (self.col, self.row);
-        if self.left_col == 0 && self.left_row == 0 {
-            self.finished = true;
-            self.reached = true;
+        // At most one axis has steps left.
+        let (mut left, index_step) = if left_col > 0 {
+            (left_col, index_step_x)
         } else {
-            self.advance();
+            (left_row, index_step_y)
+        };
+        loop {
+            visited += 1;
+            let here = if left_col > 0 {
+                cell(left, 0)
+            } else {
+                cell(0, left)
+            };
+            if visit(here, index).is_break() {
+                return stopped(visited);
+            }
+            if left == 0 {
+                break;
+            }
+            index = index.wrapping_add_signed(index_step);
+            left -= 1;
         }
-        let index = row as usize * self.width as usize + col as usize;
-        Some((Cell::new(col as i32, row as i32), index))
+        self.reached = true;
+        Traversal {
+            visited,
+            end: TraversalEnd::Reached,
+        }
     }
 
     /// Whether the current (outside) cell can no longer lead into the grid.
@@ -545,6 +615,33 @@ mod tests {
                 assert_eq!((t.visited, t.end), (k + 1, TraversalEnd::Stopped));
             }
         }
+    }
+
+    #[test]
+    fn walks_inside_the_grid_take_the_iterators_corner_steps() {
+        // End points on the half-cell lattice, inside the grid: many segments pass exactly
+        // through grid corners, in all four directions, and run along grid lines.
+        let geom = GridGeometry::new(16, 12, 0.25, Point2::new(-2.0, 1.5)).unwrap();
+        let mut rng = seeded(8);
+        let mut diagonal = 0;
+        for case in 0..3000 {
+            let point = |rng: &mut _| {
+                Point2::new(
+                    -2.0 + below(rng, 32) as f32 * 0.125,
+                    1.5 + below(rng, 24) as f32 * 0.125,
+                )
+            };
+            let (a, b) = (point(&mut rng), point(&mut rng));
+            let want: Vec<Cell> = RayCells::new(&geom, a, b).map(|(c, _)| c).collect();
+            let (got, t) = walk(&geom, a, b);
+            assert_eq!(got, want, "case {case}: {a:?} -> {b:?}");
+            assert_eq!(t.end, TraversalEnd::Reached);
+            diagonal += got
+                .windows(2)
+                .filter(|p| p[0].col != p[1].col && p[0].row != p[1].row)
+                .count();
+        }
+        assert!(diagonal > 100, "only {diagonal} diagonal steps");
     }
 
     #[test]

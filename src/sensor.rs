@@ -19,7 +19,7 @@ use core::f32::consts::PI;
 use core::ops::ControlFlow;
 
 use crate::geometry::{Point2, Pose2};
-use crate::grid::{CellClass, CellObserver, OccupancyGrid};
+use crate::grid::{Cell, CellClass, CellObserver, OccupancyGrid};
 use crate::math;
 use crate::raycast;
 use crate::units::deg_to_rad;
@@ -60,9 +60,25 @@ impl core::fmt::Display for ScanError {
 impl core::error::Error for ScanError {}
 
 /// A laser scan: beams in increasing angle order, as the laser delivered them.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Debug, Default, PartialEq)]
 pub struct Scan {
     beams: heapless::Vec<Beam, MAX_BEAMS>,
+}
+
+impl Clone for Scan {
+    fn clone(&self) -> Self {
+        Self {
+            beams: self.beams.clone(),
+        }
+    }
+
+    /// Copies only the beams `source` holds, not the whole capacity (a mission keeps its last
+    /// scan this way at every scan).
+    fn clone_from(&mut self, source: &Self) {
+        self.beams.clear();
+        // Both hold at most MAX_BEAMS beams.
+        let _ = self.beams.extend_from_slice(&source.beams);
+    }
 }
 
 impl Scan {
@@ -343,37 +359,73 @@ pub fn integrate_scan<const N: usize>(
         let angle = pose.theta + beam.angle_rad;
         let (dir_x, dir_y) = (math::cos(angle), math::sin(angle));
         let end = Point2::new(origin.x + dir_x * length_m, origin.y + dir_y * length_m);
-        let hit_cell = grid.geometry().cell_at_unchecked(end);
         let geom = *grid.geometry();
-        raycast::traverse(&geom, origin, end, |cell, index| {
-            out.updates += 1;
-            let occupied = hit && cell == hit_cell;
+        // The flat index of the cell holding the return (none when no return, or outside the
+        // grid, where the walk never goes).
+        let hit_index = geom
+            .index(geom.cell_at_unchecked(end))
+            .filter(|_| hit)
+            .unwrap_or(usize::MAX);
+        let evidence = BeamEvidence {
+            origin,
+            dir_x,
+            dir_y,
+            inv_two_sigma_sq,
+        };
+        let walk = raycast::traverse(&geom, origin, end, |cell, index| {
+            let occupied = index == hit_index;
             // A cell saturated at the bound this evidence pushes towards stays there whatever
             // the weight (the sum is clamped back to the bound), so the weight is not needed.
             let current = grid.log_odds_at(index);
             if (occupied && current >= bounds.max) || (!occupied && current <= bounds.min) {
                 return ControlFlow::Continue(());
             }
-            let centre = geom.cell_center(cell);
-            // Perpendicular distance from the cell centre to the beam's line.
-            let d = (centre.x - origin.x) * dir_y - (centre.y - origin.y) * dir_x;
-            let weight = math::exp(-d * d * inv_two_sigma_sq);
             let delta = if occupied {
                 model.occupied_log_odds
             } else {
                 model.free_log_odds
             };
-            let (old, new) = grid.add_evidence(index, delta * weight, observer);
-            if old != new {
-                out.changed += 1;
-                if old == CellClass::Unknown {
-                    out.newly_known += 1;
-                }
-            }
+            evidence.add(grid, cell, index, delta, observer, &mut out);
             ControlFlow::Continue(())
         });
+        out.updates += walk.visited;
     }
     Ok(out)
+}
+
+/// One beam's line, for weighting its evidence by the distance to a cell's centre.
+struct BeamEvidence {
+    origin: Point2,
+    dir_x: f32,
+    dir_y: f32,
+    inv_two_sigma_sq: f32,
+}
+
+impl BeamEvidence {
+    /// Adds `delta` weighted by `exp(-d² / 2σ²)` to `cell` (flat index `index`), `d` the
+    /// perpendicular distance from the cell centre to the beam's line, and books the class
+    /// change. Kept out of line: most cells a beam crosses are already saturated and skip it.
+    #[inline(never)]
+    fn add<const N: usize>(
+        &self,
+        grid: &mut OccupancyGrid<N>,
+        cell: Cell,
+        index: usize,
+        delta: f32,
+        observer: &mut impl CellObserver,
+        out: &mut ScanIntegration,
+    ) {
+        let centre = grid.geometry().cell_center(cell);
+        let d = (centre.x - self.origin.x) * self.dir_y - (centre.y - self.origin.y) * self.dir_x;
+        let weight = math::exp(-d * d * self.inv_two_sigma_sq);
+        let (old, new) = grid.add_evidence(index, delta * weight, observer);
+        if old != new {
+            out.changed += 1;
+            if old == CellClass::Unknown {
+                out.newly_known += 1;
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -414,6 +466,28 @@ mod tests {
     fn grid() -> Grid {
         let g = GridGeometry::new(60, 60, 0.1, Point2::new(0.0, 0.0)).unwrap();
         Grid::new(g, LogOddsBounds::default()).unwrap()
+    }
+
+    #[test]
+    fn clone_from_takes_the_sources_beams_only() {
+        let beam = |i: usize| Beam {
+            angle_rad: i as f32 * 0.01,
+            range_m: (!i.is_multiple_of(3)).then_some(i as f32),
+        };
+        let mut long = Scan::new();
+        let mut short = Scan::new();
+        for i in 0..10 {
+            long.push(beam(i)).unwrap();
+        }
+        for i in 0..4 {
+            short.push(beam(100 + i)).unwrap();
+        }
+        let mut kept = long.clone();
+        assert_eq!(kept, long);
+        kept.clone_from(&short);
+        assert_eq!(kept, short);
+        kept.clone_from(&long);
+        assert_eq!(kept, long);
     }
 
     #[test]

@@ -41,7 +41,7 @@ fn cast_ray_along(
     let r = g.resolution_m;
     // Work in cell units from the grid origin.
     let (px, py) = ((origin.x - g.origin.x) / r, (origin.y - g.origin.y) / r);
-    let cell = Cell::new(px.floor() as i32, py.floor() as i32);
+    let cell = Cell::new(math::floor(px) as i32, math::floor(py) as i32);
     if world.is_blocked(cell) {
         return Some(0.0);
     }
@@ -56,8 +56,8 @@ fn cast_ray_along(
             f32::INFINITY
         }
     };
-    let mut t_max_x = next_boundary(px, dx, cell.col);
-    let mut t_max_y = next_boundary(py, dy, cell.row);
+    let t_max_x = next_boundary(px, dx, cell.col);
+    let t_max_y = next_boundary(py, dy, cell.row);
     let t_delta_x = if dx != 0.0 {
         1.0 / dx.abs()
     } else {
@@ -71,9 +71,7 @@ fn cast_ray_along(
     // The walk keeps the cell's flat index along (the start cell is inside the grid, or it
     // would have counted as blocked); a cell outside the grid is blocked.
     let (width, height) = (g.width as i64, g.height as i64);
-    let (mut col, mut row) = (cell.col as i64, cell.row as i64);
-    let mut index = row * width + col;
-    let index_step_y = step_y as i64 * width;
+    let (col, row) = (cell.col as i64, cell.row as i64);
     // The k-th step along an axis happens at t >= k - 1 (a step takes at least one cell of
     // travel), so within the range the walk stays less than max_t + 2 cells from the start
     // cell along each axis: when that square lies inside the grid, no bounds check is needed.
@@ -83,27 +81,81 @@ fn cast_ray_along(
         && col + reach < width
         && row - reach >= 0
         && row + reach < height;
-    loop {
-        let t = if t_max_x < t_max_y {
-            col += step_x as i64;
-            index += step_x as i64;
-            let t = t_max_x;
-            t_max_x += t_delta_x;
-            t
-        } else {
-            row += step_y as i64;
-            index += index_step_y;
-            let t = t_max_y;
-            t_max_y += t_delta_y;
-            t
-        };
-        if t > max_t {
-            return None;
-        }
-        if !(inside || (0..width).contains(&col) && (0..height).contains(&row))
-            || world.is_blocked_index(index as usize)
-        {
-            return Some(t * r);
+    let walk = Walk {
+        blocked: world.blocked(),
+        width,
+        height,
+        step_x: step_x as i64,
+        step_y: step_y as i64,
+        t_delta_x,
+        t_delta_y,
+        max_t,
+    };
+    let t = if inside {
+        walk.run::<false>(col, row, t_max_x, t_max_y)
+    } else {
+        walk.run::<true>(col, row, t_max_x, t_max_y)
+    };
+    t.map(|t| t * r)
+}
+
+/// A ray's walk through the world's cells, from one cell to the next across whichever grid
+/// line the ray meets first.
+struct Walk<'a> {
+    /// Blocked flag per cell, in flat-index order.
+    blocked: &'a [bool],
+    width: i64,
+    height: i64,
+    step_x: i64,
+    step_y: i64,
+    /// Ray parameter \[cells\] between two vertical (horizontal) grid lines.
+    t_delta_x: f32,
+    t_delta_y: f32,
+    /// The range \[cells\].
+    max_t: f32,
+}
+
+impl Walk<'_> {
+    /// Ray parameter \[cells\] at which the walk from `(col, row)` enters the first blocked
+    /// cell, or `None` past the range; `t_max_x` (`t_max_y`) is where it crosses the next
+    /// vertical (horizontal) grid line. `CHECKED`: the walk may leave the grid, and leaving it
+    /// counts as entering a blocked cell; each step checks only the axis it moved along.
+    #[inline(always)]
+    fn run<const CHECKED: bool>(
+        &self,
+        mut col: i64,
+        mut row: i64,
+        mut t_max_x: f32,
+        mut t_max_y: f32,
+    ) -> Option<f32> {
+        let mut index = row * self.width + col;
+        let index_step_y = self.step_y * self.width;
+        // Each branch finishes its own step (rather than sharing the test of the new cell), so
+        // the crossing times stay in their registers.
+        loop {
+            if t_max_x < t_max_y {
+                let t = t_max_x;
+                if t > self.max_t {
+                    return None;
+                }
+                col += self.step_x;
+                index += self.step_x;
+                if CHECKED && !(0..self.width).contains(&col) || self.blocked[index as usize] {
+                    return Some(t);
+                }
+                t_max_x += self.t_delta_x;
+            } else {
+                let t = t_max_y;
+                if t > self.max_t {
+                    return None;
+                }
+                row += self.step_y;
+                index += index_step_y;
+                if CHECKED && !(0..self.height).contains(&row) || self.blocked[index as usize] {
+                    return Some(t);
+                }
+                t_max_y += self.t_delta_y;
+            }
         }
     }
 }

@@ -506,10 +506,22 @@ impl SafetyMonitor {
         let half_width = 0.5 * fp.width_m + self.config.side_margin_m;
         let stop_m = self.stopping_distance_m(mm_to_m(f32::from(speed_mm_s)));
         let turn_limit = fp.radius_m + self.config.turn_margin_m;
+        // A return counts only within this distance of the robot's centre (the box ahead or
+        // behind, or the turning circle); a beam longer than that plus the laser's offset, with
+        // a margin far above rounding, is skipped before its direction is worked out.
+        let within_m = if speed_mm_s > 0 {
+            math::hypot(fp.front_m + stop_m, half_width)
+        } else if speed_mm_s < 0 {
+            math::hypot(fp.rear_m + stop_m, half_width)
+        } else {
+            turn_limit
+        };
+        let mount_m = math::hypot(laser.mount.x, laser.mount.y);
+        let reach_m = (within_m + mount_m) * 1.001 + 0.001;
         let mut nearest: Option<(f32, Point2)> = None;
         for beam in scan.beams() {
             let Some(r) = beam.range_m else { continue };
-            if !(r.is_finite() && r >= self.config.min_valid_range_m) {
+            if !(r.is_finite() && r >= self.config.min_valid_range_m && r <= reach_m) {
                 continue;
             }
             let in_laser =
@@ -542,6 +554,79 @@ mod tests {
     use crate::sensor::Beam;
 
     const PERIOD_MS: u64 = 100;
+
+    #[test]
+    fn long_beams_skipped_early_change_no_obstacle_found() {
+        // Every beam measured, as before the early skip of long beams: direction, then the
+        // box ahead or behind, or the turning circle.
+        fn every_beam(
+            m: &SafetyMonitor,
+            v: Velocity,
+            scan: &Scan,
+            laser: &LaserConfig,
+        ) -> Option<(f32, Point2)> {
+            let fp = m.config.footprint;
+            let half_width = 0.5 * fp.width_m + m.config.side_margin_m;
+            let stop_m = m.stopping_distance_m(mm_to_m(f32::from(v.speed_mm_s())));
+            let turn_limit = fp.radius_m + m.config.turn_margin_m;
+            let mut nearest: Option<(f32, Point2)> = None;
+            for beam in scan.beams() {
+                let Some(r) = beam.range_m else { continue };
+                if !(r.is_finite() && r >= m.config.min_valid_range_m) {
+                    continue;
+                }
+                let p = laser.mount.transform_point(Point2::new(
+                    r * math::cos(beam.angle_rad),
+                    r * math::sin(beam.angle_rad),
+                ));
+                let clearance = if v.speed_mm_s() > 0 {
+                    (p.x > 0.0 && math::abs(p.y) <= half_width && p.x - fp.front_m < stop_m)
+                        .then_some(p.x - fp.front_m)
+                } else if v.speed_mm_s() < 0 {
+                    (p.x < 0.0 && math::abs(p.y) <= half_width && -p.x - fp.rear_m < stop_m)
+                        .then_some(-p.x - fp.rear_m)
+                } else {
+                    let d = math::hypot(p.x, p.y);
+                    (d < turn_limit).then_some(d - fp.radius_m)
+                };
+                if let Some(c) = clearance.map(|c| c.max(0.0))
+                    && nearest.is_none_or(|(best, _)| c < best)
+                {
+                    nearest = Some((c, p));
+                }
+            }
+            nearest
+        }
+        let m = SafetyMonitor::new(SafetyConfig::default(), Limits::default());
+        let mut rng = crate::random::seeded(21);
+        let mut found = 0;
+        for (k, laser) in [LaserConfig::thesis(), LaserConfig::lms1xx()]
+            .iter()
+            .cycle()
+            .take(4000)
+            .enumerate()
+        {
+            let mut scan = Scan::new();
+            for i in 0..laser.beam_count as usize {
+                let r = crate::random::range_f32(&mut rng, 0.0, 1.5);
+                scan.push(Beam {
+                    angle_rad: laser.beam_angle(i),
+                    range_m: (r > 0.05).then_some(r),
+                })
+                .unwrap();
+            }
+            let (speed_m_s, turn_rate_rad_s) = match k % 3 {
+                0 => (crate::random::range_f32(&mut rng, 0.05, 0.7), 0.0),
+                1 => (-crate::random::range_f32(&mut rng, 0.05, 0.3), 0.0),
+                _ => (0.0, 0.5),
+            };
+            let v = Limits::default().clamp(MotionCommand::from_si(speed_m_s, turn_rate_rad_s));
+            let want = every_beam(&m, v, &scan, laser);
+            assert_eq!(m.obstacle_in_path(v, &scan, laser), want, "case {k}");
+            found += want.is_some() as usize;
+        }
+        assert!(found > 1000, "only {found} obstacles found");
+    }
 
     /// A thesis-laser scan with every beam at `range_m` except those listed.
     fn scan_with(range_m: Option<f32>, overrides: &[(usize, f32)]) -> Scan {

@@ -143,13 +143,16 @@ impl<const N: usize> Mission<N> {
                 for col in c.col - span..=c.col + span {
                     let cell = Cell::new(col, row);
                     let Some(i) = geom.index(cell) else { continue };
+                    // Most cells are already Free at least as surely as weak Free: look at the
+                    // evidence before measuring distances.
+                    if map.grid.log_odds_at(i) <= weak_free {
+                        continue;
+                    }
                     let centre = geom.cell_center(cell);
                     if centre.distance(p) > r || centre.distance(here) < keep {
                         continue;
                     }
-                    if map.grid.log_odds_at(i) > weak_free {
-                        map.grid.set_log_odds(i, weak_free, &mut map.trav);
-                    }
+                    map.grid.set_log_odds(i, weak_free, &mut map.trav);
                 }
             }
         }
