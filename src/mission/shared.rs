@@ -149,7 +149,7 @@ impl<const N: usize> SharedMap<N> {
 }
 
 /// Decision working memory: distance field, A*, visited-cell stamps, the visibility cache of
-/// the exploration objective (15.1 MB, whatever `N`) and frontier search memory. One per
+/// the exploration objective (16.0 MB, whatever `N`) and frontier search memory. One per
 /// process is enough, as robots decide one after the other.
 pub struct Workspace<const N: usize> {
     field: DistanceField<N>,
@@ -175,7 +175,7 @@ impl<const N: usize> Default for Workspace<N> {
 
 impl<const N: usize> Workspace<N> {
     /// Working memory built on the stack (or in a `static`); about 90 bytes per cell plus
-    /// the 15.1 MB visibility cache.
+    /// the 16.0 MB visibility cache.
     pub const fn new() -> Self {
         Self {
             field: DistanceField::new(),
