@@ -55,6 +55,16 @@ const ZERO_QLINK: QLink = QLink {
 /// End of a list.
 const NIL: u32 = u32::MAX;
 
+/// What a cell did with a cost offered to it ([`SearchMemory::offer`]).
+enum Offer {
+    /// Closed, or reached at no higher cost: nothing changed.
+    Refused,
+    /// Open, and the cost is lower: its cost and parent changed.
+    Improved,
+    /// Reached for the first time this query.
+    Opened,
+}
+
 /// Buckets of the radix heap: bucket 0 holds keys equal to the last key taken, bucket `b > 0`
 /// keys whose highest bit differing from it is bit `b - 1`.
 const BUCKETS: usize = 33;
@@ -406,35 +416,27 @@ impl<const N: usize> SearchMemory<N> {
     /// below its parent's), goes on the stack.
     #[inline(always)]
     fn relax(&mut self, from: u32, to: usize, row: usize, g: f32, h: impl FnOnce() -> f32) {
-        let seen = 2 * self.generation;
-        let node = &mut self.nodes[to];
-        if node.stamp == seen {
-            if g >= node.g {
-                return;
+        match self.offer(from, to, row, g) {
+            Offer::Refused => {}
+            Offer::Improved => {
+                if self.queue[to].prev == ON_STACK {
+                    return; // expanded before any heap entry anyway
+                }
+                let f = g + h();
+                if f <= self.bypass_limit {
+                    self.unlink(to);
+                    self.push_stack(to);
+                } else {
+                    self.decrease(to, make_key(f));
+                }
             }
-            node.g = g;
-            self.links[to].parent = from;
-            if self.queue[to].prev == ON_STACK {
-                return; // expanded before any heap entry anyway
-            }
-            let f = g + h();
-            if f <= self.bypass_limit {
-                self.unlink(to);
-                self.push_stack(to);
-            } else {
-                self.decrease(to, make_key(f));
-            }
-        } else if node.stamp != seen + 1 {
-            *node = Node { stamp: seen, g };
-            self.links[to] = Link {
-                parent: from,
-                row: row as u32,
-            };
-            let f = g + h();
-            if f <= self.bypass_limit {
-                self.push_stack(to);
-            } else {
-                self.insert(to, make_key(f));
+            Offer::Opened => {
+                let f = g + h();
+                if f <= self.bypass_limit {
+                    self.push_stack(to);
+                } else {
+                    self.insert(to, make_key(f));
+                }
             }
         }
     }
@@ -442,26 +444,42 @@ impl<const N: usize> SearchMemory<N> {
     /// [`Self::relax`] for the bucket queue (no heuristic: the key is g).
     #[inline(always)]
     fn bucket_relax(&mut self, from: u32, to: usize, row: usize, g: f32) {
+        match self.offer(from, to, row, g) {
+            Offer::Refused => {}
+            Offer::Improved => {
+                let b = g as u32;
+                if b != self.queue[to].key {
+                    self.bucket_unlink(to);
+                    self.bucket_link(to, b);
+                }
+            }
+            Offer::Opened => self.bucket_link(to, g as u32),
+        }
+    }
+
+    /// Offers cost `g` through the parent link `from` to cell `to` (in row `row`): an open
+    /// cell takes it if lower, a cell not reached yet this query is opened with it, a closed
+    /// cell refuses it. The caller then updates the open list.
+    #[inline(always)]
+    fn offer(&mut self, from: u32, to: usize, row: usize, g: f32) -> Offer {
         let seen = 2 * self.generation;
         let node = &mut self.nodes[to];
         if node.stamp == seen {
             if g >= node.g {
-                return;
+                return Offer::Refused;
             }
             node.g = g;
             self.links[to].parent = from;
-            let b = g as u32;
-            if b != self.queue[to].key {
-                self.bucket_unlink(to);
-                self.bucket_link(to, b);
-            }
+            Offer::Improved
         } else if node.stamp != seen + 1 {
             *node = Node { stamp: seen, g };
             self.links[to] = Link {
                 parent: from,
                 row: row as u32,
             };
-            self.bucket_link(to, g as u32);
+            Offer::Opened
+        } else {
+            Offer::Refused
         }
     }
 
