@@ -193,14 +193,11 @@ impl<const N: usize> DistanceField<N> {
         sweep.unknown_factor = trav.unknown_factor();
         sweep.uniform = trav.uniform_costs();
         sweep.done = false;
-        let largest_factor = if sweep.uniform {
-            1.0
-        } else {
-            sweep.unknown_factor.max(1.0)
-        };
+        // The longest step: a diagonal into a cell of the largest cost factor (Unknown's,
+        // at least 1; 1 when Unknown cells are blocked).
         sweep
             .memory
-            .start_sweep(s, sweep.width, n, DIAGONAL * largest_factor);
+            .start_sweep(s, sweep.width, n, DIAGONAL * sweep.unknown_factor);
         self.geometry = Some(*trav.geometry());
         self.source = source;
         Ok(())

@@ -274,7 +274,8 @@ impl<const N: usize> SearchMemory<N> {
     pub(crate) fn start(&mut self, source: usize, width: usize, h: impl Heuristic) {
         self.begin();
         let (sc, sr) = (source % width, source / width);
-        self.open_source(source, sr, h.at(sc, sr));
+        self.open_source(source, sr);
+        self.insert(source, make_key(h.at(sc, sr)));
     }
 
     /// Starts a Dijkstra sweep from `source` (a passable cell of a grid of `cells` cells,
@@ -286,16 +287,13 @@ impl<const N: usize> SearchMemory<N> {
     /// short paths the parents may differ from the radix heap's. Falls back to the radix heap
     /// when the steps or the grid are too large for the buckets.
     pub(crate) fn start_sweep(&mut self, source: usize, width: usize, cells: usize, max_step: f32) {
-        self.start(source, width, Zero);
-        let fits = max_step <= MAX_BUCKET_STEP && (cells as f32) * max_step < MAX_BUCKET_COST;
-        if fits {
-            // Move the source from the heap to bucket 0.
-            self.buckets = [NIL; BUCKETS];
-            self.mins = [u32::MAX; BUCKETS];
-            self.occupied = 0;
-            self.bucketed = true;
-            self.bypass_limit = -1.0;
+        self.begin();
+        self.open_source(source, source / width);
+        self.bucketed = max_step <= MAX_BUCKET_STEP && (cells as f32) * max_step < MAX_BUCKET_COST;
+        if self.bucketed {
             self.bucket_link(source, 0);
+        } else {
+            self.insert(source, make_key(0.0));
         }
     }
 
@@ -393,8 +391,8 @@ impl<const N: usize> SearchMemory<N> {
         (closed, false)
     }
 
-    /// Opens the source cell with g = 0.
-    fn open_source(&mut self, i: usize, row: usize, key: f32) {
+    /// Reaches the source cell with g = 0 (the caller puts it in its open list).
+    fn open_source(&mut self, i: usize, row: usize) {
         self.nodes[i] = Node {
             stamp: 2 * self.generation,
             g: 0.0,
@@ -403,7 +401,13 @@ impl<const N: usize> SearchMemory<N> {
             parent: NO_PARENT,
             row: row as u32,
         };
-        self.insert(i, make_key(key));
+    }
+
+    /// Closes cell `i`, just taken from the open list; returns its index and row.
+    #[inline(always)]
+    fn close(&mut self, i: usize) -> (u32, u32) {
+        self.nodes[i].stamp = 2 * self.generation + 1;
+        (i as u32, self.links[i].row)
     }
 
     /// Relaxes the edge `from -> to` with tentative cost `g`; `h` gives the heuristic of `to`
@@ -513,8 +517,7 @@ impl<const N: usize> SearchMemory<N> {
         }
         let i = pop_front(&mut self.queue, &mut self.slots[slot]);
         self.queued -= 1;
-        self.nodes[i].stamp = 2 * self.generation + 1;
-        Some((i as u32, self.links[i].row))
+        Some(self.close(i))
     }
 
     #[inline(always)]
@@ -595,8 +598,7 @@ impl<const N: usize> SearchMemory<N> {
             self.bypass_limit = f32::from_bits(self.last) * BYPASS_SLACK;
             i
         };
-        self.nodes[i].stamp = 2 * self.generation + 1;
-        Some((i as u32, self.links[i].row))
+        Some(self.close(i))
     }
 
     /// Makes the lower bound of the lowest non-empty bucket's keys the last key taken and
