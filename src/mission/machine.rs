@@ -1094,6 +1094,21 @@ impl<const N: usize> Mission<N> {
         self.state = MissionState::Deciding;
     }
 
+    /// Counts one more replan against the current decision; `true` when that is more than
+    /// [`MissionConfig::max_replans_per_decision`] and the decision must be dropped. Replans
+    /// count only while the robot gets nowhere: one that moved on since the first counted
+    /// replan starts a fresh count.
+    fn count_replan(&mut self) -> bool {
+        let here = self.pose_map.position();
+        if self.replans_this_decision == 0 || here.distance(self.replans_from) >= REPLAN_PROGRESS_M
+        {
+            self.replans_this_decision = 0;
+            self.replans_from = here;
+        }
+        self.replans_this_decision += 1;
+        self.replans_this_decision > self.config.max_replans_per_decision
+    }
+
     /// A fresh path to the remaining targets from the current pose.
     fn replan(
         &mut self,
@@ -1106,16 +1121,7 @@ impl<const N: usize> Mission<N> {
             self.state = MissionState::Deciding;
             return;
         }
-        // Replans count against the decision only while the robot gets nowhere: one that
-        // moved on since the first counted replan starts a fresh count.
-        let here = self.pose_map.position();
-        if self.replans_this_decision == 0 || here.distance(self.replans_from) >= REPLAN_PROGRESS_M
-        {
-            self.replans_this_decision = 0;
-            self.replans_from = here;
-        }
-        self.replans_this_decision += 1;
-        if self.replans_this_decision > self.config.max_replans_per_decision {
+        if self.count_replan() {
             self.abandon(map, events);
             return;
         }

@@ -300,8 +300,7 @@ impl<const N: usize> Mission<N> {
                             other,
                             until: now + secs(self.config.yield_wait_s),
                         });
-                        self.replans_this_decision += 1;
-                        if self.replans_this_decision > self.config.max_replans_per_decision {
+                        if self.count_replan() {
                             self.yielding = None;
                             self.abandon(map, events);
                             return None;
