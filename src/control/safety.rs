@@ -51,9 +51,23 @@ pub struct RobotFootprint {
 }
 
 impl RobotFootprint {
-    /// P3-DX: 425 mm wide, 210 mm to the front, 301 mm to the rear, 250 mm turning radius
-    /// (ARIA's p3dx parameters, protocols.md §1.9).
+    /// P3-DX body: 381 mm wide, 455 mm long (210 mm ahead of the wheel axle, 245 mm behind
+    /// it), 267 mm swing radius (Adept MobileRobots, Pioneer 3-DX datasheet). ARIA's `p3dx`
+    /// parameter file gives a larger outline that includes the optional bumper rings (425 mm
+    /// wide, 511 mm long, 250 mm radius: [`Self::p3dx_with_bumpers`]); a board names the one
+    /// its robot has.
     pub const fn p3dx() -> Self {
+        Self {
+            width_m: 0.381,
+            front_m: 0.210,
+            rear_m: 0.245,
+            radius_m: 0.267,
+        }
+    }
+
+    /// P3-DX with bumper rings, ARIA's `p3dx` parameters: 425 mm wide, 210 mm to the front,
+    /// 301 mm to the rear, 250 mm radius (protocols.md §1.9).
+    pub const fn p3dx_with_bumpers() -> Self {
         Self {
             width_m: 0.425,
             front_m: 0.210,
@@ -74,8 +88,14 @@ impl Default for RobotFootprint {
 pub struct SafetyConfig {
     /// The robot's outline.
     pub footprint: RobotFootprint,
-    /// Added on each side of the robot's width for the driving corridor \[m\]. Default 0.05.
+    /// Added on each side of the robot's width for the driving corridor at a standstill
+    /// \[m\]. Default 0.02, so that a P3-DX (0.381 m) creeping through a 0.5 m door is not
+    /// stopped by its frame; the margin grows with speed ([`Self::side_margin_s`]).
     pub side_margin_m: f32,
+    /// Added to the side margin per m/s of speed \[s\]: the lateral error path tracking may
+    /// build up in that much time at a heading error of about a radian's tenth. Default 0.1
+    /// (0.06 m in all at the exploration speed of 0.4 m/s).
+    pub side_margin_s: f32,
     /// Clearance always kept ahead of (or behind) the robot's edge, on top of the braking
     /// distance \[m\]. Default 0.10.
     pub min_clearance_m: f32,
@@ -100,7 +120,8 @@ impl Default for SafetyConfig {
     fn default() -> Self {
         Self {
             footprint: RobotFootprint::p3dx(),
-            side_margin_m: 0.05,
+            side_margin_m: 0.02,
+            side_margin_s: 0.1,
             min_clearance_m: 0.10,
             turn_margin_m: 0.05,
             control_period_s: 0.1,
@@ -483,6 +504,14 @@ impl SafetyMonitor {
         )
     }
 
+    /// Half the width of the corridor watched ahead at `speed_m_s` \[m\]: half the body plus
+    /// the side margin for that speed.
+    pub fn corridor_half_width_m(&self, speed_m_s: f32) -> f32 {
+        0.5 * self.config.footprint.width_m
+            + self.config.side_margin_m
+            + self.config.side_margin_s * math::abs(speed_m_s)
+    }
+
     /// Distance needed ahead of the robot's edge at `speed_m_s` \[m\].
     pub fn stopping_distance_m(&self, speed_m_s: f32) -> f32 {
         let v = math::abs(speed_m_s);
@@ -503,7 +532,7 @@ impl SafetyMonitor {
             return None;
         }
         let fp = self.config.footprint;
-        let half_width = 0.5 * fp.width_m + self.config.side_margin_m;
+        let half_width = self.corridor_half_width_m(mm_to_m(f32::from(speed_mm_s)));
         let stop_m = self.stopping_distance_m(mm_to_m(f32::from(speed_mm_s)));
         let turn_limit = fp.radius_m + self.config.turn_margin_m;
         // A return counts only within this distance of the robot's centre (the box ahead or
@@ -566,8 +595,11 @@ mod tests {
             laser: &LaserConfig,
         ) -> Option<(f32, Point2)> {
             let fp = m.config.footprint;
-            let half_width = 0.5 * fp.width_m + m.config.side_margin_m;
-            let stop_m = m.stopping_distance_m(mm_to_m(f32::from(v.speed_mm_s())));
+            let speed_m_s = mm_to_m(f32::from(v.speed_mm_s()));
+            let half_width = 0.5 * fp.width_m
+                + m.config.side_margin_m
+                + m.config.side_margin_s * math::abs(speed_m_s);
+            let stop_m = m.stopping_distance_m(speed_m_s);
             let turn_limit = fp.radius_m + m.config.turn_margin_m;
             let mut nearest: Option<(f32, Point2)> = None;
             for beam in scan.beams() {
