@@ -9,6 +9,8 @@ pub mod faults;
 pub mod laser;
 pub mod movingai;
 pub mod physics;
+pub mod placement;
 pub mod render;
 pub mod runner;
+pub mod serve;
 pub mod world;

@@ -36,6 +36,7 @@ use papillon::sensor::{LaserConfig, Scan};
 use crate::dynamic::Dynamics;
 use crate::laser::LaserSim;
 use crate::physics::{BodyConfig, Disc, RobotBody, SlipConfig, advance_all};
+use crate::placement::start_poses;
 use crate::render::Track;
 use crate::world::{Truth, World};
 
@@ -82,7 +83,7 @@ pub struct RunConfig {
     /// The simulated robots' body.
     pub body: BodyConfig,
     /// Start poses, one per robot; `None`: robot 0 at the world's start, the others placed
-    /// next to it ([`start_poses`]).
+    /// next to it ([`crate::placement::start_poses`]).
     pub starts: Option<Vec<Pose2>>,
     /// Simulated-time limit \[s\].
     pub max_sim_time_s: f64,
@@ -169,49 +170,6 @@ impl From<MissionError> for RunError {
     fn from(e: MissionError) -> Self {
         RunError::Mission(e)
     }
-}
-
-/// Start poses for `n` robots: the first at `start`, each next one at the nearest free place
-/// (searched on rings 0.8 m apart around `start`, from the start heading on,
-/// counter-clockwise) whose disc of `radius_m` plus 0.1 m is clear of walls and at least
-/// 0.8 m from every robot placed before. All robots keep the start heading.
-pub fn start_poses(
-    world: &World,
-    start: Pose2,
-    n: usize,
-    radius_m: f32,
-) -> Result<Vec<Pose2>, RunError> {
-    let clearance = radius_m + 0.1;
-    let spacing = (2.0 * radius_m + 0.3).max(0.8);
-    let truth = world.truth();
-    let mut poses = vec![start];
-    'robots: for robot in 1..n {
-        for ring in 1..=30 {
-            let r = spacing * ring as f32;
-            let count = (2.0 * core::f32::consts::PI * r / spacing).floor().max(6.0) as usize;
-            for k in 0..count {
-                let a = start.theta + 2.0 * core::f32::consts::PI * k as f32 / count as f32;
-                let p = Point2::new(start.x + r * a.cos(), start.y + r * a.sin());
-                if world.disc_hits_blocked(p, clearance)
-                    || poses.iter().any(|q| q.position().distance(p) < spacing)
-                {
-                    continue;
-                }
-                // Reachable from the start: in the start's free component.
-                let reachable = world
-                    .geometry()
-                    .cell_at(p)
-                    .and_then(|c| world.geometry().index(c))
-                    .is_some_and(|i| truth.mask()[i]);
-                if reachable {
-                    poses.push(Pose2::new(p.x, p.y, start.theta));
-                    continue 'robots;
-                }
-            }
-        }
-        return Err(RunError::NoStart { robot });
-    }
-    Ok(poses)
 }
 
 /// How a run ended.
@@ -688,7 +646,8 @@ impl Runner {
                 }
                 s[..config.robots].to_vec()
             }
-            None => start_poses(&world, world.start(), config.robots, radius)?,
+            None => start_poses(&world, world.start(), config.robots, radius)
+                .map_err(|e| RunError::NoStart { robot: e.robot })?,
         };
         let mut robots = Vec::with_capacity(config.robots);
         let mut bodies = Vec::with_capacity(config.robots);
@@ -1097,20 +1056,6 @@ mod tests {
         assert_ne!(a, derive_seed(25, 0, STREAM_LASER));
         assert_ne!(a, derive_seed(26, 0, STREAM_BODY));
         assert_eq!(a, derive_seed(25, 0, STREAM_BODY));
-    }
-
-    #[test]
-    fn extra_robots_start_clear_of_walls_and_each_other() {
-        let w = builtin::house(0.1).unwrap();
-        let poses = start_poses(&w, w.start(), 4, 0.25).unwrap();
-        assert_eq!(poses.len(), 4);
-        assert_eq!(poses[0], w.start());
-        for (i, p) in poses.iter().enumerate() {
-            assert!(!w.disc_hits_blocked(p.position(), 0.35), "{p:?}");
-            for q in &poses[..i] {
-                assert!(p.position().distance(q.position()) >= 0.8 - 1e-4);
-            }
-        }
     }
 
     #[test]
