@@ -12,5 +12,6 @@ pub mod physics;
 pub mod placement;
 pub mod render;
 pub mod runner;
+pub mod score;
 pub mod serve;
 pub mod world;
