@@ -197,4 +197,3 @@ pub fn execute(
     }
     Ok(report)
 }
-

@@ -17,7 +17,11 @@ pub struct NoRoom {
 
 impl fmt::Display for NoRoom {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "no free start pose for robot {} near the start", self.robot)
+        write!(
+            f,
+            "no free start pose for robot {} near the start",
+            self.robot
+        )
     }
 }
 

@@ -17,11 +17,11 @@ use papillon::wire::lms1xx::command::check_reply;
 use papillon::wire::lms1xx::{
     ColaDecoder, Dialect, Reply, Request, ScanConfig, ScanDataConfig, ScanTelegram,
 };
-use papillon_sim::serve::MAP_RESOLUTION_M;
 use papillon_sim::emulator::arcos::{ArcosEmulator, Link, WATCHDOG_S};
 use papillon_sim::emulator::lms1xx::laser_config;
 use papillon_sim::laser::LaserSim;
 use papillon_sim::physics::{BodyConfig, RobotBody};
+use papillon_sim::serve::MAP_RESOLUTION_M;
 use papillon_sim::world::World;
 
 /// A server packet decoded from the emulator's output.

@@ -106,4 +106,3 @@ pub fn report(solved: &[Solved]) -> Report {
         mean_us: solved.iter().map(|s| s.time_us).sum::<f64>() / n,
     }
 }
-

@@ -178,7 +178,6 @@ fn field_of_view_box(pose_map: Pose2, laser: &LaserConfig, scan: &Scan) -> (Poin
     (lo, hi)
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

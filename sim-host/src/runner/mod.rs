@@ -26,10 +26,7 @@ use papillon::control::command::RobotCommand;
 use papillon::control::safety::RobotFlags;
 use papillon::geometry::Pose2;
 use papillon::grid::DEFAULT_CELL_CAPACITY;
-use papillon::mission::{
-    DoneReason, Mission, MissionEvent, MissionState, SharedMap,
-    Workspace,
-};
+use papillon::mission::{DoneReason, Mission, MissionEvent, MissionState, SharedMap, Workspace};
 use papillon::random::{self, ProjectRng};
 use papillon::sensor::Scan;
 
@@ -44,8 +41,8 @@ mod config;
 mod coverage;
 mod report;
 
-use config::{STREAM_BODY, STREAM_DECIDE, STREAM_LASER};
 pub use config::{RunConfig, RunError, default_time_limit_s, derive_seed};
+use config::{STREAM_BODY, STREAM_DECIDE, STREAM_LASER};
 use coverage::CoverageCounter;
 pub use report::{EndReason, LoggedEvent, RobotReport, RunReport};
 
@@ -529,8 +526,8 @@ impl Runner {
 mod tests {
     use super::*;
     use crate::physics::SlipConfig;
-    use papillon::mission::MissionConfig;
     use crate::world::builtin;
+    use papillon::mission::MissionConfig;
 
     #[test]
     fn bad_setups_are_refused() {

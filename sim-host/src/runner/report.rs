@@ -189,4 +189,3 @@ impl RunReport {
         self.robots.iter().map(|r| r.replans).sum()
     }
 }
-

@@ -383,4 +383,3 @@ fn serve_on_pty(
         slave_path.display()
     ))
 }
-

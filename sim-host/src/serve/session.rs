@@ -201,4 +201,3 @@ fn write_some(io: &mut impl Write, mut data: &[u8]) -> io::Result<()> {
     }
     Ok(())
 }
-
