@@ -10,9 +10,9 @@
 //!   truth log;
 //! - each endpoint (a pty master, or each client accepted on a TCP listener) has its own thread
 //!   running a sans-IO emulator ([`crate::emulator`]) against its robot's body
-//!   ([`session`]).
+//!   (`session.rs`).
 //!
-//! The bodies live in one `Mutex<Vec<RobotBody>>` shared by all threads ([`Sim`]); the clock is
+//! The bodies live in one `Mutex<Vec<RobotBody>>` shared by all threads (`Sim`); the clock is
 //! the wall clock since the start. With several robots, all share the world (each sees the
 //! others in its laser and collides with them) and robot `i` is served on the given ports plus
 //! `i` (`LINK-i` for ptys). Faults ([`crate::faults`]) are injected on the links, the laser and
