@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use e2e::{Relay, Sim, papillon, read_truth, signal, temp_dir, unix_now_s, wait_bounded};
 use papillon::onboard::persist::{MapImage, MissionState, PGM_UNKNOWN, StateStore};
-use papillon_sim::cli::serve::MAP_RESOLUTION_M;
+use papillon_sim::serve::MAP_RESOLUTION_M;
 use papillon_sim::world::World;
 
 /// Longest a whole lab mission may take.

@@ -1,4 +1,5 @@
-//! Moving AI grid benchmark files: `.map` grids and `.scen` problem lists.
+//! Moving AI grid benchmark files: `.map` grids and `.scen` problem lists; [`solve`] runs
+//! Papillon's A* on them.
 //!
 //! Format: Sturtevant, "Benchmarks for Grid-Based Pathfinding", IEEE Trans. Computational
 //! Intelligence and AI in Games 4(2), 2012 (<https://movingai.com/benchmarks/formats.html>).
@@ -14,6 +15,8 @@
 //! corner and y growing south. Papillon's grid has row 0 at the south edge; use
 //! [`MovingAiMap::to_cell`] to convert. Flipping rows changes no path length and no
 //! corner-cutting rule, so optimal lengths carry over unchanged.
+
+pub mod solve;
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -155,35 +155,9 @@ impl Default for BodyConfig {
     }
 }
 
-/// How deep a disc at `p` of `radius_m` reaches into the world's blocked cells \[m\] (0 when
-/// clear). Cells outside the grid count as blocked.
-pub fn wall_penetration(world: &World, p: Point2, radius_m: f32) -> f32 {
-    let g = world.geometry();
-    let r = g.resolution_m;
-    let c0 = ((p.x - radius_m - g.origin.x) / r).floor() as i32;
-    let c1 = ((p.x + radius_m - g.origin.x) / r).floor() as i32;
-    let r0 = ((p.y - radius_m - g.origin.y) / r).floor() as i32;
-    let r1 = ((p.y + radius_m - g.origin.y) / r).floor() as i32;
-    let mut depth = 0.0f32;
-    for row in r0..=r1 {
-        let y0 = g.origin.y + row as f32 * r;
-        let dy = (y0 - p.y).max(p.y - (y0 + r)).max(0.0);
-        for col in c0..=c1 {
-            if !world.is_blocked(papillon::grid::Cell::new(col, row)) {
-                continue;
-            }
-            let x0 = g.origin.x + col as f32 * r;
-            let dx = (x0 - p.x).max(p.x - (x0 + r)).max(0.0);
-            let d = (dx * dx + dy * dy).sqrt();
-            depth = depth.max(radius_m - d);
-        }
-    }
-    depth
-}
-
 /// How deep a disc at `p` of `radius_m` reaches into the world and the `discs` \[m\].
 pub fn penetration(world: &World, discs: &[Disc], p: Point2, radius_m: f32) -> f32 {
-    let mut depth = wall_penetration(world, p, radius_m);
+    let mut depth = world.wall_penetration(p, radius_m);
     for d in discs {
         depth = depth.max(radius_m + d.radius_m - p.distance(d.center));
     }
@@ -667,7 +641,7 @@ mod tests {
         assert!(x <= 23.25 + 1e-3 && x > 23.2, "stopped at {x}");
         assert!(b.stalled() && b.front_bumper() && !b.rear_bumper());
         assert_eq!(b.arcos_stall_bumpers(), 0xFF01);
-        assert!(wall_penetration(&w, b.true_pose().position(), 0.25) <= 0.0);
+        assert!(w.wall_penetration(b.true_pose().position(), 0.25) <= 0.0);
         // Backing off frees it and sets nothing.
         b.command(-200.0, 0.0);
         run(&mut b, &w, 2.0);

@@ -8,8 +8,7 @@ use std::process::Command;
 
 use papillon_sim::bench::exec::ProgressMode;
 use papillon_sim::bench::sweep::{Shard, Sweep};
-use papillon_sim::bench::{self, record, sim};
-use papillon_sim::cli::bench::run_sweep;
+use papillon_sim::bench::{self, record, run_sweep, sim};
 
 fn tiny() -> Sweep {
     Sweep::from_json(

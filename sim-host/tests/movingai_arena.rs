@@ -6,7 +6,7 @@ use std::process::Command;
 
 use papillon::grid::Cell;
 use papillon::planner::{AStar, DistanceField, Traversability};
-use papillon_sim::cli::plan;
+use papillon_sim::movingai::solve;
 use papillon_sim::movingai::{MovingAiMap, Scenario};
 
 const CAP: usize = 49 * 49;
@@ -62,8 +62,8 @@ fn astar_matches_all_130_arena_optima() {
 #[test]
 fn plan_report_counts_all_problems_optimal() {
     let (map, scen) = arena();
-    let solved = plan::solve_all(&map, &scen).unwrap();
-    let report = plan::report(&solved);
+    let solved = solve::solve_all(&map, &scen).unwrap();
+    let report = solve::report(&solved);
     assert_eq!((report.optimal, report.problems), (130, 130));
     assert!(report.mismatches.is_empty());
     assert!(report.mean_expansions >= 1.0);

@@ -17,11 +17,11 @@ use papillon::wire::lms1xx::command::check_reply;
 use papillon::wire::lms1xx::{
     ColaDecoder, Dialect, Reply, Request, ScanConfig, ScanDataConfig, ScanTelegram,
 };
-use papillon_sim::cli::serve::MAP_RESOLUTION_M;
 use papillon_sim::emulator::arcos::{ArcosEmulator, Link, WATCHDOG_S};
 use papillon_sim::emulator::lms1xx::laser_config;
 use papillon_sim::laser::LaserSim;
 use papillon_sim::physics::{BodyConfig, RobotBody};
+use papillon_sim::serve::MAP_RESOLUTION_M;
 use papillon_sim::world::World;
 
 /// A server packet decoded from the emulator's output.
@@ -704,7 +704,7 @@ fn with_one_percent_byte_corruption_the_client_keeps_receiving_valid_status_pack
 
 #[test]
 fn fault_specs_parse_and_bad_ones_are_refused() {
-    use papillon_sim::cli::serve::{FaultSpecError, Faults};
+    use papillon_sim::faults::{FaultSpecError, Faults};
     let f: Faults = "corrupt=0.01, drop=0.002".parse().unwrap();
     assert_eq!(f.corrupt, 0.01);
     assert_eq!(f.drop, 0.002);
@@ -765,9 +765,9 @@ fn tcp_client_with_one_percent_corruption_connects_and_keeps_receiving_status_pa
 #[test]
 fn two_robots_share_the_world_on_consecutive_endpoints_and_see_each_other() {
     let server = Server::start(&["--robots", "2", "--tcp", "127.0.0.1:0"]);
-    // Robot 0 (at the start, facing east) sees robot 1, parked 0.75 m east of it, as a disc.
+    // Robot 0 (at the start, facing east) sees robot 1, parked 0.8 m east of it, as a disc.
     let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
-    let starts = papillon_sim::cli::serve::start_poses(&world, 2, 0.25).unwrap();
+    let starts = papillon_sim::placement::start_poses(&world, world.start(), 2, 0.25).unwrap();
     assert_eq!(starts[0], world.start());
     let config = laser_config(ScanConfig::DEFAULT_50HZ);
     let other = papillon_sim::physics::Disc::new(starts[1].position(), 0.25);

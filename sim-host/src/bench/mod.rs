@@ -20,11 +20,12 @@ pub mod summary;
 pub mod sweep;
 
 use std::collections::BTreeMap;
-use std::fs;
+use std::fs::{self, OpenOptions};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use exec::{ProgressMode, RunFn, execute};
 use record::RunRecord;
 use sweep::{Shard, Sweep};
 
@@ -55,6 +56,47 @@ pub fn write_sweep_file(dir: &Path, sweep: &Sweep, shard: Shard) -> Result<(), S
     let path = dir.join(SWEEP_FILE);
     let text = serde_json::to_string_pretty(&f).map_err(|e| e.to_string())?;
     fs::write(&path, text + "\n").map_err(|e| format!("{}: cannot write: {e}", path.display()))
+}
+
+/// Runs the sweep's shard with `run` into `out`; returns the number of failed runs.
+pub fn run_sweep(
+    sweep: &Sweep,
+    shard: Shard,
+    jobs: usize,
+    out: &Path,
+    run: &RunFn,
+    mode: ProgressMode,
+) -> Result<usize, String> {
+    write_sweep_file(out, sweep, shard)?;
+    let specs: Vec<_> = sweep
+        .specs()
+        .into_iter()
+        .filter(|s| shard.contains(s.index))
+        .collect();
+    let runs_path = out.join(RUNS_FILE);
+    let file = OpenOptions::new()
+        .create(true)
+        .write(true)
+        .truncate(true)
+        .open(&runs_path)
+        .map_err(|e| format!("{}: cannot write: {e}", runs_path.display()))?;
+    if mode != ProgressMode::Quiet {
+        eprintln!(
+            "bench {}: {} runs (shard {shard} of a sweep of {}), {} worker threads, into {}",
+            sweep.name,
+            specs.len(),
+            sweep.len(),
+            if jobs == 0 {
+                rayon::current_num_threads()
+            } else {
+                jobs
+            },
+            out.display()
+        );
+    }
+    let records = execute(&specs, jobs, run, Some(file), mode)?;
+    write_outputs(out, &sweep.name, &records)?;
+    Ok(records.iter().filter(|r| r.result.is_err()).count())
 }
 
 /// Reads a directory's `sweep.json`.

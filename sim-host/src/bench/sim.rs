@@ -1,73 +1,40 @@
-//! One run of a sweep in the simulator: the mission set up exactly as `papillon-sim mission`
-//! would for the same options ([`crate::cli::mission::Setup`]), run by the fast runner
-//! ([`crate::runner::Runner`]).
+//! One run of a sweep in the simulator: the mission set up by the same scenario builder as
+//! `papillon-sim mission` for the same options ([`crate::scenario::Setup`]), run by the fast
+//! runner ([`crate::runner::Runner`]).
 //!
 //! The convergence curve (best fitness per generation) is that of robot 0's first decision,
 //! as the runner recorded it.
 
 use super::record::RunResult;
 use super::sweep::RunSpec;
-use crate::cli::mission::{Args, Setup};
 use crate::dynamic::Dynamics;
 use crate::runner::Runner;
+use crate::scenario::{ScenarioSpec, Setup, Slip, Strategy, selector_from_name};
 
-/// `papillon-sim mission`'s options, parsed the way its command line is.
-#[derive(clap::Parser)]
-struct MissionLine {
-    #[command(flatten)]
-    args: Args,
-}
-
-/// The `papillon-sim mission` command line of a run (options not given keep their defaults).
-pub fn mission_line(spec: &RunSpec) -> Vec<String> {
-    let mut v: Vec<String> = [
-        "--map",
-        &spec.map,
-        "--robots",
-        &spec.robots.to_string(),
-        "--method",
-        &spec.method,
-        "--pop",
-        &spec.population.to_string(),
-        "--gens",
-        &spec.generations.to_string(),
-        "--strategy",
-        &spec.strategy,
-        "--seed",
-        &spec.seed.to_string(),
-        "--resolution",
-        &spec.resolution_m.to_string(),
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    if spec.strategy == "long" {
-        v.extend(["--targets".to_string(), spec.targets.to_string()]);
-    }
-    if let Some(b) = spec.battery_steps {
-        v.extend(["--battery".to_string(), b.to_string()]);
-    }
-    v
-}
-
-/// The `papillon-sim mission` options of a run.
-pub fn mission_args(spec: &RunSpec) -> Result<Args, String> {
-    use clap::Parser;
-    let line = std::iter::once("mission".to_string()).chain(mission_line(spec));
-    MissionLine::try_parse_from(line)
-        .map(|m| m.args)
-        .map_err(|e| {
-            let text = e.to_string();
-            text.lines()
-                .next()
-                .unwrap_or("bad mission options")
-                .to_string()
-        })
+/// The scenario of a run: `papillon-sim mission`'s defaults (thesis slip, the world's start)
+/// with the run's world, robots, selector, budget, strategy, seed, battery and cell size. The
+/// run's `targets` counts for the long-term strategy only, as `--targets` does.
+pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
+    let strategy = Strategy::from_name(&spec.strategy)?;
+    Ok(ScenarioSpec {
+        map: spec.map.clone(),
+        resolution_m: spec.resolution_m,
+        robots: spec.robots,
+        selector: selector_from_name(&spec.method)?,
+        population: spec.population,
+        generations: spec.generations,
+        strategy,
+        targets: (strategy == Strategy::Long).then_some(spec.targets),
+        seed: spec.seed,
+        battery_steps: spec.battery_steps,
+        start: None,
+        slip: Slip::Thesis,
+    })
 }
 
 /// Runs `spec` in the simulator.
 pub fn run(spec: &RunSpec) -> Result<RunResult, String> {
-    let setup = Setup::from_args(&mission_args(spec)?)?;
+    let setup = Setup::new(&scenario(spec)?)?;
     let mut runner = Runner::new(setup.world.clone(), Dynamics::new(), setup.run.clone())
         .map_err(|e| e.to_string())?;
     let report = runner.run().map_err(|e| e.to_string())?;

@@ -239,6 +239,21 @@ impl Sweep {
         })
     }
 
+    /// Reads a sweep file; a sweep without a name takes the file's stem.
+    pub fn from_file(path: &Path) -> Result<Self, String> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+        let mut s = Sweep::from_json(&text, &path.display().to_string())?;
+        if s.name.is_empty() {
+            s.name = path
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("sweep")
+                .to_string();
+        }
+        Ok(s)
+    }
+
     /// Reads a sweep from JSON text; `origin` names the source in errors.
     pub fn from_json(text: &str, origin: &str) -> Result<Self, String> {
         let sweep: Sweep =

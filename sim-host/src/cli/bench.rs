@@ -4,13 +4,12 @@
 //! Bad arguments and unreadable files exit with status 2 and one line on standard error; a
 //! sweep whose runs failed exits with status 1 after writing its outputs.
 
-use std::fs::OpenOptions;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use crate::bench::exec::{ProgressMode, RunFn, execute};
+use crate::bench::exec::ProgressMode;
 use crate::bench::sweep::{self, EXPERIMENTS, Shard, Sweep};
-use crate::bench::{self as b, RUNS_FILE};
+use crate::bench::{self as b, run_sweep};
 
 /// Arguments of `papillon-sim bench`.
 #[derive(clap::Args, Debug, Clone)]
@@ -102,16 +101,7 @@ pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
             )?
         }
         (None, Some(path)) => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-            let mut s = Sweep::from_json(&text, &path.display().to_string())?;
-            if s.name.is_empty() {
-                s.name = path
-                    .file_stem()
-                    .and_then(|s| s.to_str())
-                    .unwrap_or("sweep")
-                    .to_string();
-            }
+            let mut s = Sweep::from_file(path)?;
             if let Some(r) = args.runs {
                 s.runs = r;
             }
@@ -127,47 +117,6 @@ pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
     }
     sweep.check()?;
     Ok(sweep)
-}
-
-/// Runs the sweep's shard with `run` into `out`; returns the number of failed runs.
-pub fn run_sweep(
-    sweep: &Sweep,
-    shard: Shard,
-    jobs: usize,
-    out: &Path,
-    run: &RunFn,
-    mode: ProgressMode,
-) -> Result<usize, String> {
-    b::write_sweep_file(out, sweep, shard)?;
-    let specs: Vec<_> = sweep
-        .specs()
-        .into_iter()
-        .filter(|s| shard.contains(s.index))
-        .collect();
-    let runs_path = out.join(RUNS_FILE);
-    let file = OpenOptions::new()
-        .create(true)
-        .write(true)
-        .truncate(true)
-        .open(&runs_path)
-        .map_err(|e| format!("{}: cannot write: {e}", runs_path.display()))?;
-    if mode != ProgressMode::Quiet {
-        eprintln!(
-            "bench {}: {} runs (shard {shard} of a sweep of {}), {} worker threads, into {}",
-            sweep.name,
-            specs.len(),
-            sweep.len(),
-            if jobs == 0 {
-                rayon::current_num_threads()
-            } else {
-                jobs
-            },
-            out.display()
-        );
-    }
-    let records = execute(&specs, jobs, run, Some(file), mode)?;
-    b::write_outputs(out, &sweep.name, &records)?;
-    Ok(records.iter().filter(|r| r.result.is_err()).count())
 }
 
 fn fail(msg: &str) -> ExitCode {

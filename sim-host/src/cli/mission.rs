@@ -1,24 +1,19 @@
 //! `papillon-sim mission`: a whole exploration mission in simulated time
-//! ([`crate::runner`]), with a human summary, `--json`, `--png` and `--frames`.
+//! ([`crate::mission_run`]), with a human summary, `--json`, `--png` and `--frames`.
 //!
-//! Bad arguments, bad map files and a start inside an obstacle exit with status 2 and one line
-//! on standard error.
+//! The options become a [`ScenarioSpec`] ([`crate::scenario`]); bad arguments, bad map files
+//! and a start inside an obstacle exit with status 2 and one line on standard error.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use papillon::geometry::Pose2;
-use papillon::mission::{MissionConfig, SelectorKind};
-use papillon::optim::Method;
 
-use crate::dynamic::Dynamics;
-use crate::physics::SlipConfig;
-use crate::render::{self, Track};
-use crate::runner::{self, RunConfig, RunReport, Runner};
-use crate::world::World;
+use crate::mission_run::{Failure, execute, json_report, summary};
+use crate::scenario::{ScenarioSpec, Setup, Slip, Strategy, selector_from_name};
 
-/// Arguments of `papillon-sim mission` (kept as text and checked by [`Setup::from_args`], so
+/// Arguments of `papillon-sim mission` (kept as text and checked by [`setup_from_args`], so
 /// every problem is reported on one line naming the option).
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
@@ -74,335 +69,68 @@ pub struct Args {
     pub frames: Option<PathBuf>,
 }
 
-/// A checked mission set-up.
-#[derive(Clone, Debug)]
-pub struct Setup {
-    /// The world.
-    pub world: World,
-    /// The run.
-    pub run: RunConfig,
-    /// The selector's name as given.
-    pub method: String,
-    /// `short` or `long`.
-    pub strategy: String,
-    /// `thesis`, `full` or `none`.
-    pub slip: String,
-}
-
 fn number<T: std::str::FromStr>(option: &str, text: &str, what: &str) -> Result<T, String> {
     text.trim()
         .parse()
         .map_err(|_| format!("{option}: expected {what}, got '{text}'"))
 }
 
-impl Setup {
-    /// Checks the arguments and loads the world; the error is one line naming the option or
-    /// the file.
-    pub fn from_args(args: &Args) -> Result<Self, String> {
-        let robots: usize = number("--robots", &args.robots, "a whole number of robots")?;
-        if !(1..=runner::MAX_ROBOTS).contains(&robots) {
-            return Err(format!(
-                "--robots: expected 1 to {}, got {robots}",
-                runner::MAX_ROBOTS
-            ));
-        }
-        let selector = match args.method.as_str() {
-            "nearest-frontier" => SelectorKind::NearestFrontier,
-            "frontier-utility" => SelectorKind::FrontierUtility,
-            m => SelectorKind::Optimized(m.parse::<Method>().map_err(|_| {
-                format!(
-                    "--method: unknown method '{m}', expected one of: xboa boa mboa aboa saboa ga pso gwo abc cmaes nearest-frontier frontier-utility"
-                )
-            })?),
-        };
-        let pop: usize = number("--pop", &args.pop, "a whole number")?;
-        if !(2..=64).contains(&pop) {
-            return Err(format!("--pop: expected 2 to 64, got {pop}"));
-        }
-        let gens: u32 = number("--gens", &args.gens, "a whole number")?;
-        if gens == 0 {
-            return Err("--gens: expected at least 1".into());
-        }
-        let max_k = papillon::explore::MAX_TARGETS;
-        let targets = match args.strategy.as_str() {
-            "short" => match &args.targets {
-                None => 1,
-                Some(t) => {
-                    let k: usize = number("--targets", t, "a whole number")?;
-                    if k != 1 {
-                        return Err(format!(
-                            "--targets: the short-term strategy has one target per decision, got {k} (use --strategy long)"
-                        ));
-                    }
-                    k
-                }
-            },
-            "long" => {
-                let k: usize = match &args.targets {
-                    None => 3,
-                    Some(t) => number("--targets", t, "a whole number")?,
-                };
-                if !(1..=max_k).contains(&k) {
-                    return Err(format!("--targets: expected 1 to {max_k}, got {k}"));
-                }
-                k
-            }
-            other => {
-                return Err(format!("--strategy: expected short or long, got '{other}'"));
-            }
-        };
-        let seed: u64 = number("--seed", &args.seed, "a whole number")?;
-        let mut mission = MissionConfig {
-            selector,
-            ..MissionConfig::default()
-        };
-        mission.explore.population = pop;
-        mission.explore.max_generations = gens;
-        mission.explore.targets = targets;
-        if let Some(b) = &args.battery {
-            let b: f32 = number("--battery", b, "a number of steps")?;
-            if !(b.is_finite() && b > 0.0) {
-                return Err(format!(
-                    "--battery: expected a positive number of steps, got {b}"
-                ));
-            }
-            mission.battery_steps = b;
-        }
-        let resolution: f32 = number("--resolution", &args.resolution, "a cell size in metres")?;
-        let mut world = World::load(&args.map, resolution).map_err(|e| e.to_string())?;
-        if let Some(v) = &args.start {
+/// The scenario the options describe; the error is one line naming the option.
+pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
+    let robots = number("--robots", &args.robots, "a whole number of robots")?;
+    let selector = selector_from_name(&args.method)?;
+    let population = number("--pop", &args.pop, "a whole number")?;
+    let generations = number("--gens", &args.gens, "a whole number")?;
+    let strategy = Strategy::from_name(&args.strategy)?;
+    let targets = match &args.targets {
+        Some(t) => Some(number("--targets", t, "a whole number")?),
+        None => None,
+    };
+    let seed = number("--seed", &args.seed, "a whole number")?;
+    let battery_steps = match &args.battery {
+        Some(b) => Some(number("--battery", b, "a number of steps")?),
+        None => None,
+    };
+    let resolution_m = number("--resolution", &args.resolution, "a cell size in metres")?;
+    let start = match &args.start {
+        Some(v) => {
             let nums = v
                 .iter()
                 .map(|t| number::<f32>("--start", t, "X Y [THETA] as numbers"))
                 .collect::<Result<Vec<f32>, String>>()?;
-            if nums.iter().any(|x| !x.is_finite()) {
-                return Err("--start: expected finite numbers".into());
-            }
-            let pose = Pose2::new(nums[0], nums[1], nums.get(2).copied().unwrap_or(0.0));
-            world.set_start(pose);
+            Some(Pose2::new(
+                nums[0],
+                nums[1],
+                nums.get(2).copied().unwrap_or(0.0),
+            ))
         }
-        let mut run = RunConfig::new(mission, robots, seed);
-        run.body.slip = match args.slip.as_str() {
-            "thesis" => SlipConfig::thesis(),
-            "full" => SlipConfig::default(),
-            "none" => SlipConfig::none(),
-            other => {
-                return Err(format!(
-                    "--slip: expected thesis, full or none, got '{other}'"
-                ));
-            }
-        };
-        if !world.start_is_clear(run.body.radius_m) {
-            let s = world.start();
-            return Err(format!(
-                "--start: ({:.2} m, {:.2} m) on {} is inside an obstacle or too close to one for a robot of radius {} m",
-                s.x,
-                s.y,
-                world.name(),
-                run.body.radius_m
-            ));
-        }
-        Ok(Self {
-            world,
-            run,
-            method: args.method.clone(),
-            strategy: args.strategy.clone(),
-            slip: args.slip.clone(),
-        })
-    }
-}
-
-/// Pixels per cell for pictures about 600 pixels across (1 to 4).
-pub fn picture_scale(world: &World) -> u32 {
-    let g = world.geometry();
-    (600 / g.width.max(g.height).max(1) as u32).clamp(1, 4)
-}
-
-/// The JSON report (one object).
-pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
-    let per_robot: Vec<serde_json::Value> = report
-        .robots
-        .iter()
-        .map(|r| {
-            serde_json::json!({
-                "steps": r.steps,
-                "distance_m": r.distance_m,
-                "rotation_rad": r.rotation_rad,
-                "decisions": r.decisions,
-                "fitness_evals": r.fitness_evals,
-                "replans": r.replans,
-                "yields": r.yields,
-                "faults": r.faults,
-                "collisions": r.collisions,
-                "battery_steps": r.battery_steps,
-                "done": r.done.map(|d| runner::EndReason::from(d).name()),
-                "pose_error_m": r.pose_error_m,
-            })
-        })
-        .collect();
-    let m = &setup.run.mission;
-    serde_json::json!({
-        "map": setup.world.name(),
-        "method": setup.method,
-        "robots": setup.run.robots,
-        "seed": setup.run.seed,
-        "population": m.explore.population,
-        "generations": m.explore.max_generations,
-        "strategy": setup.strategy,
-        "targets": m.explore.targets,
-        "battery_steps": m.battery_steps,
-        "slip": setup.slip,
-        "coverage": report.coverage,
-        "observable_cells": report.observable_cells,
-        "known_cells": report.known_cells,
-        "steps": report.steps(),
-        "steps_per_robot": report.robots.iter().map(|r| r.steps).collect::<Vec<_>>(),
-        "distance_m": report.distance_m(),
-        "rotation_rad": report.rotation_rad(),
-        "decisions": report.decisions(),
-        "fitness_evals": report.fitness_evals(),
-        "decision_ms_p50": report.decision_ms_quantile(0.5),
-        "decision_ms_p99": report.decision_ms_quantile(0.99),
-        "decision_ms_total": report.decision_ms_total(),
-        "replans": report.replans(),
-        "collisions": report.collisions(),
-        "sim_time_s": report.sim_time_s,
-        "wall_time_s": report.wall_time_s,
-        "reason": report.reason.map(|r| r.name()),
-        "coverage_curve": report.coverage_curve.iter().map(|&(s, c)| [s as f64, c as f64]).collect::<Vec<_>>(),
-        "coverage_time_curve": report.coverage_time_curve.iter().map(|&(t, c)| [t, c as f64]).collect::<Vec<_>>(),
-        "per_robot": per_robot,
+        None => None,
+    };
+    let slip = Slip::from_name(&args.slip)?;
+    Ok(ScenarioSpec {
+        map: args.map.clone(),
+        resolution_m,
+        robots,
+        selector,
+        population,
+        generations,
+        strategy,
+        targets,
+        seed,
+        battery_steps,
+        start,
+        slip,
     })
 }
 
-/// The human summary.
-pub fn summary(setup: &Setup, report: &RunReport) -> String {
-    let g = setup.world.geometry();
-    let m = &setup.run.mission;
-    let mut s = String::new();
-    let plural = if setup.run.robots == 1 { "" } else { "s" };
-    s += &format!(
-        "mission on {} ({:.1} m x {:.1} m, {} m cells): {}, {} robot{plural}, population {}, {} generations, {}-term (k = {}), battery {} steps, {} slip, seed {}\n",
-        setup.world.name(),
-        g.width_m(),
-        g.height_m(),
-        g.resolution_m,
-        setup.method,
-        setup.run.robots,
-        m.explore.population,
-        m.explore.max_generations,
-        setup.strategy,
-        m.explore.targets,
-        m.battery_steps,
-        setup.slip,
-        setup.run.seed
-    );
-    let speed = if report.wall_time_s > 0.0 {
-        report.sim_time_s / report.wall_time_s
-    } else {
-        0.0
-    };
-    s += &format!(
-        "ended: {} after {:.1} s simulated ({:.2} s wall, {:.0}x real time)\n",
-        report.reason.map_or("running", |r| r.name()),
-        report.sim_time_s,
-        report.wall_time_s,
-        speed
-    );
-    s += &format!(
-        "coverage: {:.2} % ({} of {} observable cells known)\n",
-        100.0 * report.coverage,
-        report.known_cells,
-        report.observable_cells
-    );
-    let per: Vec<String> = report
-        .robots
-        .iter()
-        .enumerate()
-        .map(|(k, r)| format!("robot {k}: {:.1}", r.steps))
-        .collect();
-    s += &format!(
-        "steps: {:.1} ({}); {:.1} m travelled, {:.1} rad turned\n",
-        report.steps(),
-        per.join(", "),
-        report.distance_m(),
-        report.rotation_rad()
-    );
-    s += &format!(
-        "decisions: {}, fitness evaluations {}, decision time p50 {:.2} ms, p99 {:.2} ms, total {:.1} ms\n",
-        report.decisions(),
-        report.fitness_evals(),
-        report.decision_ms_quantile(0.5),
-        report.decision_ms_quantile(0.99),
-        report.decision_ms_total()
-    );
-    s += &format!(
-        "replans: {}, yields: {}, contacts: {}",
-        report.replans(),
-        report.robots.iter().map(|r| r.yields).sum::<u32>(),
-        report.collisions()
-    );
-    s
-}
-
-fn frame_path(dir: &Path, n: usize) -> PathBuf {
-    dir.join(format!("frame-{n:04}.png"))
-}
-
-/// Why [`execute`] failed: a set-up the runner refuses (exit 2) or a file that could not be
-/// written (exit 1); one line each.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Failure {
-    /// The runner refused the set-up.
-    Setup(String),
-    /// A picture could not be written.
-    Output(String),
-}
-
-/// Runs a checked set-up and returns the report, writing one picture per decision into
-/// `frames` and the final picture to `png` when given.
-pub fn execute(
-    setup: &Setup,
-    frames: Option<&Path>,
-    png: Option<&Path>,
-) -> Result<RunReport, Failure> {
-    let scale = picture_scale(&setup.world);
-    let mut runner = Runner::new(setup.world.clone(), Dynamics::new(), setup.run.clone())
-        .map_err(|e| Failure::Setup(e.to_string()))?;
-    if let Some(dir) = frames {
-        std::fs::create_dir_all(dir).map_err(|e| {
-            Failure::Output(format!("--frames: {}: cannot create: {e}", dir.display()))
-        })?;
-    }
-    let mut frame = 0usize;
-    let mut frame_error: Option<String> = None;
-    let report = runner
-        .run_with(|r, progress| {
-            let Some(dir) = frames else { return };
-            if frame_error.is_some() || !matches!(progress, runner::Progress::Decided { .. }) {
-                return;
-            }
-            frame += 1;
-            let img = render::render_grid(&r.map().grid, &r.tracks(), scale);
-            if let Err(e) = render::save_png(&img, &frame_path(dir, frame)) {
-                frame_error = Some(format!("--frames: {e}"));
-            }
-        })
-        .map_err(|e| Failure::Setup(e.to_string()))?;
-    if let Some(e) = frame_error {
-        return Err(Failure::Output(e));
-    }
-    if let Some(path) = png {
-        let tracks: Vec<Track> = runner.tracks();
-        let img = render::render_grid(&runner.map().grid, &tracks, scale);
-        render::save_png(&img, path).map_err(|e| Failure::Output(format!("--png: {e}")))?;
-    }
-    Ok(report)
+/// The checked set-up the options describe ([`Setup::new`]).
+pub fn setup_from_args(args: &Args) -> Result<Setup, String> {
+    Setup::new(&spec_from_args(args)?)
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> ExitCode {
-    let setup = match Setup::from_args(&args) {
+    let setup = match setup_from_args(&args) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("papillon-sim mission: {e}");
@@ -434,6 +162,9 @@ pub fn run(args: Args) -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::SlipConfig;
+    use papillon::mission::{MissionConfig, SelectorKind};
+    use papillon::optim::Method;
 
     fn args() -> Args {
         Args {
@@ -457,7 +188,7 @@ mod tests {
 
     #[test]
     fn defaults_are_the_thesis_setup() {
-        let s = Setup::from_args(&Args {
+        let s = setup_from_args(&Args {
             map: "house".into(),
             ..args()
         })
@@ -589,16 +320,16 @@ mod tests {
             ),
         ];
         for (a, want) in cases {
-            let e = Setup::from_args(&a).unwrap_err();
+            let e = setup_from_args(&a).unwrap_err();
             assert!(e.starts_with(want) && !e.contains('\n'), "{want}: {e}");
         }
-        let long = Setup::from_args(&Args {
+        let long = setup_from_args(&Args {
             strategy: "long".into(),
             ..args()
         })
         .unwrap();
         assert_eq!(long.run.mission.explore.targets, 3);
-        let nf = Setup::from_args(&Args {
+        let nf = setup_from_args(&Args {
             method: "nearest-frontier".into(),
             ..args()
         })

@@ -3,7 +3,7 @@
 //!
 //! Both emulators are sans-IO: they take the bytes a client sent and the current time, and
 //! append the bytes to send back to a caller's buffer. The caller owns the sockets, the pty
-//! and the clock (see `cli::serve`).
+//! and the clock (see [`crate::serve`]).
 
 pub mod arcos;
 pub mod lms1xx;

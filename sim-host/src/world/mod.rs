@@ -361,7 +361,34 @@ impl World {
 
     /// Whether a disc of `radius_m` centred at `p` overlaps a blocked cell (or leaves the grid).
     pub fn disc_hits_blocked(&self, p: Point2, radius_m: f32) -> bool {
-        crate::physics::wall_penetration(self, p, radius_m) > 0.0
+        self.wall_penetration(p, radius_m) > 0.0
+    }
+
+    /// How deep a disc at `p` of `radius_m` reaches into the blocked cells \[m\] (0 when
+    /// clear): the largest `radius_m - d` over the blocked cells, `d` being the distance from
+    /// `p` to the cell's square. Cells outside the grid count as blocked.
+    pub fn wall_penetration(&self, p: Point2, radius_m: f32) -> f32 {
+        let g = self.geometry();
+        let r = g.resolution_m;
+        let c0 = ((p.x - radius_m - g.origin.x) / r).floor() as i32;
+        let c1 = ((p.x + radius_m - g.origin.x) / r).floor() as i32;
+        let r0 = ((p.y - radius_m - g.origin.y) / r).floor() as i32;
+        let r1 = ((p.y + radius_m - g.origin.y) / r).floor() as i32;
+        let mut depth = 0.0f32;
+        for row in r0..=r1 {
+            let y0 = g.origin.y + row as f32 * r;
+            let dy = (y0 - p.y).max(p.y - (y0 + r)).max(0.0);
+            for col in c0..=c1 {
+                if !self.is_blocked(Cell::new(col, row)) {
+                    continue;
+                }
+                let x0 = g.origin.x + col as f32 * r;
+                let dx = (x0 - p.x).max(p.x - (x0 + r)).max(0.0);
+                let d = (dx * dx + dy * dy).sqrt();
+                depth = depth.max(radius_m - d);
+            }
+        }
+        depth
     }
 }
 

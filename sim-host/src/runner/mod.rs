@@ -1,0 +1,581 @@
+//! The fast mission runner: the core's exploration mission for one or several robots sharing
+//! one map, in process and in simulated time.
+//!
+//! Time advances event by event: a control period every [`CONTROL_PERIOD_US`] (100 ms, the
+//! P3-DX's SIP cycle) and a scan every `1 / laser.rate_hz` seconds; between events the bodies'
+//! physics runs ([`crate::physics::advance_all`], each robot seeing the others as discs), and
+//! doors and people move ([`crate::dynamic`]). At a scan, each robot's laser
+//! ([`crate::laser::LaserSim`], other robots and people as discs) measures from its **true**
+//! pose and the mission integrates it at its **estimated** pose, fed from the body's drifting
+//! odometry ([`crate::physics::RobotBody::odometry_pose`]). At a control period, each mission
+//! gets its odometry and flags (bumpers, stall, motors, e-stop), the shared coverage (from the
+//! world's truth, [`crate::world::truth`]) and one [`Mission::step`], whose command drives the
+//! body. Robots decide one after the other in id order, so the whole run is deterministic per
+//! seed: every robot's body, laser and decision generator is a seeded Xoshiro stream derived
+//! from the run's seed ([`derive_seed`]).
+//!
+//! The run ends when every mission is done, or at a simulated-time limit
+//! ([`RunConfig::max_sim_time_s`]) so that a stuck mission ends with a reason instead of
+//! running forever. What is recorded is listed on [`RunReport`] and [`RobotReport`].
+
+use std::fmt;
+use std::time::Instant;
+
+use papillon::control::Time;
+use papillon::control::command::RobotCommand;
+use papillon::control::safety::RobotFlags;
+use papillon::geometry::Pose2;
+use papillon::grid::DEFAULT_CELL_CAPACITY;
+use papillon::mission::{DoneReason, Mission, MissionEvent, MissionState, SharedMap, Workspace};
+use papillon::random::{self, ProjectRng};
+use papillon::sensor::Scan;
+
+use crate::dynamic::Dynamics;
+use crate::laser::LaserSim;
+use crate::physics::{Disc, RobotBody, advance_all};
+use crate::placement::start_poses;
+use crate::render::Track;
+use crate::world::World;
+
+mod config;
+mod coverage;
+mod report;
+
+pub use config::{RunConfig, RunError, default_time_limit_s, derive_seed};
+use config::{STREAM_BODY, STREAM_DECIDE, STREAM_LASER};
+use coverage::CoverageCounter;
+pub use report::{EndReason, LoggedEvent, RobotReport, RunReport};
+
+/// Largest map the runner holds \[cells\] (the core's default: the factory at 0.1 m fits).
+pub const MAP_CAPACITY: usize = DEFAULT_CELL_CAPACITY;
+
+/// Control period \[µs\] (10 Hz).
+pub const CONTROL_PERIOD_US: u64 = 100_000;
+
+/// Most robots in one run (the core's shared-map limit).
+pub const MAX_ROBOTS: usize = papillon::mission::MAX_ROBOTS;
+
+/// Full recount of the coverage every this many control periods (between recounts, the cells
+/// around each scan are updated).
+const RECOUNT_PERIODS: u64 = 10;
+
+/// Trajectory points closer than this to the previous one are not recorded \[m\].
+const TRACK_SPACING_M: f32 = 0.05;
+
+/// One simulated robot's laser, mission and decision generator (its body lives in
+/// [`Runner::bodies`], so that the physics can step all bodies together).
+struct Robot {
+    laser: LaserSim,
+    mission: Mission<MAP_CAPACITY>,
+    rng: ProjectRng,
+    report: RobotReport,
+    last_odom: Option<Pose2>,
+    was_stalled: bool,
+}
+
+impl Robot {
+    fn flags(b: &RobotBody) -> RobotFlags {
+        RobotFlags {
+            front_bumper: b.front_bumper(),
+            rear_bumper: b.rear_bumper(),
+            left_stall: b.stalled(),
+            right_stall: b.stalled(),
+            motors_enabled: b.motors_enabled(),
+            estop: b.e_stop(),
+        }
+    }
+
+    /// Feeds the body's odometry to the mission and accumulates distance and rotation.
+    fn feed_odometry(&mut self, now: Time, body: &RobotBody) {
+        let odom = body.odometry_pose();
+        if let Some(prev) = self.last_odom {
+            self.report.distance_m += prev.position().distance(odom.position()) as f64;
+            self.report.rotation_rad +=
+                papillon::geometry::normalize_angle(odom.theta - prev.theta).abs() as f64;
+        }
+        self.last_odom = Some(odom);
+        self.mission.on_odometry(now, odom, Self::flags(body));
+    }
+}
+
+/// Applies a mission command to a body. `SetLimits` and `KeepAlive` change nothing in the
+/// simulation (the body has the P3-DX's limits; there is no watchdog).
+fn apply(body: &mut RobotBody, command: RobotCommand) {
+    match command {
+        RobotCommand::Velocity(v) => {
+            body.command(v.speed_mm_s() as f32, v.turn_rate_deg_s() as f32)
+        }
+        RobotCommand::Stop | RobotCommand::EmergencyStop => body.stop(),
+        RobotCommand::EnableMotors(on) => body.set_motors_enabled(on),
+        _ => {}
+    }
+}
+
+/// What [`Runner::run_with`] reports to its observer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Progress {
+    /// Robot `robot` made a decision (its targets are in the report).
+    Decided {
+        /// Robot index.
+        robot: usize,
+    },
+    /// The run ended.
+    Finished,
+}
+
+/// A run in progress: the world, the robots and the shared map.
+pub struct Runner {
+    world: World,
+    dynamics: Dynamics,
+    bodies: Vec<RobotBody>,
+    robots: Vec<Robot>,
+    map: Box<SharedMap<MAP_CAPACITY>>,
+    ws: Box<Workspace<MAP_CAPACITY>>,
+    coverage: CoverageCounter,
+    config: RunConfig,
+    now_us: u64,
+    next_control_us: u64,
+    next_scan_us: u64,
+    scan_period_us: u64,
+    periods: u64,
+    report: RunReport,
+    scan: Scan,
+    last_sample: Option<(f32, f32)>,
+}
+
+impl fmt::Debug for Runner {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Runner")
+            .field("world", &self.world.name())
+            .field("robots", &self.robots.len())
+            .field("now_s", &(self.now_us as f64 * 1e-6))
+            .finish_non_exhaustive()
+    }
+}
+
+impl Runner {
+    /// Sets up a run in `world` (the truth is taken from its current state and start pose),
+    /// with `dynamics` (doors and people; empty for none).
+    pub fn new(world: World, dynamics: Dynamics, config: RunConfig) -> Result<Self, RunError> {
+        if config.robots == 0 || config.robots > MAX_ROBOTS {
+            return Err(RunError::Robots(config.robots));
+        }
+        let g = *world.geometry();
+        if g.cell_count() > MAP_CAPACITY {
+            return Err(RunError::MapTooLarge {
+                cells: g.cell_count(),
+            });
+        }
+        config.mission.validate()?;
+        let radius = config.body.radius_m;
+        if !world.start_is_clear(radius) {
+            return Err(RunError::StartBlocked {
+                robot: 0,
+                pose: world.start(),
+            });
+        }
+        let starts = match &config.starts {
+            Some(s) => {
+                if s.len() < config.robots {
+                    return Err(RunError::NoStart { robot: s.len() });
+                }
+                s[..config.robots].to_vec()
+            }
+            None => start_poses(&world, world.start(), config.robots, radius)
+                .map_err(|e| RunError::NoStart { robot: e.robot })?,
+        };
+        let mut robots = Vec::with_capacity(config.robots);
+        let mut bodies = Vec::with_capacity(config.robots);
+        for (k, &pose) in starts.iter().enumerate() {
+            if world.disc_hits_blocked(pose.position(), radius)
+                || starts[..k]
+                    .iter()
+                    .any(|q| q.position().distance(pose.position()) < 2.0 * radius)
+            {
+                return Err(RunError::StartBlocked { robot: k, pose });
+            }
+            let mission = Mission::new(k as u8, config.mission.clone(), pose)?;
+            bodies.push(RobotBody::new(
+                config.body,
+                pose,
+                derive_seed(config.seed, k, STREAM_BODY),
+            ));
+            robots.push(Robot {
+                laser: LaserSim::new(
+                    config.mission.laser,
+                    derive_seed(config.seed, k, STREAM_LASER),
+                ),
+                mission,
+                rng: random::seeded(derive_seed(config.seed, k, STREAM_DECIDE)),
+                report: RobotReport {
+                    trajectory: vec![pose.position()],
+                    final_pose: pose,
+                    ..RobotReport::default()
+                },
+                last_odom: None,
+                was_stalled: false,
+            });
+        }
+        let map = SharedMap::<MAP_CAPACITY>::new_boxed(g, &config.mission)?;
+        let ws = Workspace::<MAP_CAPACITY>::new_boxed();
+        let truth = world.truth();
+        let rate = config.mission.laser.rate_hz;
+        let scan_period_us = if rate.is_finite() && rate > 0.0 {
+            ((1e6 / rate as f64).round() as u64).max(1_000)
+        } else {
+            CONTROL_PERIOD_US
+        };
+        let report = RunReport {
+            observable_cells: truth.len(),
+            robots: Vec::new(),
+            ..RunReport::default()
+        };
+        Ok(Self {
+            world,
+            dynamics,
+            bodies,
+            robots,
+            map,
+            ws,
+            coverage: CoverageCounter::new(truth),
+            config,
+            now_us: 0,
+            next_control_us: 0,
+            next_scan_us: 0,
+            scan_period_us,
+            periods: 0,
+            report,
+            scan: Scan::new(),
+            last_sample: None,
+        })
+    }
+
+    /// The world as it is now (doors in their current state).
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The shared map.
+    pub fn map(&self) -> &SharedMap<MAP_CAPACITY> {
+        &self.map
+    }
+
+    /// Simulated time \[s\].
+    pub fn sim_time_s(&self) -> f64 {
+        self.now_us as f64 * 1e-6
+    }
+
+    /// Current coverage (0..1).
+    pub fn coverage(&self) -> f32 {
+        self.coverage.coverage()
+    }
+
+    /// Robot `k`'s mission.
+    pub fn mission(&self, k: usize) -> &Mission<MAP_CAPACITY> {
+        &self.robots[k].mission
+    }
+
+    /// Robot `k`'s body.
+    pub fn body(&self, k: usize) -> &RobotBody {
+        &self.bodies[k]
+    }
+
+    /// Number of robots.
+    pub fn robot_count(&self) -> usize {
+        self.robots.len()
+    }
+
+    /// The tracks to draw: each robot's trajectory so far and its targets.
+    pub fn tracks(&self) -> Vec<Track> {
+        self.robots
+            .iter()
+            .map(|r| Track {
+                trajectory: r.report.trajectory.clone(),
+                targets: r.report.targets.clone(),
+            })
+            .collect()
+    }
+
+    /// Whether the run has ended.
+    pub fn finished(&self) -> bool {
+        self.report.reason.is_some()
+    }
+
+    /// Runs to the end and returns the report.
+    pub fn run(&mut self) -> Result<RunReport, RunError> {
+        self.run_with(|_, _| {})
+    }
+
+    /// Runs to the end, calling `observer` after each decision and at the end.
+    pub fn run_with(
+        &mut self,
+        mut observer: impl FnMut(&Runner, Progress),
+    ) -> Result<RunReport, RunError> {
+        let wall = Instant::now();
+        let mut observing_s = 0.0;
+        while !self.finished() {
+            let decided = self.advance()?;
+            if !decided.is_empty() {
+                let t = Instant::now();
+                for robot in decided {
+                    observer(self, Progress::Decided { robot });
+                }
+                observing_s += t.elapsed().as_secs_f64();
+            }
+            self.report.wall_time_s = wall.elapsed().as_secs_f64() - observing_s;
+        }
+        observer(self, Progress::Finished);
+        Ok(self.report())
+    }
+
+    /// The report so far (final once [`Self::finished`]).
+    pub fn report(&self) -> RunReport {
+        let mut r = self.report.clone();
+        r.coverage = self.coverage.coverage();
+        r.known_cells = self.coverage.count;
+        r.sim_time_s = self.sim_time_s();
+        r.robots = self
+            .robots
+            .iter()
+            .zip(&self.bodies)
+            .map(|(rb, body)| {
+                let mut rep = rb.report.clone();
+                let s = rb.mission.stats();
+                rep.steps = s.steps;
+                rep.decisions = s.decisions;
+                rep.fitness_evals = s.fitness_evals;
+                rep.replans = s.replans;
+                rep.yields = s.yields;
+                rep.faults = s.faults;
+                rep.battery_steps = rb.mission.battery_steps();
+                rep.done = match rb.mission.state() {
+                    MissionState::Done(d) => Some(d),
+                    _ => None,
+                };
+                rep.true_distance_m = body.distance_m();
+                rep.final_pose = body.true_pose();
+                rep.pose_error_m = body
+                    .true_pose()
+                    .position()
+                    .distance(rb.mission.pose_map().position());
+                rep
+            })
+            .collect();
+        r
+    }
+
+    /// Runs up to and including the next event (scan or control period); returns the robots
+    /// that decided.
+    pub fn advance(&mut self) -> Result<Vec<usize>, RunError> {
+        let next = self.next_control_us.min(self.next_scan_us);
+        if next > self.now_us {
+            let dt = (next - self.now_us) as f32 * 1e-6;
+            let people = self.dynamics.people_discs(self.sim_time_s());
+            advance_all(&mut self.bodies, dt, &self.world, &people);
+            self.now_us = next;
+        }
+        let now = Time::from_micros(self.now_us);
+        if self.next_scan_us == self.now_us {
+            self.scan_all(now)?;
+            self.next_scan_us += self.scan_period_us;
+        }
+        let mut decided = Vec::new();
+        if self.next_control_us == self.now_us {
+            decided = self.control(now);
+            self.next_control_us += CONTROL_PERIOD_US;
+        }
+        Ok(decided)
+    }
+
+    fn robot_discs(&self) -> Vec<Disc> {
+        self.bodies.iter().map(RobotBody::disc).collect()
+    }
+
+    fn scan_all(&mut self, now: Time) -> Result<(), RunError> {
+        let mut discs = self.robot_discs();
+        discs.extend(self.dynamics.people_discs(self.sim_time_s()));
+        for (r, body) in self.robots.iter_mut().zip(&self.bodies) {
+            let pose = body.true_pose();
+            // A laser with more beams than a scan holds keeps the first ones.
+            let _ = r.laser.scan_into(&self.world, pose, &discs, &mut self.scan);
+            r.feed_odometry(now, body);
+            r.mission.on_scan(now, &self.scan, &mut self.map)?;
+            self.coverage.update_after_scan(
+                &self.map.grid,
+                r.mission.pose_map(),
+                &self.config.mission.laser,
+                &self.scan,
+            );
+        }
+        Ok(())
+    }
+
+    fn control(&mut self, now: Time) -> Vec<usize> {
+        let time_s = self.sim_time_s();
+        let discs = self.robot_discs();
+        if !self.dynamics.is_empty() {
+            self.dynamics.update(time_s, &mut self.world, &discs);
+        }
+        if self.periods.is_multiple_of(RECOUNT_PERIODS) {
+            self.coverage.recount(&self.map.grid);
+            self.sample();
+        }
+        self.periods += 1;
+        let coverage = self.coverage.coverage();
+        let mut decided = Vec::new();
+        for k in 0..self.robots.len() {
+            let r = &mut self.robots[k];
+            let body = &mut self.bodies[k];
+            r.feed_odometry(now, body);
+            r.mission.set_coverage(coverage);
+            let t0 = Instant::now();
+            let out = r.mission.step(now, &mut self.map, &mut self.ws, &mut r.rng);
+            let elapsed_ms = t0.elapsed().as_secs_f64() * 1e3;
+            apply(body, out.command);
+            for e in out.events {
+                match &e {
+                    MissionEvent::Decided { targets, .. } => {
+                        r.report.decision_ms.push(elapsed_ms);
+                        r.report
+                            .decision_histories
+                            .push(r.mission.last_decision_history().to_vec());
+                        r.report.targets.extend(targets.iter().copied());
+                        decided.push(k);
+                    }
+                    MissionEvent::WaypointReached { .. } => continue,
+                    _ => {}
+                }
+                self.report.events.push(LoggedEvent {
+                    time_s,
+                    robot: k,
+                    event: e,
+                });
+            }
+            // Contacts and the trajectory.
+            let stalled = body.stalled();
+            if stalled && !r.was_stalled {
+                r.report.collisions += 1;
+            }
+            r.was_stalled = stalled;
+            let p = body.true_pose().position();
+            if r.report
+                .trajectory
+                .last()
+                .is_none_or(|q| q.distance(p) >= TRACK_SPACING_M)
+            {
+                r.report.trajectory.push(p);
+            }
+        }
+        if !decided.is_empty() {
+            self.sample();
+        }
+        self.check_end();
+        decided
+    }
+
+    fn steps_so_far(&self) -> f32 {
+        self.robots.iter().map(|r| r.mission.stats().steps).sum()
+    }
+
+    fn sample(&mut self) {
+        let s = (self.steps_so_far(), self.coverage.coverage());
+        if self.last_sample == Some(s) {
+            return;
+        }
+        self.last_sample = Some(s);
+        self.report.coverage_curve.push(s);
+        self.report
+            .coverage_time_curve
+            .push((self.sim_time_s(), s.1));
+    }
+
+    fn check_end(&mut self) {
+        let mut last: Option<DoneReason> = None;
+        let mut all_done = true;
+        let mut any_coverage = false;
+        for r in &self.robots {
+            match r.mission.state() {
+                MissionState::Done(d) => {
+                    any_coverage |= d == DoneReason::CoverageReached;
+                    last = Some(d);
+                }
+                _ => all_done = false,
+            }
+        }
+        let reason = if all_done {
+            if any_coverage {
+                Some(EndReason::CoverageReached)
+            } else {
+                last.map(EndReason::from)
+            }
+        } else if self.sim_time_s() >= self.config.max_sim_time_s {
+            Some(EndReason::TimeLimit)
+        } else {
+            None
+        };
+        if let Some(reason) = reason {
+            self.coverage.recount(&self.map.grid);
+            self.last_sample = None;
+            self.sample();
+            self.report.reason = Some(reason);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::SlipConfig;
+    use crate::world::builtin;
+    use papillon::mission::MissionConfig;
+
+    #[test]
+    fn bad_setups_are_refused() {
+        let w = builtin::lab(0.1).unwrap();
+        let cfg = RunConfig::new(MissionConfig::default(), 0, 1);
+        assert_eq!(
+            Runner::new(w.clone(), Dynamics::new(), cfg).unwrap_err(),
+            RunError::Robots(0)
+        );
+        let blocked = w.clone().with_start(Pose2::new(0.1, 0.1, 0.0));
+        let cfg = RunConfig::new(MissionConfig::default(), 1, 1);
+        let e = Runner::new(blocked, Dynamics::new(), cfg).unwrap_err();
+        assert!(matches!(e, RunError::StartBlocked { robot: 0, .. }), "{e}");
+        assert!(e.to_string().contains("(0.10 m, 0.10 m)"), "{e}");
+    }
+
+    #[test]
+    fn a_time_limit_ends_a_run_with_its_reason() {
+        let w = builtin::lab(0.1).unwrap();
+        let mut cfg = RunConfig::new(MissionConfig::default(), 1, 3);
+        cfg.max_sim_time_s = 2.0;
+        let mut runner = Runner::new(w, Dynamics::new(), cfg).unwrap();
+        let report = runner.run().unwrap();
+        assert_eq!(report.reason, Some(EndReason::TimeLimit));
+        assert!(
+            (report.sim_time_s - 2.0).abs() < 0.11,
+            "{}",
+            report.sim_time_s
+        );
+        assert!(report.coverage > 0.0, "the first scans are integrated");
+        assert_eq!(report.robots.len(), 1);
+        assert!(!report.coverage_curve.is_empty());
+    }
+
+    #[test]
+    fn without_slip_the_estimate_follows_the_true_pose() {
+        let w = builtin::lab(0.1).unwrap();
+        let mission = MissionConfig {
+            selector: papillon::mission::SelectorKind::NearestFrontier,
+            ..MissionConfig::default()
+        };
+        let mut cfg = RunConfig::new(mission, 1, 3);
+        cfg.body.slip = SlipConfig::none();
+        cfg.max_sim_time_s = 60.0;
+        let mut runner = Runner::new(w, Dynamics::new(), cfg).unwrap();
+        let report = runner.run().unwrap();
+        let r = &report.robots[0];
+        assert!(r.true_distance_m > 2.0, "{r:?}");
+        assert!(r.pose_error_m < 0.01, "pose error {} m", r.pose_error_m);
+    }
+}

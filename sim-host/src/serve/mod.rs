@@ -1,0 +1,385 @@
+//! The emulator server behind `papillon-sim serve`: a simulated world run in real time, with an
+//! emulated P3-DX microcontroller (ARCOS, on a pseudo-terminal and/or TCP) and an emulated SICK
+//! LMS1xx (CoLa-A over TCP) or LMS200 (on a second pseudo-terminal) per robot, so that the
+//! onboard binary or other P3-DX software can be tested exactly as it talks to the robot.
+//!
+//! [`Server::start`] loads the world, places the robots ([`crate::placement::start_poses`], the
+//! same rule as the fast runner's), opens every endpoint and starts the threads:
+//!
+//! - one physics thread steps every body to the wall clock about every 10 ms and writes the
+//!   truth log;
+//! - each endpoint (a pty master, or each client accepted on a TCP listener) has its own thread
+//!   running a sans-IO emulator ([`crate::emulator`]) against its robot's body
+//!   (`session.rs`).
+//!
+//! The bodies live in one `Mutex<Vec<RobotBody>>` shared by all threads (`Sim`); the clock is
+//! the wall clock since the start. With several robots, all share the world (each sees the
+//! others in its laser and collides with them) and robot `i` is served on the given ports plus
+//! `i` (`LINK-i` for ptys). Faults ([`crate::faults`]) are injected on the links, the laser and
+//! the bodies. [`Server::stop`] ends the threads' loops and removes the pty symlinks.
+
+mod pty;
+mod session;
+pub mod signal;
+
+use std::fmt;
+use std::io::{self, Write};
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use papillon::sensor::{LaserConfig, Scan};
+
+use crate::faults::Faults;
+use crate::laser::LaserSim;
+use crate::physics::{BodyConfig, Disc, RobotBody, SlipConfig, advance_all};
+use crate::placement::start_poses;
+use crate::world::World;
+
+/// Cell size of the served world \[m\].
+pub const MAP_RESOLUTION_M: f32 = 0.05;
+/// Robot name answered in SYNC2 and CONFIG.
+pub const ROBOT_NAME: &str = "papillon-sim";
+/// Period of the truth log \[s\].
+pub const TRUTH_PERIOD_S: f64 = 0.02;
+/// Where the LMS1xx is served when no address is given.
+pub const DEFAULT_LMS1XX_ADDR: &str = "127.0.0.1:2111";
+/// Where the LMS200's pty symlink goes when no path is given.
+pub const DEFAULT_LMS200_LINK: &str = "/tmp/papillon-sim-lms200";
+
+/// Which laser the server emulates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LaserModel {
+    /// SICK LMS1xx, CoLa-A over TCP.
+    Lms1xx,
+    /// SICK LMS200, telegrams over a serial line (a pty here).
+    Lms200,
+}
+
+/// What to serve.
+#[derive(Clone, Debug)]
+pub struct ServeConfig {
+    /// World: a built-in map name or a map file, loaded at [`MAP_RESOLUTION_M`].
+    pub map: String,
+    /// Serve ARCOS on a pseudo-terminal and make this path a symlink to its device.
+    pub pty: Option<PathBuf>,
+    /// Serve ARCOS over TCP on this address.
+    pub tcp: Option<String>,
+    /// Where the laser is served: a TCP address for the LMS1xx (default
+    /// [`DEFAULT_LMS1XX_ADDR`]), a pty symlink path for the LMS200 (default
+    /// [`DEFAULT_LMS200_LINK`]).
+    pub laser: Option<String>,
+    /// The emulated laser.
+    pub laser_model: LaserModel,
+    /// Seed of the simulation's random choices (wheel slip, faults).
+    pub seed: u64,
+    /// Faults to inject.
+    pub faults: Faults,
+    /// Robots sharing the world.
+    pub robots: usize,
+    /// Write each robot's true state to this file every [`TRUTH_PERIOD_S`] (JSON lines).
+    pub truth_log: Option<PathBuf>,
+    /// The emulated firmware's watchdog \[ms\].
+    pub watchdog_ms: u16,
+}
+
+/// An endpoint the server opened, for the announcement line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Endpoint {
+    /// The robot it serves.
+    pub robot: usize,
+    /// `arcos pty LINK -> DEVICE`, `arcos tcp ADDR`, `laser lms1xx tcp ADDR` or `laser lms200
+    /// pty LINK -> DEVICE`.
+    pub what: String,
+}
+
+/// The world and the robots, shared by the server's threads.
+struct Sim {
+    world: World,
+    watchdog_ms: u16,
+    bodies: Mutex<Vec<RobotBody>>,
+    start: Instant,
+    seed: u64,
+    faults: Faults,
+    /// ARCOS sessions opened so far (each draws its fault RNG from its number).
+    links: AtomicU64,
+    stop: AtomicBool,
+}
+
+impl Sim {
+    fn now_s(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    fn stopped(&self) -> bool {
+        self.stop.load(Ordering::SeqCst)
+    }
+
+    fn bodies(&self) -> MutexGuard<'_, Vec<RobotBody>> {
+        self.bodies.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// A scan from robot `robot`'s true pose; the other robots appear as discs.
+    fn scan(&self, robot: usize, config: LaserConfig) -> Scan {
+        let (pose, others) = {
+            let bodies = self.bodies();
+            let others: Vec<Disc> = bodies
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != robot)
+                .map(|(_, b)| b.disc())
+                .collect();
+            (bodies[robot].true_pose(), others)
+        };
+        LaserSim::new(config, self.seed ^ robot as u64).scan(&self.world, pose, &others)
+    }
+}
+
+/// A running server.
+pub struct Server {
+    sim: Arc<Sim>,
+    endpoints: Vec<Endpoint>,
+    links: Vec<PathBuf>,
+}
+
+impl fmt::Debug for Server {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Server")
+            .field("world", &self.sim.world.name())
+            .field("endpoints", &self.endpoints)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Server {
+    /// Loads the world, places the robots, opens every endpoint and starts the threads; the
+    /// error is one line.
+    pub fn start(config: &ServeConfig) -> Result<Self, String> {
+        let world = World::load(&config.map, MAP_RESOLUTION_M)
+            .map_err(|e| format!("cannot load map {:?}: {e}", config.map))?;
+        let n = config.robots;
+        // The thesis's slip (a slide of about 1.5 cm at the end of each move), as the mission
+        // runner uses: the core has no scan matching, so the full default slip smears its map.
+        let mut body = BodyConfig {
+            slip: SlipConfig::thesis(),
+            ..BodyConfig::default()
+        };
+        config.faults.apply_to_body(&mut body);
+        let bodies = start_poses(&world, world.start(), n, body.radius_m)
+            .map_err(|e| format!("{e} in map {:?}", world.name()))?
+            .into_iter()
+            .enumerate()
+            .map(|(i, pose)| RobotBody::new(body, pose, config.seed.wrapping_add(i as u64)))
+            .collect();
+        let sim = Arc::new(Sim {
+            world,
+            watchdog_ms: config.watchdog_ms,
+            bodies: Mutex::new(bodies),
+            start: Instant::now(),
+            seed: config.seed,
+            faults: config.faults.clone(),
+            links: AtomicU64::new(0),
+            stop: AtomicBool::new(false),
+        });
+        let truth = match &config.truth_log {
+            Some(path) => Some(io::BufWriter::new(
+                std::fs::File::create(path)
+                    .map_err(|e| format!("cannot create truth log {}: {e}", path.display()))?,
+            )),
+            None => None,
+        };
+        {
+            let sim = Arc::clone(&sim);
+            thread::spawn(move || physics_loop(&sim, truth));
+        }
+        let mut server = Server {
+            sim,
+            endpoints: Vec::new(),
+            links: Vec::new(),
+        };
+        if let Err(e) = server.open_endpoints(config) {
+            server.stop();
+            return Err(e);
+        }
+        Ok(server)
+    }
+
+    fn open_endpoints(&mut self, config: &ServeConfig) -> Result<(), String> {
+        let n = config.robots;
+        let sim = &self.sim;
+        for robot in 0..n {
+            let mut announce = |what: String| self.endpoints.push(Endpoint { robot, what });
+            if let Some(link) = &config.pty {
+                let link = robot_link(link, robot, n);
+                let what = serve_on_pty(sim, &link, robot, session::arcos_on_pty)?;
+                self.links.push(link);
+                announce(format!("arcos {what}"));
+            }
+            if let Some(addr) = &config.tcp {
+                let listener = bind(&offset_addr(addr, robot)?)?;
+                announce(format!("arcos tcp {}", local_addr(&listener)?));
+                let sim = Arc::clone(sim);
+                thread::spawn(move || {
+                    session::accept_loop(listener, sim, robot, session::serve_arcos_tcp)
+                });
+            }
+            match config.laser_model {
+                LaserModel::Lms1xx => {
+                    let addr = config.laser.as_deref().unwrap_or(DEFAULT_LMS1XX_ADDR);
+                    let listener = bind(&offset_addr(addr, robot)?)?;
+                    announce(format!("laser lms1xx tcp {}", local_addr(&listener)?));
+                    let sim = Arc::clone(sim);
+                    thread::spawn(move || {
+                        session::accept_loop(listener, sim, robot, session::serve_laser)
+                    });
+                }
+                LaserModel::Lms200 => {
+                    let link = config.laser.as_deref().unwrap_or(DEFAULT_LMS200_LINK);
+                    let link = robot_link(Path::new(link), robot, n);
+                    let what = serve_on_pty(sim, &link, robot, session::serve_lms200)?;
+                    self.links.push(link);
+                    announce(format!("laser lms200 {what}"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The endpoints opened, robot by robot, in the order they were opened.
+    pub fn endpoints(&self) -> &[Endpoint] {
+        &self.endpoints
+    }
+
+    /// Robots served.
+    pub fn robot_count(&self) -> usize {
+        self.sim.bodies().len()
+    }
+
+    /// Ends the threads' loops (within a poll period) and removes the pty symlinks.
+    pub fn stop(&mut self) {
+        self.sim.stop.store(true, Ordering::SeqCst);
+        for link in self.links.drain(..) {
+            let _ = std::fs::remove_file(&link);
+        }
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+fn bind(addr: &str) -> Result<TcpListener, String> {
+    TcpListener::bind(addr).map_err(|e| format!("cannot bind {addr}: {e}"))
+}
+
+fn local_addr(listener: &TcpListener) -> Result<std::net::SocketAddr, String> {
+    listener.local_addr().map_err(|e| e.to_string())
+}
+
+/// `addr` with its port moved up by `offset` (port 0, "any free port", stays 0).
+pub fn offset_addr(addr: &str, offset: usize) -> Result<String, String> {
+    if offset == 0 {
+        return Ok(addr.to_string());
+    }
+    let (host, port) = addr
+        .rsplit_once(':')
+        .ok_or_else(|| format!("{addr:?} is not HOST:PORT"))?;
+    let port: u16 = port
+        .parse()
+        .map_err(|_| format!("{addr:?}: bad port number"))?;
+    if port == 0 {
+        return Ok(addr.to_string());
+    }
+    let port = usize::from(port) + offset;
+    let port = u16::try_from(port).map_err(|_| format!("{addr:?}: port {port} is above 65535"))?;
+    Ok(format!("{host}:{port}"))
+}
+
+/// Steps every body to the server's clock about every 10 ms (the physics itself runs in its
+/// fixed steps, [`crate::physics::BodyConfig::step_s`]), presses and releases the e-stop
+/// faults, and writes the truth log every [`TRUTH_PERIOD_S`].
+fn physics_loop(sim: &Sim, mut truth: Option<io::BufWriter<std::fs::File>>) {
+    let mut next_truth_s = 0.0;
+    while !sim.stopped() {
+        thread::sleep(Duration::from_millis(10));
+        let now = sim.now_s();
+        let mut bodies = sim.bodies();
+        if !sim.faults.estops.is_empty() {
+            let pressed = sim.faults.estop_pressed(now);
+            for body in bodies.iter_mut() {
+                body.set_e_stop(pressed);
+            }
+        }
+        let dt = now - bodies[0].time_s();
+        if dt > 0.0 {
+            advance_all(&mut bodies, dt as f32, &sim.world, &[]);
+        }
+        if let Some(out) = truth.as_mut()
+            && now >= next_truth_s
+        {
+            next_truth_s = now + TRUTH_PERIOD_S;
+            let unix_s = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0.0, |d| d.as_secs_f64());
+            let mut lines = String::new();
+            for (i, b) in bodies.iter().enumerate() {
+                use std::fmt::Write as _;
+                let p = b.true_pose();
+                let _ = writeln!(
+                    lines,
+                    "{{\"t_s\":{now:.3},\"unix_s\":{unix_s:.3},\"robot\":{i},\"x_m\":{:.4},\"y_m\":{:.4},\"theta_rad\":{:.4},\"speed_mm_s\":{:.1},\"turn_deg_s\":{:.2},\"motors_enabled\":{}}}",
+                    p.x,
+                    p.y,
+                    p.theta,
+                    b.speed_mm_s(),
+                    b.turn_deg_s(),
+                    b.motors_enabled()
+                );
+            }
+            drop(bodies);
+            let written = out.write_all(lines.as_bytes());
+            if written.and_then(|()| out.flush()).is_err() {
+                eprintln!("papillon-sim serve: cannot write the truth log; it stops here");
+                truth = None;
+            }
+        }
+    }
+}
+
+/// The link of robot `robot` of `n`: `link` itself for one robot, `link-ROBOT` for several.
+fn robot_link(link: &Path, robot: usize, n: usize) -> PathBuf {
+    if n > 1 {
+        PathBuf::from(format!("{}-{robot}", link.display()))
+    } else {
+        link.to_path_buf()
+    }
+}
+
+/// Opens a pty, links `link` to its slave and serves robot `robot`'s device on the master with
+/// `serve` in a thread of its own. Returns the line announcing it (`pty LINK -> SLAVE`).
+fn serve_on_pty(
+    sim: &Arc<Sim>,
+    link: &Path,
+    robot: usize,
+    serve: fn(&Sim, usize, &mut std::fs::File),
+) -> Result<String, String> {
+    let (master, slave_path, slave) = pty::open_pty().map_err(|e| format!("openpty: {e}"))?;
+    pty::make_symlink(link, &slave_path)?;
+    let sim = Arc::clone(sim);
+    thread::spawn(move || {
+        // Holding the slave open keeps the master readable between client sessions.
+        let _slave = slave;
+        let mut master = std::fs::File::from(master);
+        serve(&sim, robot, &mut master);
+    });
+    Ok(format!(
+        "pty {} -> {}",
+        link.display(),
+        slave_path.display()
+    ))
+}
