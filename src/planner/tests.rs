@@ -555,17 +555,18 @@ fn the_bucket_queue_finds_the_radix_heap_costs_bit_for_bit() {
     );
 }
 
-/// The planning layer of a P3-DX (0.381 m wide, 0.267 m swing radius) with 5 cm of clearance:
-/// blocked within 0.24 m of a wall, no turning within 0.317 m, near-wall cost within 0.517 m.
+/// The planning layer of a P3-DX (0.381 m wide, 0.267 m swing radius) with 5 cm of clearance
+/// at 0.1 m cells (`mission::footprint`): blocked within 0.29 m of a wall's cell centre, no
+/// turning within 0.367 m, near-wall cost within 0.517 m.
 fn p3dx_bands() -> TraversabilityConfig {
     TraversabilityConfig {
-        robot_radius_m: 0.1905 + 0.05,
+        robot_radius_m: 0.1905 + 0.05 + 0.05,
         unknown_policy: UnknownPolicy::Traversable { cost_factor: 1.0 },
         bands: WallBands {
-            no_turn_radius_m: 0.267 + 0.05,
-            no_turn_cost_factor: 3.0,
-            near_radius_m: 0.267 + 0.05 + 0.2,
-            near_cost_factor: 1.5,
+            no_turn_radius_m: 0.267 + 0.05 + 0.05,
+            no_turn_cost_factor: 2.0,
+            near_radius_m: 0.267 + 0.05 + 0.05 + 0.15,
+            near_cost_factor: 1.3,
         },
     }
 }
