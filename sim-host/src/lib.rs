@@ -9,6 +9,7 @@ pub mod faults;
 pub mod laser;
 pub mod mission_run;
 pub mod movingai;
+pub mod optimize;
 pub mod physics;
 pub mod placement;
 pub mod render;
