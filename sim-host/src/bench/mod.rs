@@ -3,6 +3,7 @@
 //! statistics, graphs).
 //!
 //! - [`sweep`]: what runs an experiment is made of, seeds, shards;
+//! - [`select`]: which sweep (a named experiment or a file) and the caller's overrides;
 //! - [`exec`]: running them in parallel with progress;
 //! - [`sim`]: one run in the simulator ([`crate::runner`]);
 //! - [`record`]: per-run records (`runs.jsonl`, `results.csv`);
@@ -15,6 +16,7 @@
 pub mod exec;
 pub mod plot;
 pub mod record;
+pub mod select;
 pub mod sim;
 pub mod summary;
 pub mod sweep;
