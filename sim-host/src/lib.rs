@@ -17,4 +17,5 @@ pub mod runner;
 pub mod scenario;
 pub mod score;
 pub mod serve;
+pub mod shared_data;
 pub mod world;
