@@ -188,6 +188,15 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Merged, String> {
     })
 }
 
+/// [`merge`]s the shards in `dirs` and writes the whole sweep's outputs (`sweep.json` and
+/// everything [`write_outputs`] writes) into `out`, even when runs are missing.
+pub fn merge_into(dirs: &[PathBuf], out: &Path) -> Result<Merged, String> {
+    let merged = merge(dirs)?;
+    write_sweep_file(out, &merged.sweep, Shard::ALL)?;
+    write_outputs(out, &merged.sweep.name, &merged.records)?;
+    Ok(merged)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
