@@ -3,6 +3,7 @@
 //! statistics, graphs).
 //!
 //! - [`sweep`]: what runs an experiment is made of, seeds, shards;
+//! - [`select`]: which sweep (a named experiment or a file) and the caller's overrides;
 //! - [`exec`]: running them in parallel with progress;
 //! - [`sim`]: one run in the simulator ([`crate::runner`]);
 //! - [`record`]: per-run records (`runs.jsonl`, `results.csv`);
@@ -15,6 +16,7 @@
 pub mod exec;
 pub mod plot;
 pub mod record;
+pub mod select;
 pub mod sim;
 pub mod summary;
 pub mod sweep;
@@ -184,6 +186,15 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Merged, String> {
         records: by_index.into_values().collect(),
         missing,
     })
+}
+
+/// [`merge`]s the shards in `dirs` and writes the whole sweep's outputs (`sweep.json` and
+/// everything [`write_outputs`] writes) into `out`, even when runs are missing.
+pub fn merge_into(dirs: &[PathBuf], out: &Path) -> Result<Merged, String> {
+    let merged = merge(dirs)?;
+    write_sweep_file(out, &merged.sweep, Shard::ALL)?;
+    write_outputs(out, &merged.sweep.name, &merged.records)?;
+    Ok(merged)
 }
 
 #[cfg(test)]

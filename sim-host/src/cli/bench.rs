@@ -1,5 +1,6 @@
 //! `papillon-sim bench`: run an experiment (a named one or a JSON sweep) in parallel, or merge
-//! the results of its shards ([`crate::bench`]).
+//! the results of its shards ([`crate::bench`]; the sweep is chosen by
+//! [`crate::bench::select`]).
 //!
 //! Bad arguments and unreadable files exit with status 2 and one line on standard error; a
 //! sweep whose runs failed exits with status 1 after writing its outputs.
@@ -8,7 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use crate::bench::exec::ProgressMode;
-use crate::bench::sweep::{self, EXPERIMENTS, Shard, Sweep};
+use crate::bench::select::{Overrides, SelectError, Source, ThesisMaps, select};
+use crate::bench::sweep::{Shard, Sweep};
 use crate::bench::{self as b, run_sweep};
 
 /// Arguments of `papillon-sim bench`.
@@ -75,48 +77,28 @@ pub struct MergeArgs {
 
 /// The sweep the arguments ask for.
 pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
-    let mut sweep = match (&args.experiment, &args.config) {
-        (Some(name), None) => {
-            let extra = if args.no_thesis_maps {
-                Vec::new()
-            } else if let Some(dir) = &args.thesis_maps {
-                let found = sweep::thesis_maps_in(dir);
-                if found.is_empty() {
-                    return Err(format!(
-                        "--thesis-maps: {} has no map-empty.csv and map-house.csv",
-                        dir.display()
-                    ));
-                }
-                found
-            } else {
-                sweep::find_thesis_maps()
-            };
-            Sweep::named(name, args.runs.unwrap_or(sweep::DEFAULT_RUNS), &extra).ok_or_else(
-                || {
-                    format!(
-                        "--experiment: unknown experiment '{name}', expected one of: {}",
-                        EXPERIMENTS.join(", ")
-                    )
-                },
-            )?
-        }
-        (None, Some(path)) => {
-            let mut s = Sweep::from_file(path)?;
-            if let Some(r) = args.runs {
-                s.runs = r;
-            }
-            s
-        }
+    let source = match (&args.experiment, &args.config) {
+        (Some(name), None) => Source::Named {
+            name: name.clone(),
+            thesis_maps: match (&args.thesis_maps, args.no_thesis_maps) {
+                (_, true) => ThesisMaps::Skip,
+                (Some(dir), false) => ThesisMaps::In(dir.clone()),
+                (None, false) => ThesisMaps::Find,
+            },
+        },
+        (None, Some(path)) => Source::File(path.clone()),
         _ => return Err("give --experiment NAME or --config FILE".into()),
     };
-    if let Some(maps) = &args.maps {
-        sweep.maps = maps.clone();
-    }
-    if let Some(b) = args.battery {
-        sweep.battery_steps = Some(b);
-    }
-    sweep.check()?;
-    Ok(sweep)
+    let overrides = Overrides {
+        runs: args.runs,
+        maps: args.maps.clone(),
+        battery_steps: args.battery,
+    };
+    select(&source, &overrides).map_err(|e| match e {
+        SelectError::UnknownExperiment(_) => format!("--experiment: {e}"),
+        SelectError::NoThesisMaps(_) => format!("--thesis-maps: {e}"),
+        SelectError::Sweep(_) => e.to_string(),
+    })
 }
 
 fn fail(msg: &str) -> ExitCode {
@@ -173,7 +155,7 @@ pub fn run(args: Args) -> ExitCode {
 }
 
 fn merge(m: &MergeArgs) -> ExitCode {
-    let merged = match b::merge(&m.dirs) {
+    let merged = match b::merge_into(&m.dirs, &m.out) {
         Ok(x) => x,
         Err(e) => return fail(&e),
     };
@@ -185,17 +167,10 @@ fn merge(m: &MergeArgs) -> ExitCode {
             merged.missing[0]
         );
     }
-    let result = b::write_sweep_file(&m.out, &merged.sweep, Shard::ALL)
-        .and_then(|_| b::write_outputs(&m.out, &merged.sweep.name, &merged.records));
-    match result {
-        Ok(_) => {
-            println!("{}", m.out.join("summary.md").display());
-            if merged.missing.is_empty() {
-                ExitCode::SUCCESS
-            } else {
-                ExitCode::from(1)
-            }
-        }
-        Err(e) => fail(&e),
+    println!("{}", m.out.join("summary.md").display());
+    if merged.missing.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
     }
 }

@@ -144,15 +144,13 @@ mod tests {
 
     #[test]
     fn thesis_house_map_loads_at_ten_centimetres() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../shared/data/thesis-maps/map-house.csv"
-        );
-        if !Path::new(path).exists() {
-            // The shared data folder is not part of a plain checkout.
+        let Some(path) = crate::shared_data::locate_or_skip(
+            "thesis_house_map_loads_at_ten_centimetres",
+            "data/thesis-maps/map-house.csv",
+        ) else {
             return;
-        }
-        let w = World::load(path, 0.1).unwrap();
+        };
+        let w = World::load(&path.to_string_lossy(), 0.1).unwrap();
         assert_eq!((w.geometry().width, w.geometry().height), (240, 240));
         assert_eq!(w.blocked_count(), 155 * 100);
         let f = w.occupied_fraction();

@@ -66,10 +66,12 @@ mod tests {
 
     #[test]
     fn the_benchmark_arena_loads() {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/movingai/arena.map");
-        if !p.exists() {
+        let Some(p) = crate::shared_data::locate_or_skip(
+            "the_benchmark_arena_loads",
+            "data/movingai/arena.map",
+        ) else {
             return;
-        }
+        };
         let w = load(&p, 0.1).unwrap();
         assert_eq!((w.geometry().width, w.geometry().height), (49, 49));
     }
