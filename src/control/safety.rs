@@ -199,6 +199,10 @@ pub struct SafetyInputs<'a> {
     pub laser: &'a LaserConfig,
     /// The robot's flags from its latest SIP.
     pub flags: RobotFlags,
+    /// Obstacles the map remembers around the robot, in the base frame \[m\]: what the laser
+    /// cannot see (behind a 180° laser, inside its blind zone) but a turn or a back-off would
+    /// run into. Empty when the caller has no map.
+    pub remembered: &'a [Point2],
 }
 
 /// Why the monitor is holding the robot until a fresh plan.
@@ -473,10 +477,15 @@ impl SafetyMonitor {
             }
             SafetyState::Monitoring => self.limits.clamp(proposed),
         };
-        if let Some((distance_m, point_base_m)) = inputs
+        let seen = inputs
             .scan
-            .and_then(|s| self.obstacle_in_path(command, s, inputs.laser))
-        {
+            .and_then(|s| self.obstacle_in_path(command, s, inputs.laser));
+        let remembered = self.nearest_in_path(command, inputs.remembered.iter().copied());
+        let nearest = match (seen, remembered) {
+            (Some(a), Some(b)) => Some(if b.0 < a.0 { b } else { a }),
+            (a, b) => a.or(b),
+        };
+        if let Some((distance_m, point_base_m)) = nearest {
             let cause = match self.state {
                 SafetyState::BackingOff { .. } => HoldCause::Contact,
                 _ => HoldCause::Obstacle,
@@ -547,15 +556,36 @@ impl SafetyMonitor {
         };
         let mount_m = math::hypot(laser.mount.x, laser.mount.y);
         let reach_m = (within_m + mount_m) * 1.001 + 0.001;
-        let mut nearest: Option<(f32, Point2)> = None;
-        for beam in scan.beams() {
-            let Some(r) = beam.range_m else { continue };
-            if !(r.is_finite() && r >= self.config.min_valid_range_m && r <= reach_m) {
-                continue;
+        let min_m = self.config.min_valid_range_m;
+        let points = scan.beams().iter().filter_map(|beam| {
+            let r = beam.range_m?;
+            if !(r.is_finite() && r >= min_m && r <= reach_m) {
+                return None;
             }
             let in_laser =
                 Point2::new(r * math::cos(beam.angle_rad), r * math::sin(beam.angle_rad));
-            let p = laser.mount.transform_point(in_laser);
+            Some(laser.mount.transform_point(in_laser))
+        });
+        self.nearest_in_path(v, points)
+    }
+
+    /// The nearest of `points` (base frame \[m\]) that `v` would run into: its clearance \[m\]
+    /// and the point.
+    fn nearest_in_path(
+        &self,
+        v: Velocity,
+        points: impl Iterator<Item = Point2>,
+    ) -> Option<(f32, Point2)> {
+        let speed_mm_s = v.speed_mm_s();
+        if speed_mm_s == 0 && v.turn_rate_deg_s() == 0 {
+            return None;
+        }
+        let fp = self.config.footprint;
+        let half_width = self.corridor_half_width_m(mm_to_m(f32::from(speed_mm_s)));
+        let stop_m = self.stopping_distance_m(mm_to_m(f32::from(speed_mm_s)));
+        let turn_limit = fp.radius_m + self.config.turn_margin_m;
+        let mut nearest: Option<(f32, Point2)> = None;
+        for p in points {
             let clearance = if speed_mm_s > 0 {
                 (p.x > 0.0 && math::abs(p.y) <= half_width && p.x - fp.front_m < stop_m)
                     .then_some(p.x - fp.front_m)
@@ -696,8 +726,14 @@ mod tests {
     }
 
     impl Bench {
+        /// A monitor of the P3-DX with bumper rings (425 mm wide, 301 mm to the rear, 0.25 m
+        /// radius), whose geometry the distances below are worked out for.
         fn new() -> Self {
-            let mut monitor = SafetyMonitor::new(SafetyConfig::default(), Limits::default());
+            let config = SafetyConfig {
+                footprint: RobotFootprint::p3dx_with_bumpers(),
+                ..SafetyConfig::default()
+            };
+            let mut monitor = SafetyMonitor::new(config, Limits::default());
             monitor.acknowledge_replan().unwrap();
             Self {
                 monitor,
@@ -727,6 +763,7 @@ mod tests {
                 scan_time: self.scan_time,
                 laser: &self.laser,
                 flags: self.flags,
+                remembered: &[],
             };
             self.monitor.filter(self.now, proposed, &inputs)
         }
@@ -770,6 +807,7 @@ mod tests {
             scan_time: Some(Time::ZERO),
             laser: &laser,
             flags: RobotFlags::nominal(),
+            remembered: &[],
         };
         let (cmd, _) = m.filter(Time::ZERO, forward(200), &inputs);
         assert_eq!(cmd, RobotCommand::Stop);
@@ -877,6 +915,45 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn remembered_obstacles_stop_a_turn_the_laser_cannot_see() {
+        let mut b = Bench::new();
+        let spin = MotionCommand {
+            speed_mm_s: 0,
+            turn_rate_deg_s: 30,
+        };
+        // Nothing in the scan; the map remembers a wall corner 0.28 m behind the robot.
+        let behind = [Point2::new(-0.28, 0.0)];
+        assert!(moving(b.tick(spin).0));
+        let inputs = SafetyInputs {
+            pose_odom: b.pose_odom,
+            odometry_time: b.odometry_time,
+            scan: Some(&b.scan),
+            scan_time: b.scan_time,
+            laser: &b.laser,
+            flags: b.flags,
+            remembered: &behind,
+        };
+        let (cmd, ev) = b.monitor.filter(b.now, spin, &inputs);
+        assert_eq!(cmd, RobotCommand::Stop);
+        assert!(matches!(ev, Some(SafetyEvent::ObstacleAhead { .. })));
+    }
+
+    #[test]
+    fn a_creeping_p3dx_fits_a_half_metre_door() {
+        // The body (0.381 m) centred 2 cm off the middle of a 0.5 m door, frame faces 0.23 m
+        // and 0.27 m to the sides, 0.3 m ahead: at 100 mm/s the corridor (0.19 + 0.02 + 0.01
+        // m each side) passes between them; at 400 mm/s it does not.
+        let mut monitor = SafetyMonitor::new(SafetyConfig::default(), Limits::default());
+        monitor.acknowledge_replan().unwrap();
+        let frame = [Point2::new(0.5, 0.23), Point2::new(0.5, -0.27)];
+        let limits = Limits::default();
+        let slow = monitor.nearest_in_path(limits.clamp(forward(100)), frame.iter().copied());
+        assert_eq!(slow, None);
+        let fast = monitor.nearest_in_path(limits.clamp(forward(400)), frame.iter().copied());
+        assert!(fast.is_some());
     }
 
     #[test]

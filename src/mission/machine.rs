@@ -425,6 +425,7 @@ impl<const N: usize> Mission<N> {
             scan_time: self.scan_time,
             laser: &self.config.laser,
             flags: self.flags,
+            remembered: &[],
         };
         let (command, safety) = self.monitor.filter(now, proposed, &inputs);
         if let Some(event) = safety {
