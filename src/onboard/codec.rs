@@ -12,6 +12,7 @@ use super::arcos::{
     ArcosCodec, ClientCommand, CodecStats, ConfigHighlights, Incoming, RobotIdentity, RobotStatus,
 };
 use super::laser::{LaserCodec, LaserCodecStats, LaserReply, LaserRequest};
+use crate::sensor::telegram::lms1xx_scan;
 use crate::sensor::{LaserConfig, Scan};
 use crate::wire::arcos::{
     Command, ConfigPacket, FrameDecoder, ServerPacket, StatusPacket, SyncReply,
@@ -203,7 +204,7 @@ impl WireLms1xx {
         if is_scan_data(payload) {
             let telegram = ScanTelegram::parse(payload).ok()?;
             let mut scan = Box::new(Scan::new());
-            telegram.to_scan(laser.max_range_m, &mut scan).ok()?;
+            lms1xx_scan(&telegram, laser.max_range_m, &mut scan).ok()?;
             return Some(LaserReply::Scan(scan));
         }
         let reply = Reply::parse(payload).ok()?;
