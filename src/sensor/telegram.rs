@@ -57,9 +57,7 @@ impl From<ScanError> for ToScanError {
 /// An LMS1xx telegram's distance channel as a scan in `out` (cleared first). Ranges above
 /// `max_range_m` \[m\] become "no return".
 pub fn lms1xx_scan(t: &ScanTelegram, max_range_m: f32, out: &mut Scan) -> Result<(), ToScanError> {
-    let c = t
-        .distance_channel()
-        .ok_or(ToScanError::NoDistanceChannel)?;
+    let c = t.distance_channel().ok_or(ToScanError::NoDistanceChannel)?;
     if !c.scale.is_finite() || !c.offset.is_finite() {
         return Err(ToScanError::BadScale {
             scale: c.scale,

@@ -501,7 +501,6 @@ pub(crate) mod tests {
         let mut buf = std::vec![0u8; 8192];
         let n = t.emit(&mut buf).unwrap();
         assert_eq!(&buf[..n], &frame[..]);
-
     }
 
     #[test]
