@@ -274,8 +274,8 @@ pub enum RobotEvent {
     Status {
         /// Arrival time.
         at: Instant,
-        /// The packet.
-        status: StatusPacket,
+        /// The packet (boxed: a SIP carries up to 32 sonar readings).
+        status: Box<StatusPacket>,
     },
     /// A CONFIG packet (after a CONFIG request).
     Config(Box<ConfigPacket>),
@@ -592,7 +592,7 @@ impl ArcosClient {
                     self.stats.status_packets += 1;
                     return Ok(Some(RobotEvent::Status {
                         at: Instant::now(),
-                        status,
+                        status: Box::new(status),
                     }));
                 }
                 ServerPacket::Config(c) => return Ok(Some(RobotEvent::Config(Box::new(c)))),

@@ -671,7 +671,7 @@ async fn next_status(
     let deadline = Instant::now() + wait;
     while let Some(ev) = client.next_event(deadline).await? {
         if let super::robot::RobotEvent::Status { status, .. } = ev {
-            return Ok(Some(status));
+            return Ok(Some(*status));
         }
     }
     Ok(None)
