@@ -111,7 +111,7 @@ fn bench(c: &mut Criterion) {
             let mut n = 0usize;
             while let Some(p) = dec.decode(&mut input) {
                 let t = ScanTelegram::parse(p).unwrap();
-                t.to_scan(4.0, &mut scan).unwrap();
+                papillon::sensor::telegram::lms1xx_scan(&t, 4.0, &mut scan).unwrap();
                 n += scan.len();
             }
             n

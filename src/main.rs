@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use papillon::config::{Address, BoardConfig, ConfigError};
-use papillon::onboard::runtime::{self, ProbeOptions, RunOptions, RunOutcome};
+use papillon::onboard::runtime::{self, ProbeOptions, RunOptions};
 
 #[derive(Parser)]
 #[command(
@@ -82,9 +82,6 @@ struct RunArgs {
 
 /// Exit code for a missing or unreadable file.
 const EXIT_FILE: u8 = 2;
-
-/// Exit code of `run` when this build has no mission yet (start-up checked, robot stopped).
-const EXIT_NO_MISSION: u8 = 3;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -209,7 +206,7 @@ fn probe(args: ProbeArgs) -> ExitCode {
     let result = runtime().block_on(async {
         let mut out = std::io::stdout();
         tokio::select! {
-            r = runtime::probe_with(&options, runtime::arcos_codec(), &mut out) => r,
+            r = runtime::probe_with(&options, &mut out) => r,
             _ = runtime::shutdown_signal() => {
                 // The session is dropped; the firmware watchdog stops the robot within 2 s.
                 eprintln!("papillon: probe interrupted");
@@ -265,18 +262,11 @@ fn run(args: RunArgs) -> ExitCode {
     };
     let result = runtime().block_on(runtime::run_with(
         options,
-        runtime::arcos_codec,
         runtime::laser_codec,
         runtime::mission_driver,
         runtime::shutdown_signal(),
     ));
     match result {
-        Ok(RunOutcome::MissionUnavailable) => {
-            eprintln!(
-                "papillon: start-up checked; autonomous missions are not yet available in this build. Robot stopped, motors disabled."
-            );
-            ExitCode::from(EXIT_NO_MISSION)
-        }
         Ok(_) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("papillon: {e}");

@@ -24,6 +24,8 @@ use crate::math;
 use crate::raycast;
 use crate::units::deg_to_rad;
 
+pub mod telegram;
+
 /// Beams a scan can hold: an LMS1xx at 0.25° over 270° (1081 beams).
 pub const MAX_BEAMS: usize = 1081;
 

@@ -21,7 +21,7 @@ fuzz_target!(|data: &[u8]| {
         while let Some(p) = dec.decode(&mut input) {
             if scandata::is_scan_data(p) {
                 if let Ok(t) = ScanTelegram::parse(p) {
-                    let _ = t.to_scan(4.0, &mut scan);
+                    let _ = papillon::sensor::telegram::lms1xx_scan(&t, 4.0, &mut scan);
                     let n = t.emit(&mut out).expect("fits");
                     let t2 = ScanTelegram::parse(&out[1..n - 1]).expect("re-parses");
                     let m = t2.emit(&mut again).expect("fits");

@@ -26,7 +26,7 @@ fuzz_target!(|data: &[u8]| {
             if let Ok(r) = Response::parse(&t) {
                 if let Response::MeasuredValues(m) = &r {
                     let v = Variant::DEG180_RES05;
-                    let _ = m.to_scan(v.first_angle_rad(), v.step_rad(), 0x1FFF, 8.0, &mut scan);
+                    let _ = papillon::sensor::telegram::lms200_scan(m, v, 0x1FFF, 8.0, &mut scan);
                 }
                 let n = r.emit(&mut out).expect("fits");
                 let back = Telegram::new_checked(&out[..n]).expect("checks");

@@ -1,22 +1,21 @@
-//! The client sessions' codecs over `crate::wire`: [`WireArcos`] (ARCOS, fact sheet section 1)
+//! The client sessions' codecs over `crate::wire`: [`ArcosCodec`] (ARCOS, fact sheet section 1)
 //! and [`WireLms1xx`] (SICK LMS1xx CoLa-A, fact sheet section 2).
 //!
-//! These adapters hold no protocol knowledge of their own: framing, checksums, packet layouts
-//! and resynchronisation are the wire module's ([`crate::wire::arcos::FrameDecoder`],
+//! These hold no protocol knowledge of their own: framing, checksums, packet layouts and
+//! resynchronisation are the wire module's ([`crate::wire::arcos::FrameDecoder`],
 //! [`crate::wire::arcos::ServerPacket`], [`crate::wire::arcos::Command`],
 //! [`crate::wire::lms1xx::ColaDecoder`], [`crate::wire::lms1xx::Reply`],
-//! [`crate::wire::lms1xx::ScanTelegram`]). They only map the wire types onto the session's
-//! vocabulary ([`super::arcos`], [`super::laser`]).
+//! [`crate::wire::lms1xx::ScanTelegram`]). [`ArcosCodec`] speaks the wire's own types and adds
+//! the link counters of the telemetry; [`WireLms1xx`] maps CoLa-A replies onto the laser
+//! session's connect steps ([`super::laser`]) and turns scan telegrams into scans through
+//! [`crate::sensor::telegram`].
 
-use super::arcos::{
-    ArcosCodec, ClientCommand, CodecStats, ConfigHighlights, Incoming, RobotIdentity, RobotStatus,
-};
+use std::fmt;
+
 use super::laser::{LaserCodec, LaserCodecStats, LaserReply, LaserRequest};
+use crate::sensor::telegram::lms1xx_scan;
 use crate::sensor::{LaserConfig, Scan};
-use crate::wire::arcos::{
-    Command, ConfigPacket, FrameDecoder, ServerPacket, StatusPacket, SyncReply,
-    command::MAX_COMMAND_LEN,
-};
+use crate::wire::arcos::{Command, FrameDecoder, ServerPacket, command::MAX_COMMAND_LEN};
 use crate::wire::lms1xx::{
     ColaDecoder, Dialect, Reply, Request, ScanDataConfig, ScanTelegram,
     command::check_reply,
@@ -24,126 +23,67 @@ use crate::wire::lms1xx::{
     scandata::is_scan_data,
 };
 
-/// The wire command of a session command (ARIA's arguments: OPEN 1, CLOSE 1, CONFIG 1).
-pub fn wire_command(command: &ClientCommand) -> Command {
-    match *command {
-        ClientCommand::Sync(0) => Command::SYNC0,
-        ClientCommand::Sync(1) => Command::SYNC1,
-        ClientCommand::Sync(_) => Command::SYNC2,
-        ClientCommand::Pulse => Command::Pulse,
-        ClientCommand::Open => Command::Open(Some(1)),
-        ClientCommand::Close => Command::Close(Some(1)),
-        ClientCommand::Enable(on) => Command::Enable(on),
-        ClientCommand::SetA(v) => Command::SetA(v),
-        ClientCommand::SetV(v) => Command::SetV(v),
-        ClientCommand::SetO => Command::SetO,
-        ClientCommand::SetRv(v) => Command::SetRv(v),
-        ClientCommand::Vel(v) => Command::Vel(v),
-        ClientCommand::Config => Command::Config(Some(1)),
-        ClientCommand::RVel(v) => Command::RVel(v),
-        ClientCommand::SetRa(v) => Command::SetRa(v),
-        ClientCommand::Stop => Command::Stop,
-        ClientCommand::HostBaud(v) => Command::HostBaud(v),
-        ClientCommand::BatteryInfo(v) => Command::BatteryInfo(v),
+/// Decoder counters, for link statistics in the telemetry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CodecStats {
+    /// Well-formed packets decoded.
+    pub packets: u64,
+    /// Frames dropped for a bad checksum.
+    pub bad_checksums: u64,
+    /// Bytes skipped while hunting for a frame header.
+    pub junk_bytes: u64,
+    /// Frames with a good checksum whose payload did not parse.
+    pub bad_payloads: u64,
+}
+
+impl fmt::Display for CodecStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} packets, {} bad checksums, {} junk bytes, {} bad payloads",
+            self.packets, self.bad_checksums, self.junk_bytes, self.bad_payloads
+        )
     }
 }
 
-/// The session's view of a status packet.
-pub fn robot_status(p: &StatusPacket) -> RobotStatus {
-    RobotStatus {
-        moving: p.moving,
-        x_pos: p.x_pos,
-        y_pos: p.y_pos,
-        th_pos: p.th_pos,
-        left_vel_mm_s: p.left_vel_mm_s,
-        right_vel_mm_s: p.right_vel_mm_s,
-        battery_dv: p.battery_dv,
-        stall_bumpers: p.stall_bumpers,
-        flags: p.flags,
-    }
-}
-
-/// The CONFIG fields the session uses or prints.
-pub fn config_highlights(c: &ConfigPacket) -> ConfigHighlights {
-    ConfigHighlights {
-        class: c.robot_type.as_str().into(),
-        subclass: c.subtype.as_str().into(),
-        serial: c.serial.as_str().into(),
-        name: c.name.as_str().into(),
-        rot_vel_top_deg_s: c.rot_vel_top,
-        trans_vel_top_mm_s: c.trans_vel_top,
-        rot_acc_top_deg_s2: c.rot_acc_top,
-        trans_acc_top_mm_s2: c.trans_acc_top,
-        sip_cycle_ms: c.sip_cycle_ms,
-        host_baud_code: c.host_baud,
-        watchdog_ms: c.watchdog_ms,
-        rot_vel_max_deg_s: c.rot_vel_max,
-        trans_vel_max_mm_s: c.trans_vel_max,
-        auto_baud: c.auto_baud,
-        firmware: c
-            .extras
-            .firmware_version
-            .as_ref()
-            .map(|v| v.as_str().to_string())
-            .unwrap_or_default(),
-    }
-}
-
-/// The ARCOS client codec over [`crate::wire::arcos`].
+/// The ARCOS client codec: [`Command`]s to frames, received bytes (any split, junk,
+/// corruption) to [`ServerPacket`]s, with counters.
 #[derive(Default)]
-pub struct WireArcos {
+pub struct ArcosCodec {
     decoder: FrameDecoder,
     /// Frames with a good checksum whose payload did not parse.
     bad_payloads: u64,
 }
 
-impl ArcosCodec for WireArcos {
-    fn encode(&mut self, command: &ClientCommand, out: &mut Vec<u8>) {
+impl ArcosCodec {
+    /// Appends the complete frame of `command` to `out`.
+    pub fn encode(&mut self, command: &Command, out: &mut Vec<u8>) {
         let mut buf = [0u8; MAX_COMMAND_LEN];
-        // Every session command has an int argument in range: emitting cannot fail.
-        if let Ok(n) = wire_command(command).emit(&mut buf) {
+        // The session's commands have int arguments in range: emitting cannot fail.
+        if let Ok(n) = command.emit(&mut buf) {
             out.extend_from_slice(&buf[..n]);
         }
     }
 
-    fn decode(&mut self, bytes: &[u8], out: &mut Vec<Incoming>) {
+    /// Feeds received bytes; appends every packet completed by them to `out`. A frame whose
+    /// payload does not parse is counted, never returned. Never panics.
+    pub fn decode(&mut self, bytes: &[u8], out: &mut Vec<ServerPacket>) {
         let mut input = bytes;
         while let Some(frame) = self.decoder.decode(&mut input) {
-            let packet = match ServerPacket::parse(&frame) {
-                Ok(p) => p,
-                Err(_) => {
-                    self.bad_payloads += 1;
-                    continue;
-                }
-            };
-            out.push(match packet {
-                ServerPacket::Sync(SyncReply::Sync0) => Incoming::SyncEcho(0),
-                ServerPacket::Sync(SyncReply::Sync1) => Incoming::SyncEcho(1),
-                ServerPacket::Sync(SyncReply::Sync2 {
-                    name,
-                    class,
-                    subclass,
-                }) => Incoming::Identity(RobotIdentity {
-                    name: name.as_str().into(),
-                    class: class.as_str().into(),
-                    subclass: subclass.as_str().into(),
-                }),
-                ServerPacket::Status(s) => Incoming::Status(robot_status(&s)),
-                ServerPacket::Config(c) => Incoming::Config(config_highlights(&c)),
-                ServerPacket::Reset { id } => Incoming::Reset { id },
-                ServerPacket::Encoder(_) => Incoming::Other {
-                    id: crate::wire::arcos::encoder::ID,
-                },
-                ServerPacket::Other { id } => Incoming::Other { id },
-            });
+            match ServerPacket::parse(&frame) {
+                Ok(p) => out.push(p),
+                Err(_) => self.bad_payloads += 1,
+            }
         }
     }
 
-    fn reset(&mut self) {
+    /// Forgets any partial frame (after a baud change or a reconnect).
+    pub fn reset(&mut self) {
         self.decoder.reset();
     }
 
-    fn stats(&self) -> CodecStats {
+    /// Counters since the codec was made.
+    pub fn stats(&self) -> CodecStats {
         let s = self.decoder.stats();
         CodecStats {
             packets: s.frames,
@@ -203,7 +143,7 @@ impl WireLms1xx {
         if is_scan_data(payload) {
             let telegram = ScanTelegram::parse(payload).ok()?;
             let mut scan = Box::new(Scan::new());
-            telegram.to_scan(laser.max_range_m, &mut scan).ok()?;
+            lms1xx_scan(&telegram, laser.max_range_m, &mut scan).ok()?;
             return Some(LaserReply::Scan(scan));
         }
         let reply = Reply::parse(payload).ok()?;
@@ -257,7 +197,7 @@ impl LaserCodec for WireLms1xx {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wire::arcos::{config, sip};
+    use crate::wire::arcos::{SyncReply, config, sip};
 
     fn emit_server(p: &ServerPacket) -> Vec<u8> {
         let mut buf = [0u8; crate::wire::arcos::frame::MAX_FRAME_LEN];
@@ -267,25 +207,19 @@ mod tests {
 
     #[test]
     fn commands_are_the_fact_sheet_bytes() {
-        let mut c = WireArcos::default();
-        let bytes = |c: &mut WireArcos, cmd| {
+        let mut c = ArcosCodec::default();
+        let bytes = |c: &mut ArcosCodec, cmd| {
             let mut out = Vec::new();
             c.encode(&cmd, &mut out);
             out
         };
         // SYNC0 and STOP, fact sheet 1.1; OPEN with ARIA's int argument 1.
-        assert_eq!(
-            bytes(&mut c, ClientCommand::Sync(0)),
-            [0xFA, 0xFB, 3, 0, 0, 0]
-        );
-        assert_eq!(
-            bytes(&mut c, ClientCommand::Stop),
-            [0xFA, 0xFB, 3, 0x1D, 0, 0x1D]
-        );
-        let open = bytes(&mut c, ClientCommand::Open);
+        assert_eq!(bytes(&mut c, Command::SYNC0), [0xFA, 0xFB, 3, 0, 0, 0]);
+        assert_eq!(bytes(&mut c, Command::Stop), [0xFA, 0xFB, 3, 0x1D, 0, 0x1D]);
+        let open = bytes(&mut c, Command::Open(Some(1)));
         assert_eq!(&open[..7], [0xFA, 0xFB, 6, 1, 0x3B, 1, 0]);
         // A negative argument uses the 0x1B type byte and the magnitude.
-        let vel = bytes(&mut c, ClientCommand::Vel(-300));
+        let vel = bytes(&mut c, Command::Vel(-300));
         assert_eq!(&vel[3..7], [11, 0x1B, 0x2C, 0x01]);
         // Each frame parses back to the command the session meant.
         let mut dec = FrameDecoder::new();
@@ -308,38 +242,45 @@ mod tests {
         stream.extend(emit_server(&ServerPacket::Status(sip.clone())));
         stream.extend(emit_server(&ServerPacket::Reset { id: 0xFE }));
         for split in [1, 7, 64, stream.len()] {
-            let mut c = WireArcos::default();
+            let mut c = ArcosCodec::default();
             let mut out = Vec::new();
             for chunk in stream.chunks(split) {
                 c.decode(chunk, &mut out);
             }
             assert_eq!(out.len(), 5, "split {split}: {out:?}");
-            assert_eq!(out[0], Incoming::SyncEcho(0));
+            assert_eq!(out[0], ServerPacket::Sync(SyncReply::Sync0));
+            let ServerPacket::Sync(SyncReply::Sync2 {
+                name,
+                class,
+                subclass,
+            }) = &out[1]
+            else {
+                panic!("{:?}", out[1]);
+            };
             assert_eq!(
-                out[1],
-                Incoming::Identity(RobotIdentity {
-                    name: "AMRISim".into(),
-                    class: "Pioneer".into(),
-                    subclass: "p3dx-sh".into(),
-                })
+                (name.as_str(), class.as_str(), subclass.as_str()),
+                ("AMRISim", "Pioneer", "p3dx-sh")
             );
-            let Incoming::Config(cfg) = &out[2] else {
+            let ServerPacket::Config(cfg) = &out[2] else {
                 panic!("{:?}", out[2]);
             };
-            assert_eq!(cfg.class, "Pioneer");
-            assert_eq!(cfg.subclass, "p3dx-sh");
+            assert_eq!(cfg.robot_type, "Pioneer");
+            assert_eq!(cfg.subtype, "p3dx-sh");
             assert_eq!(cfg.watchdog_ms, 2000);
             assert_eq!(cfg.auto_baud, 2);
-            assert_eq!(cfg.trans_vel_top_mm_s, 2200);
-            assert_eq!(cfg.firmware, "S.0");
-            let Incoming::Status(s) = &out[3] else {
+            assert_eq!(cfg.trans_vel_top, 2200);
+            assert_eq!(
+                cfg.extras.firmware_version.as_ref().map(|v| v.as_str()),
+                Some("S.0")
+            );
+            let ServerPacket::Status(s) = &out[3] else {
                 panic!("{:?}", out[3]);
             };
             assert_eq!((s.x_pos, s.y_pos, s.th_pos), (1000, 0x7FF0, -1024));
             assert_eq!(s.battery_dv, 130);
             assert_eq!(s.flags, 0x001E);
             assert!(!s.motors_enabled());
-            assert_eq!(out[4], Incoming::Reset { id: 0xFE });
+            assert_eq!(out[4], ServerPacket::Reset { id: 0xFE });
             let stats = c.stats();
             assert_eq!(stats.packets, 5);
             assert_eq!(stats.junk_bytes, 5);
@@ -351,7 +292,7 @@ mod tests {
     fn corrupted_bytes_are_counted_never_decoded() {
         let mut frame = emit_server(&ServerPacket::Status(sip::tests::amrisim_like()));
         frame[10] ^= 0x40;
-        let mut c = WireArcos::default();
+        let mut c = ArcosCodec::default();
         let mut out = Vec::new();
         c.decode(&frame, &mut out);
         assert!(out.is_empty());

@@ -5,11 +5,10 @@
 //! 7 (ready for measurement), Run, then `sEN LMDscandata 1`; every scan then arrives as an
 //! `sSN LMDscandata` telegram and surfaces as a [`Scan`] with its arrival time.
 //!
-//! The CoLa-A framing and telegram layouts belong to `crate::wire::lms1xx` (wire branch);
-//! **integration point:** an adapter `impl LaserCodec` over `wire::lms1xx::{Request, Reply,
-//! ColaDecoder, ScanTelegram, check_reply}` (the reply check maps to
-//! [`LaserReply::Refused`], the scan conversion to [`LaserReply::Scan`]), returned by
-//! [`super::runtime::laser_codec`]. The LMS200 (serial) session is [`super::lms200`].
+//! The CoLa-A framing and telegram layouts belong to `crate::wire::lms1xx`; the session reads
+//! them through a [`LaserCodec`]: [`super::codec::WireLms1xx`] on the robot (its reply check
+//! gives [`LaserReply::Refused`], its scans come from `crate::sensor::telegram`), a byte-level
+//! double in the tests. The LMS200 (serial) session is [`super::lms200`].
 
 use std::fmt;
 use std::io;

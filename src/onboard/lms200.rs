@@ -7,7 +7,7 @@
 //! describes (0x3B, reply 0xBB), switch to the board's speed (0x20 0x40/0x41, then the port
 //! follows), and start continuous output (0x20 0x24). Each request is acknowledged by a single
 //! ACK byte (a NACK is a refusal) before its reply telegram. Every measured-values telegram
-//! (0xB0) then becomes a [`Scan`] with its arrival time. Closing stops the continuous output.
+//! (0xB0) then becomes a [`Scan`] (through [`lms200_scan`]) with its arrival time. Closing stops the continuous output.
 
 use std::time::Duration;
 
@@ -16,6 +16,7 @@ use tokio::time::Instant;
 
 use super::laser::{LaserError, next_decoded};
 use super::link::RobotLink;
+use crate::sensor::telegram::lms200_scan;
 use crate::sensor::{LaserConfig, Scan};
 use crate::wire::lms200::{
     DEFAULT_PASSWORD, Event, Lms200Decoder, Lms200Stats, MAX_TELEGRAM_LEN, Mode, Request, Response,
@@ -207,9 +208,9 @@ impl Lms200Client {
                         continue;
                     };
                     let mut scan = Scan::new();
-                    if m.to_scan(
-                        self.variant.first_angle_rad(),
-                        self.variant.step_rad(),
+                    if lms200_scan(
+                        &m,
+                        self.variant,
                         DISTANCE_MASK,
                         self.laser.max_range_m,
                         &mut scan,

@@ -39,13 +39,12 @@ use std::sync::mpsc::{self, Receiver, Sender};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant as WallInstant;
 
-use super::arcos::RobotStatus;
+use super::driver::{MissionCommand, MissionDriver, TelemetryRecord};
 use super::persist::{Counters, MapImage, MissionState as SavedState, PoseRecord, STATE_VERSION};
 use super::robot::Fault;
-use super::runtime::{MissionCommand, MissionDriver, TelemetryRecord};
 use crate::config::{BoardConfig, Strategy};
 use crate::control::Time;
-use crate::control::command::Limits;
+use crate::control::command::{Limits, Velocity};
 use crate::control::odometry::{ArcosOdometry, MapFromOdom};
 use crate::control::safety::RobotFlags;
 use crate::geometry::normalize_angle;
@@ -56,6 +55,7 @@ use crate::mission::{
 };
 use crate::optim::Method;
 use crate::sensor::Scan;
+use crate::wire::arcos::StatusPacket;
 
 /// Cells the onboard grid can hold (512 x 512: 51 m square at 10 cm).
 pub const GRID_CELLS: usize = 1 << 18;
@@ -158,7 +158,7 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
 
 /// An input for the mission thread.
 enum Input {
-    Status(f64, RobotStatus),
+    Status(f64, Box<StatusPacket>),
     Scan(f64, Box<Scan>),
     Fault,
     Reconnected,
@@ -279,9 +279,9 @@ impl CoreMission {
 }
 
 impl MissionDriver for CoreMission {
-    fn on_status(&mut self, t_s: f64, status: &RobotStatus) {
+    fn on_status(&mut self, t_s: f64, status: &StatusPacket) {
         self.status_pending = true;
-        let _ = self.tx.send(Input::Status(t_s, *status));
+        let _ = self.tx.send(Input::Status(t_s, Box::new(status.clone())));
     }
 
     fn on_scan(&mut self, t_s: f64, scan: &Scan) {
@@ -337,22 +337,13 @@ impl MissionDriver for CoreMission {
         {
             self.commands_seen = commands;
             self.last_command_s = t_s;
-            self.last_moving = !matches!(
-                c,
-                MissionCommand::Drive {
-                    speed_mm_s: 0,
-                    turn_deg_s: 0
-                }
-            );
+            self.last_moving = !matches!(c, MissionCommand::Drive(Velocity::ZERO));
             return c;
         }
         if self.last_moving && t_s - self.last_command_s > BUSY_STOP_S {
             // The thread is busy (deciding): never keep driving on an old command.
             self.last_moving = false;
-            return MissionCommand::Drive {
-                speed_mm_s: 0,
-                turn_deg_s: 0,
-            };
+            return MissionCommand::Drive(Velocity::ZERO);
         }
         MissionCommand::Hold
     }
@@ -566,11 +557,10 @@ impl Worker {
                 _ => {}
             }
         }
+        // The monitor's command as the velocity it sets (zero for a stop, and for a command
+        // that sets none): a clamped `Velocity`, unchanged down to the VEL/RVEL bytes.
         let velocity = output.command.velocity().unwrap_or_default();
-        out.command = Some(MissionCommand::Drive {
-            speed_mm_s: velocity.speed_mm_s(),
-            turn_deg_s: velocity.turn_rate_deg_s(),
-        });
+        out.command = Some(MissionCommand::Drive(velocity));
         out.commands += 1;
         drop(out);
         let done = matches!(mission.state(), crate::mission::MissionState::Done(_));

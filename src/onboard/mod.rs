@@ -4,17 +4,17 @@
 //! Everything here is std and tokio; the mission logic itself stays in the sans-IO core and is
 //! pumped by [`runtime`]. Layers, bottom up:
 //! - [`link`]: byte links (serial, TCP, in-memory) and reconnection with back-off;
-//! - [`arcos`]: what the ARCOS session needs from the wire codec;
-//! - [`codec`]: the session codecs over `crate::wire`;
+//! - [`codec`]: the session codecs over `crate::wire` (ARCOS commands and packets, CoLa-A);
 //! - [`robot`]: the ARCOS client session (handshake, CONFIG check, HOSTBAUD, keep-alive, safe
-//!   stop);
+//!   stop, velocities only as the core's clamped `Velocity`);
 //! - [`laser`]: the LMS1xx client session; [`lms200`]: the LMS200 one;
+//! - [`driver`]: the seam between the pump and a mission ([`driver::MissionDriver`]);
 //! - [`mission`]: the core mission on its own thread, as the runtime's mission driver;
 //! - [`persist`]: atomic saving and loading of the mission state, telemetry;
 //! - [`runtime`]: `papillon run` and `papillon probe`.
 
-pub mod arcos;
 pub mod codec;
+pub mod driver;
 pub mod laser;
 pub mod link;
 pub mod lms200;

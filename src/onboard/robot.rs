@@ -15,6 +15,12 @@
 //!   motion command is refused until [`ArcosClient::clear_fault`] (the mission calls it after a
 //!   fresh re-plan), so a stale velocity can never be re-sent after a fault;
 //! - [`ArcosClient::stop_and_close`]: VEL 0, RVEL 0, STOP, ENABLE 0, 100 ms, CLOSE 1.
+//!
+//! The session speaks the wire's own types: it sends [`Command`]s and reads [`ServerPacket`]s
+//! (status packets reach the mission as the wire's [`StatusPacket`]) through
+//! [`ArcosCodec`]. The only velocity it sends on its own is zero; a moving one comes in as a
+//! [`Velocity`] (made only by `Limits::clamp`, in the core's safety monitor) through
+//! [`ArcosClient::drive`], which writes its two halves as VEL and RVEL.
 
 use std::collections::VecDeque;
 use std::fmt;
@@ -24,11 +30,24 @@ use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::time::Instant;
 
-use super::arcos::{
-    ArcosCodec, ClientCommand, CodecStats, ConfigHighlights, Incoming, RobotIdentity, RobotStatus,
-};
+use super::codec::{ArcosCodec, CodecStats};
 use super::link::RobotLink;
 use crate::config::{ARCOS_BAUD_RATES, BoardConfig, KNOWN_SUBCLASSES};
+use crate::control::command::Velocity;
+use crate::wire::arcos::{
+    Command, ConfigPacket, Name, ServerPacket, StatusPacket, SyncReply, config, encoder,
+};
+
+/// The robot's identity from the SYNC2 reply.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RobotIdentity {
+    /// Robot name (`AMRISim`, `IIT-madras_3906`).
+    pub name: Name,
+    /// Robot class (`Pioneer`).
+    pub class: Name,
+    /// Robot subclass (`p3dx-sh`).
+    pub subclass: Name,
+}
 
 /// Session timing and checks.
 #[derive(Clone, Debug, PartialEq)]
@@ -116,14 +135,14 @@ impl MotionLimits {
     }
 
     /// The start-up commands, in the order they are sent.
-    pub fn commands(&self) -> [ClientCommand; 6] {
+    pub fn commands(&self) -> [Command; 6] {
         [
-            ClientCommand::SetV(self.max_speed_mm_s),
-            ClientCommand::SetRv(self.max_turn_rate_deg_s),
-            ClientCommand::SetA(self.accel_mm_s2),
-            ClientCommand::SetA(-self.decel_mm_s2),
-            ClientCommand::SetRa(self.rot_accel_deg_s2),
-            ClientCommand::SetRa(-self.rot_accel_deg_s2),
+            Command::SetV(self.max_speed_mm_s),
+            Command::SetRv(self.max_turn_rate_deg_s),
+            Command::SetA(self.accel_mm_s2),
+            Command::SetA(-self.decel_mm_s2),
+            Command::SetRa(self.rot_accel_deg_s2),
+            Command::SetRa(-self.rot_accel_deg_s2),
         ]
     }
 }
@@ -255,11 +274,11 @@ pub enum RobotEvent {
     Status {
         /// Arrival time.
         at: Instant,
-        /// The packet.
-        status: RobotStatus,
+        /// The packet (boxed: a SIP carries up to 32 sonar readings).
+        status: Box<StatusPacket>,
     },
     /// A CONFIG packet (after a CONFIG request).
-    Config(ConfigHighlights),
+    Config(Box<ConfigPacket>),
     /// Any other packet ID.
     Other {
         /// The ID.
@@ -295,13 +314,13 @@ pub struct SessionStats {
 /// An open ARCOS session.
 pub struct ArcosClient {
     link: Box<dyn RobotLink>,
-    codec: Box<dyn ArcosCodec>,
+    codec: ArcosCodec,
     options: SessionOptions,
     identity: RobotIdentity,
-    config: Option<ConfigHighlights>,
+    config: Option<ConfigPacket>,
     baud_switch: BaudSwitch,
-    pending: VecDeque<Incoming>,
-    decoded: Vec<Incoming>,
+    pending: VecDeque<ServerPacket>,
+    decoded: Vec<ServerPacket>,
     encoded: Vec<u8>,
     read_buf: Box<[u8; 512]>,
     last_sent: Instant,
@@ -317,12 +336,11 @@ impl ArcosClient {
     /// The motors are still disabled afterwards; call [`ArcosClient::start`].
     pub async fn connect(
         link: Box<dyn RobotLink>,
-        codec: Box<dyn ArcosCodec>,
         options: SessionOptions,
     ) -> Result<Self, SessionError> {
         let mut client = Self {
             link,
-            codec,
+            codec: ArcosCodec::default(),
             options,
             identity: RobotIdentity::default(),
             config: None,
@@ -338,11 +356,11 @@ impl ArcosClient {
         };
         client.handshake().await?;
         client.check_identity(&client.identity.class, &client.identity.subclass)?;
-        client.send(&ClientCommand::Open).await?;
+        client.send(&Command::Open(Some(1))).await?;
         client.keepalive_on = true;
-        client.send(&ClientCommand::Config).await?;
+        client.send(&Command::Config(Some(1))).await?;
         let config = client.await_config().await?;
-        client.check_identity(&config.class, &config.subclass)?;
+        client.check_identity(&config.robot_type, &config.subtype)?;
         // A robot whose FLASH watchdog is shorter than four keep-alive periods gets PULSEs
         // four times per watchdog period: a short watchdog (so that a cut serial line stops
         // the robot quickly) is never tripped by a live program.
@@ -363,26 +381,40 @@ impl ArcosClient {
         for _attempt in 0..self.options.sync_attempts {
             let mut step = 0u8;
             while step <= 2 {
-                self.send(&ClientCommand::Sync(step)).await?;
+                let sync = match step {
+                    0 => Command::SYNC0,
+                    1 => Command::SYNC1,
+                    _ => Command::SYNC2,
+                };
+                self.send(&sync).await?;
                 let deadline = Instant::now() + self.options.sync_timeout;
                 let Some(packet) = self.next_packet(deadline).await? else {
                     break; // silent: start again from SYNC0
                 };
                 match packet {
-                    Incoming::SyncEcho(n) if n == step && step < 2 => step += 1,
-                    Incoming::Identity(identity) if step == 2 => {
-                        self.identity = identity;
+                    ServerPacket::Sync(SyncReply::Sync0) if step == 0 => step += 1,
+                    ServerPacket::Sync(SyncReply::Sync1) if step == 1 => step += 1,
+                    ServerPacket::Sync(SyncReply::Sync2 {
+                        name,
+                        class,
+                        subclass,
+                    }) if step == 2 => {
+                        self.identity = RobotIdentity {
+                            name,
+                            class,
+                            subclass,
+                        };
                         return Ok(());
                     }
-                    Incoming::Status(_) => {
+                    ServerPacket::Status(_) => {
                         // An old session is still open: close it and start over.
                         last_id = Some(0x32);
-                        self.send(&ClientCommand::Close).await?;
+                        self.send(&Command::Close(Some(1))).await?;
                         self.drain(Duration::from_millis(200)).await?;
                         break;
                     }
                     other => {
-                        last_id = Some(incoming_id(&other));
+                        last_id = Some(packet_id(&other));
                         break;
                     }
                 }
@@ -427,18 +459,17 @@ impl ArcosClient {
         }
     }
 
-    async fn await_config(&mut self) -> Result<ConfigHighlights, SessionError> {
+    async fn await_config(&mut self) -> Result<ConfigPacket, SessionError> {
         let deadline = Instant::now() + self.options.config_timeout;
         loop {
             match self.next_packet(deadline).await? {
                 None => return Err(SessionError::NoConfig),
-                Some(Incoming::Config(c)) => return Ok(c),
-                Some(Incoming::Reset { id }) => {
+                Some(ServerPacket::Config(c)) => return Ok(c),
+                Some(ServerPacket::Reset { id }) => {
                     return Err(SessionError::MicrocontrollerReset { id });
                 }
-                Some(Incoming::Status(s)) => {
+                Some(ServerPacket::Status(_)) => {
                     self.stats.status_packets += 1;
-                    let _ = s;
                 }
                 Some(_) => {}
             }
@@ -461,12 +492,12 @@ impl ArcosClient {
         let Some(code) = ARCOS_BAUD_RATES.iter().position(|&b| b == target) else {
             return Ok(BaudSwitch::NotAttempted);
         };
-        self.send(&ClientCommand::HostBaud(code as i16)).await?;
+        self.send(&Command::HostBaud(code as i16)).await?;
         tokio::time::sleep(Duration::from_millis(10)).await;
         self.link.set_baud(target)?;
         self.codec.reset();
         self.pending.clear();
-        self.send(&ClientCommand::Pulse).await?;
+        self.send(&Command::Pulse).await?;
         let deadline = Instant::now() + self.options.baud_probe_timeout;
         if self.next_packet(deadline).await?.is_some() {
             Ok(BaudSwitch::Switched(target))
@@ -479,7 +510,7 @@ impl ArcosClient {
 
     /// Enables the motors and applies the board's limits.
     pub async fn start(&mut self, limits: &MotionLimits) -> Result<(), SessionError> {
-        self.send(&ClientCommand::Enable(true)).await?;
+        self.send(&Command::Enable(true)).await?;
         for command in limits.commands() {
             self.send(&command).await?;
         }
@@ -492,7 +523,7 @@ impl ArcosClient {
     }
 
     /// The CONFIG packet read at connection.
-    pub fn config(&self) -> Option<&ConfigHighlights> {
+    pub fn config(&self) -> Option<&ConfigPacket> {
         self.config.as_ref()
     }
 
@@ -519,14 +550,15 @@ impl ArcosClient {
         self.fault
     }
 
-    /// Commands a velocity \[mm/s\] and a turn rate \[deg/s, counter-clockwise\]. Refused while a
+    /// Commands `velocity`: VEL with its speed \[mm/s\], then RVEL with its turn rate \[deg/s,
+    /// counter-clockwise\]. A [`Velocity`] is within the limits that made it. Refused while a
     /// fault is latched.
-    pub async fn drive(&mut self, speed_mm_s: i16, turn_deg_s: i16) -> Result<(), SessionError> {
+    pub async fn drive(&mut self, velocity: Velocity) -> Result<(), SessionError> {
         if let Some(fault) = self.fault {
             return Err(SessionError::Faulted(fault));
         }
-        self.send(&ClientCommand::Vel(speed_mm_s)).await?;
-        self.send(&ClientCommand::RVel(turn_deg_s)).await
+        self.send(&Command::Vel(velocity.speed_mm_s())).await?;
+        self.send(&Command::RVel(velocity.turn_rate_deg_s())).await
     }
 
     /// Latches `fault` and commands zero velocity at once. Motion stays refused until
@@ -536,8 +568,8 @@ impl ArcosClient {
         if self.fault.is_none() {
             self.fault = Some(fault);
         }
-        self.send(&ClientCommand::Vel(0)).await?;
-        self.send(&ClientCommand::RVel(0)).await
+        self.send(&Command::Vel(0)).await?;
+        self.send(&Command::RVel(0)).await
     }
 
     /// Clears a latched fault; the caller must have re-planned (no old velocity is kept).
@@ -556,26 +588,33 @@ impl ArcosClient {
                 return Ok(None);
             };
             match packet {
-                Incoming::Status(status) => {
+                ServerPacket::Status(status) => {
                     self.stats.status_packets += 1;
                     return Ok(Some(RobotEvent::Status {
                         at: Instant::now(),
-                        status,
+                        status: Box::new(status),
                     }));
                 }
-                Incoming::Config(c) => return Ok(Some(RobotEvent::Config(c))),
-                Incoming::Reset { id } => {
+                ServerPacket::Config(c) => return Ok(Some(RobotEvent::Config(Box::new(c)))),
+                ServerPacket::Reset { id } => {
                     self.fault.get_or_insert(Fault::Link);
                     return Err(SessionError::MicrocontrollerReset { id });
                 }
-                Incoming::Other { id } => return Ok(Some(RobotEvent::Other { id })),
-                Incoming::SyncEcho(_) | Incoming::Identity(_) => {}
+                ServerPacket::Sync(_) => {}
+                other => {
+                    return Ok(Some(RobotEvent::Other {
+                        id: packet_id(&other),
+                    }));
+                }
             }
         }
     }
 
     /// The next decoded packet before `deadline`, keeping the link alive meanwhile.
-    async fn next_packet(&mut self, deadline: Instant) -> Result<Option<Incoming>, SessionError> {
+    async fn next_packet(
+        &mut self,
+        deadline: Instant,
+    ) -> Result<Option<ServerPacket>, SessionError> {
         loop {
             if let Some(p) = self.pending.pop_front() {
                 return Ok(Some(p));
@@ -603,7 +642,7 @@ impl ArcosClient {
                 }
                 _ = tokio::time::sleep_until(wake) => {
                     if self.keepalive_on && Instant::now() >= pulse_at {
-                        self.send(&ClientCommand::Pulse).await?;
+                        self.send(&Command::Pulse).await?;
                         self.stats.pulses_sent += 1;
                     }
                 }
@@ -612,7 +651,7 @@ impl ArcosClient {
     }
 
     /// Writes one command, keeping the minimum spacing between commands.
-    pub async fn send(&mut self, command: &ClientCommand) -> Result<(), SessionError> {
+    pub async fn send(&mut self, command: &Command) -> Result<(), SessionError> {
         let earliest = self.last_sent + self.options.command_spacing;
         if Instant::now() < earliest && self.stats.commands_sent > 0 {
             tokio::time::sleep_until(earliest).await;
@@ -639,17 +678,17 @@ impl ArcosClient {
         self.fault.get_or_insert(Fault::Operator);
         let mut first_err = None;
         for command in [
-            ClientCommand::Vel(0),
-            ClientCommand::RVel(0),
-            ClientCommand::Stop,
-            ClientCommand::Enable(false),
+            Command::Vel(0),
+            Command::RVel(0),
+            Command::Stop,
+            Command::Enable(false),
         ] {
             if let Err(e) = self.send(&command).await {
                 first_err.get_or_insert(e);
             }
         }
         tokio::time::sleep(Duration::from_millis(100)).await;
-        if let Err(e) = self.send(&ClientCommand::Close).await {
+        if let Err(e) = self.send(&Command::Close(Some(1))).await {
             first_err.get_or_insert(e);
         }
         let _ = self.link.shutdown().await;
@@ -660,19 +699,16 @@ impl ArcosClient {
     }
 }
 
-fn incoming_id(p: &Incoming) -> u8 {
+/// The packet ID a packet came with.
+fn packet_id(p: &ServerPacket) -> u8 {
     match p {
-        Incoming::SyncEcho(n) => *n,
-        Incoming::Identity(_) => 2,
-        Incoming::Config(_) => 0x20,
-        Incoming::Status(s) => {
-            if s.moving {
-                0x33
-            } else {
-                0x32
-            }
-        }
-        Incoming::Reset { id } | Incoming::Other { id } => *id,
+        ServerPacket::Sync(SyncReply::Sync0) => 0,
+        ServerPacket::Sync(SyncReply::Sync1) => 1,
+        ServerPacket::Sync(SyncReply::Sync2 { .. }) => 2,
+        ServerPacket::Config(_) => config::ID,
+        ServerPacket::Status(s) => s.id(),
+        ServerPacket::Encoder(_) => encoder::ID,
+        ServerPacket::Reset { id } | ServerPacket::Other { id } => *id,
     }
 }
 

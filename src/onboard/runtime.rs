@@ -1,16 +1,13 @@
 //! `papillon run` and `papillon probe`: start-up, the mission pump, safety checks, persistence
 //! and a safe shutdown.
 //!
-//! Integration points (marked `INTEGRATION POINT` below):
-//! 1. [`arcos_codec`] and [`laser_codec`] return the wire codecs once `crate::wire` is merged
-//!    (adapters implementing [`ArcosCodec`] and [`LaserCodec`]); today they return `None` and
-//!    the binary says that this build cannot talk to a robot yet.
-//! 2. [`mission_driver`] returns the core mission state machine wrapped in a
-//!    [`MissionDriver`]; today it returns `None` and `papillon run` connects, starts up,
-//!    reports that autonomous missions are not yet available, and shuts down safely.
-//! 3. [`pump`] already does what the mission needs around it: status and scan timestamps,
-//!    stale-data and e-stop checks that stop the robot at once and latch the fault until the
-//!    mission re-plans, periodic atomic saves, telemetry, and a stop on SIGINT/SIGTERM.
+//! [`run_with`] opens the robot link and the ARCOS session ([`connect_robot`]), builds the
+//! mission ([`mission_driver`]: the core mission behind a [`MissionDriver`]), connects the
+//! laser ([`connect_laser`]), then runs [`pump`] until the mission is done or a signal comes:
+//! status and scan timestamps, stale-data and e-stop checks that stop the robot at once and
+//! latch the fault until the mission re-plans, periodic atomic saves, telemetry, and a stop on
+//! SIGINT/SIGTERM. A lost link is reconnected with back-off and the pump resumes.
+//! `docs/architecture.md` ("Onboard pump") follows a scan and a velocity through it.
 
 use std::io;
 use std::path::PathBuf;
@@ -18,24 +15,21 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
-use super::arcos::{ArcosCodec, RobotStatus};
+use super::driver::{MissionCommand, MissionDriver};
 use super::laser::{LaserCodec, Lms1xxClient};
 use super::link::{Backoff, TcpLink, connect_with_backoff, open_robot_link};
 use super::lms200::Lms200Client;
 use super::persist::{MapImage, MissionState, PersistError, STATE_VERSION, StateStore, Telemetry};
 use super::robot::{ArcosClient, Fault, MotionLimits, SessionError, SessionOptions};
 use crate::config::{BoardConfig, LaserModel};
+use crate::control::command::{Limits, MotionCommand};
 use crate::control::odometry::ArcosOdometry;
 use crate::sensor::Scan;
+use crate::wire::arcos::StatusPacket;
 
-/// The ARCOS codec of `crate::wire::arcos`.
-pub fn arcos_codec() -> Option<Box<dyn ArcosCodec>> {
-    Some(Box::new(super::codec::WireArcos::default()))
-}
-
-/// The CoLa-A codec of `crate::wire::lms1xx`.
-pub fn laser_codec() -> Option<Box<dyn LaserCodec>> {
-    Some(Box::new(super::codec::WireLms1xx::default()))
+/// The CoLa-A codec of `crate::wire::lms1xx`, for an LMS1xx session.
+pub fn laser_codec() -> Box<dyn LaserCodec> {
+    Box::new(super::codec::WireLms1xx::default())
 }
 
 /// The core mission for a board ([`super::mission::CoreMission`]), resumed from `resume` if
@@ -43,68 +37,15 @@ pub fn laser_codec() -> Option<Box<dyn LaserCodec>> {
 pub fn mission_driver(
     board: &BoardConfig,
     resume: Option<&(MissionState, Option<MapImage>)>,
-) -> Result<Option<Box<dyn MissionDriver>>, String> {
+) -> Result<Box<dyn MissionDriver>, String> {
     let mission = super::mission::CoreMission::new(board, resume)?;
-    Ok(Some(Box::new(mission)))
-}
-
-/// A telemetry line a mission wants written (`{"t_s", "kind", ...fields}`).
-#[derive(Clone, Debug, PartialEq)]
-pub struct TelemetryRecord {
-    /// Mission time \[s\].
-    pub t_s: f64,
-    /// The record's kind (`decision`, `replan`, `done`, ...).
-    pub kind: &'static str,
-    /// Its fields (a JSON object).
-    pub fields: serde_json::Value,
-}
-
-/// What the mission asks the robot to do after a step.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[non_exhaustive]
-pub enum MissionCommand {
-    /// Drive at `speed_mm_s` \[mm/s\] and `turn_deg_s` \[deg/s, counter-clockwise\].
-    Drive {
-        /// Translational velocity \[mm/s\].
-        speed_mm_s: i16,
-        /// Rotational velocity \[deg/s\].
-        turn_deg_s: i16,
-    },
-    /// Stand still (thinking, or waiting for scans).
-    Hold,
-    /// The mission is complete.
-    Done,
-}
-
-/// The mission state machine as the runtime sees it (sans-IO: it is given times and data).
-pub trait MissionDriver: Send {
-    /// A status packet arrived at mission time `t_s` \[s\].
-    fn on_status(&mut self, t_s: f64, status: &RobotStatus);
-    /// A scan arrived at mission time `t_s` \[s\].
-    fn on_scan(&mut self, t_s: f64, scan: &Scan);
-    /// The runtime stopped the robot for `fault`; the mission must re-plan before moving.
-    fn on_fault(&mut self, t_s: f64, fault: Fault);
-    /// The runtime lost a link and is connecting again (the saved counters count it).
-    fn on_reconnect(&mut self);
-    /// Whether the mission has re-planned since its last fault (the runtime then clears the
-    /// latch and lets motion through again).
-    fn replanned(&self) -> bool;
-    /// One control step at mission time `t_s` \[s\].
-    fn step(&mut self, t_s: f64) -> MissionCommand;
-    /// The state to save.
-    fn snapshot(&self) -> (MissionState, Option<MapImage>);
-    /// Telemetry lines produced since the last call (decisions with their compute time...).
-    fn take_telemetry(&mut self) -> Vec<TelemetryRecord> {
-        Vec::new()
-    }
+    Ok(Box::new(mission))
 }
 
 /// Errors of `papillon run` / `probe`.
 #[derive(Debug)]
 #[non_exhaustive]
 pub enum RuntimeError {
-    /// This build has no codec for the robot or the laser.
-    NoCodec(&'static str),
     /// The link could not be opened.
     Link(io::Error),
     /// The ARCOS session failed.
@@ -122,10 +63,6 @@ pub enum RuntimeError {
 impl std::fmt::Display for RuntimeError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            RuntimeError::NoCodec(what) => write!(
-                f,
-                "this build has no {what} codec yet (the wire module is not integrated); nothing was sent"
-            ),
             RuntimeError::Link(e) => write!(f, "{e}"),
             RuntimeError::Session(e) => write!(f, "{e}"),
             RuntimeError::Laser(e) => write!(f, "{e}"),
@@ -177,8 +114,6 @@ pub enum RunOutcome {
     Finished,
     /// Stopped by SIGINT/SIGTERM; state saved.
     Interrupted,
-    /// This build has no mission yet: connected, started up, stopped safely.
-    MissionUnavailable,
 }
 
 /// Resolves on SIGINT or SIGTERM.
@@ -206,10 +141,7 @@ pub async fn shutdown_signal() {
 
 /// Opens the robot link with back-off and runs the ARCOS start-up (handshake, CONFIG check,
 /// HOSTBAUD, ENABLE, limits).
-pub async fn connect_robot(
-    board: &BoardConfig,
-    codec: Box<dyn ArcosCodec>,
-) -> Result<ArcosClient, RuntimeError> {
+pub async fn connect_robot(board: &BoardConfig) -> Result<ArcosClient, RuntimeError> {
     let tcp = board.link.tcp.as_ref().map(|a| a.as_str().to_string());
     let port = board.link.port.as_str().to_string();
     let baud = board.link.baud;
@@ -220,7 +152,7 @@ pub async fn connect_robot(
     )
     .await?;
     tracing::info!(link = %link.describe(), "robot link open");
-    let mut client = ArcosClient::connect(link, codec, SessionOptions::from_board(board)).await?;
+    let mut client = ArcosClient::connect(link, SessionOptions::from_board(board)).await?;
     let id = client.identity().clone();
     tracing::info!(name = %id.name, class = %id.class, subclass = %id.subclass, baud = ?client.baud_switch(), "connected");
     client.start(&MotionLimits::from_board(board)).await?;
@@ -349,18 +281,17 @@ where
 /// Link losses `run` recovers from (reconnecting with back-off each time) before giving up.
 pub const MAX_RECONNECTS: u32 = 20;
 
-/// `papillon run`, with the codec factories and the mission given (the binary passes
-/// [`arcos_codec`], [`laser_codec`] and [`mission_driver`]). A lost robot or laser link is
+/// `papillon run`, with the LMS1xx codec factory and the mission given (the binary passes
+/// [`laser_codec`] and [`mission_driver`]; tests pass doubles). A lost robot or laser link is
 /// reconnected with back-off (the robot was stopped at once, and its firmware watchdog stops
 /// it too), then the mission resumes after a fresh re-plan.
 pub async fn run_with(
     options: RunOptions,
-    arcos: impl Fn() -> Option<Box<dyn ArcosCodec>>,
-    laser: impl Fn() -> Option<Box<dyn LaserCodec>>,
+    laser: impl Fn() -> Box<dyn LaserCodec>,
     make_mission: impl FnOnce(
         &BoardConfig,
         Option<&(MissionState, Option<MapImage>)>,
-    ) -> Result<Option<Box<dyn MissionDriver>>, String>,
+    ) -> Result<Box<dyn MissionDriver>, String>,
     shutdown: impl std::future::Future<Output = ()>,
 ) -> Result<RunOutcome, RuntimeError> {
     let board = &options.board;
@@ -382,127 +313,84 @@ pub async fn run_with(
         None
     };
     let mut shutdown = std::pin::pin!(shutdown);
-    let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
-    let mut client = connect_robot(board, codec).await?;
-    let mission = match make_mission(board, resumed.as_ref()) {
+    let mut client = connect_robot(board).await?;
+    let mut mission = match make_mission(board, resumed.as_ref()) {
         Ok(m) => m,
         Err(e) => {
             let _ = client.stop_and_close().await;
             return Err(RuntimeError::Mission(e));
         }
     };
-    let outcome = match mission {
-        None => {
-            // INTEGRATION POINT 2: no mission in this build. Check the laser start-up too
-            // when a codec exists, then say so and stop safely.
-            if let Some(codec) = laser() {
-                match connect_laser(board, codec).await {
-                    Ok(mut l) => {
-                        let first = l.next_scan(Instant::now() + Duration::from_secs(2)).await;
-                        match first {
-                            Ok(Some((_, scan))) => {
-                                tracing::info!(beams = scan.len(), "laser streaming")
-                            }
-                            Ok(None) => tracing::warn!("laser connected but sent no scan in 2 s"),
-                            Err(e) => tracing::warn!(error = %e, "laser failed after connecting"),
-                        }
-                        let _ = l.close().await;
-                    }
-                    Err(e) => tracing::warn!(error = %e, "laser start-up failed"),
-                }
+    let outcome = {
+        let mut laser_client = connect_laser(board, laser()).await?;
+        // Mission time runs on across reconnections.
+        let epoch = Instant::now();
+        let mut reconnects = 0u32;
+        let outcome = loop {
+            let r = pump(
+                board,
+                &mut client,
+                &mut laser_client,
+                mission.as_mut(),
+                Records {
+                    store: &store,
+                    telemetry: &mut telemetry,
+                },
+                epoch,
+                &mut shutdown,
+            )
+            .await;
+            let robot_lost = matches!(
+                r,
+                Err(RuntimeError::Session(
+                    SessionError::Closed
+                        | SessionError::Io(_)
+                        | SessionError::MicrocontrollerReset { .. }
+                ))
+            );
+            let laser_lost = matches!(r, Err(RuntimeError::Laser(_)));
+            if !(robot_lost || laser_lost) || reconnects >= MAX_RECONNECTS {
+                break r;
             }
-            tracing::warn!("autonomous missions are not yet available in this build; stopping");
-            telemetry.record(
-                0.0,
-                "note",
-                serde_json::json!({"note": "mission not available; start-up checked, robot stopped"}),
-            )?;
-            if let Some((state, map)) = &resumed {
-                // Nothing ran: keep the saved mission exactly as it was.
-                store.save(state, map.as_ref())?;
-            }
-            Ok(RunOutcome::MissionUnavailable)
-        }
-        Some(mut mission) => {
-            let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
-            let mut laser_client = connect_laser(board, codec).await?;
-            // Mission time runs on across reconnections.
-            let epoch = Instant::now();
-            let mut reconnects = 0u32;
-            let outcome = loop {
-                let r = pump(
-                    board,
-                    &mut client,
-                    &mut laser_client,
-                    mission.as_mut(),
-                    Records {
-                        store: &store,
-                        telemetry: &mut telemetry,
-                    },
-                    epoch,
-                    &mut shutdown,
-                )
-                .await;
-                let robot_lost = matches!(
-                    r,
-                    Err(RuntimeError::Session(
-                        SessionError::Closed
-                            | SessionError::Io(_)
-                            | SessionError::MicrocontrollerReset { .. }
-                    ))
-                );
-                let laser_lost = matches!(r, Err(RuntimeError::Laser(_)));
-                if !(robot_lost || laser_lost) || reconnects >= MAX_RECONNECTS {
-                    break r;
-                }
-                reconnects += 1;
-                mission.on_reconnect();
-                let (state, map) = mission.snapshot();
-                tracing::warn!(
-                    robot = robot_lost,
-                    laser = laser_lost,
-                    "link lost; reconnecting"
-                );
-                telemetry.fault(state.mission_time_s, &Fault::Link.to_string())?;
-                mission.on_fault(state.mission_time_s, Fault::Link);
-                store.save(&state, map.as_ref())?;
-                telemetry.record(
-                    state.mission_time_s,
-                    "reconnect",
-                    serde_json::json!({"robot": robot_lost, "laser": laser_lost, "count": reconnects}),
-                )?;
-                let reconnect = async {
-                    if robot_lost {
-                        client = retry_session("robot", || async {
-                            let codec = arcos().ok_or(RuntimeError::NoCodec("ARCOS"))?;
-                            connect_robot(board, codec).await
-                        })
-                        .await?;
-                        // Motion stays refused until the mission has re-planned.
-                        client.halt(Fault::Link).await?;
-                    } else {
-                        let _ = client.halt(Fault::Link).await;
-                        laser_client = retry_session("laser", || async {
-                            let codec = laser().ok_or(RuntimeError::NoCodec("laser"))?;
-                            connect_laser(board, codec).await
-                        })
-                        .await?;
-                    }
-                    Ok::<(), RuntimeError>(())
-                };
-                tokio::select! {
-                    r = reconnect => r?,
-                    _ = &mut shutdown => break Ok(RunOutcome::Interrupted),
-                }
-            };
-            let _ = laser_client.close().await;
+            reconnects += 1;
+            mission.on_reconnect();
             let (state, map) = mission.snapshot();
+            tracing::warn!(
+                robot = robot_lost,
+                laser = laser_lost,
+                "link lost; reconnecting"
+            );
+            telemetry.fault(state.mission_time_s, &Fault::Link.to_string())?;
+            mission.on_fault(state.mission_time_s, Fault::Link);
             store.save(&state, map.as_ref())?;
-            if let Some(map) = map {
-                map.write_png(&options.log_dir.join("map.png"))?;
+            telemetry.record(
+                state.mission_time_s,
+                "reconnect",
+                serde_json::json!({"robot": robot_lost, "laser": laser_lost, "count": reconnects}),
+            )?;
+            let reconnect = async {
+                if robot_lost {
+                    client = retry_session("robot", || connect_robot(board)).await?;
+                    // Motion stays refused until the mission has re-planned.
+                    client.halt(Fault::Link).await?;
+                } else {
+                    let _ = client.halt(Fault::Link).await;
+                    laser_client = retry_session("laser", || connect_laser(board, laser())).await?;
+                }
+                Ok::<(), RuntimeError>(())
+            };
+            tokio::select! {
+                r = reconnect => r?,
+                _ = &mut shutdown => break Ok(RunOutcome::Interrupted),
             }
-            outcome
+        };
+        let _ = laser_client.close().await;
+        let (state, map) = mission.snapshot();
+        store.save(&state, map.as_ref())?;
+        if let Some(map) = map {
+            map.write_png(&options.log_dir.join("map.png"))?;
         }
+        outcome
     };
     let stats = client.stop_and_close().await;
     if let Ok(stats) = &stats {
@@ -564,7 +452,7 @@ pub async fn pump(
             mission.on_status(t(at), &status);
             // A wheel stall or a bumper is the mission's to handle: its safety monitor stops
             // and backs off before re-planning (a stop here would cut that back-off short).
-            let contact = status.stalled() || status.bumped();
+            let contact = status.stalled() || status.bumpers_a() != 0 || status.bumpers_b() != 0;
             if contact && !in_contact {
                 telemetry.record(
                     t(at),
@@ -613,10 +501,7 @@ pub async fn pump(
         match mission.step(t(now)) {
             MissionCommand::Done => return Ok(RunOutcome::Finished),
             MissionCommand::Hold => {}
-            MissionCommand::Drive {
-                speed_mm_s,
-                turn_deg_s,
-            } => match client.drive(speed_mm_s, turn_deg_s).await {
+            MissionCommand::Drive(velocity) => match client.drive(velocity).await {
                 Ok(()) | Err(SessionError::Faulted(_)) => {}
                 Err(e) => return Err(e.into()),
             },
@@ -666,17 +551,15 @@ pub struct ProbeOptions {
 /// written to `out`.
 pub async fn probe_with(
     options: &ProbeOptions,
-    codec: Option<Box<dyn ArcosCodec>>,
     out: &mut impl io::Write,
 ) -> Result<(), RuntimeError> {
-    let codec = codec.ok_or(RuntimeError::NoCodec("ARCOS"))?;
     let link = open_robot_link(options.tcp.as_deref(), &options.port, 9600).await?;
     writeln!(out, "link: {}", link.describe())?;
     let session = SessionOptions {
         expected_subclass: None,
         ..SessionOptions::default()
     };
-    let mut client = ArcosClient::connect(link, codec, session).await?;
+    let mut client = ArcosClient::connect(link, session).await?;
     let id = client.identity().clone();
     writeln!(
         out,
@@ -687,15 +570,19 @@ pub async fn probe_with(
         writeln!(
             out,
             "config: firmware {:?}, serial {:?}, top speeds {} mm/s / {} deg/s, current max {} mm/s / {} deg/s, watchdog {} ms, SIP cycle {} ms, host baud code {}, autobaud {}",
-            c.firmware,
+            c.extras
+                .firmware_version
+                .as_ref()
+                .map(|v| v.as_str())
+                .unwrap_or_default(),
             c.serial,
-            c.trans_vel_top_mm_s,
-            c.rot_vel_top_deg_s,
-            c.trans_vel_max_mm_s,
-            c.rot_vel_max_deg_s,
+            c.trans_vel_top,
+            c.rot_vel_top,
+            c.trans_vel_max,
+            c.rot_vel_max,
             c.watchdog_ms,
             c.sip_cycle_ms,
-            c.host_baud_code,
+            c.host_baud,
             c.auto_baud
         )?;
     }
@@ -706,7 +593,7 @@ pub async fn probe_with(
         Some(s) => writeln!(
             out,
             "status: battery {:.1} V, pose {} (counters x {}, y {}, th {}), motors {}, e-stop {}",
-            s.battery_v(),
+            f32::from(s.battery_dv) * 0.1,
             pose_text(odometry.update(s.x_pos, s.y_pos, s.th_pos)),
             s.x_pos,
             s.y_pos,
@@ -721,19 +608,28 @@ pub async fn probe_with(
         None => writeln!(out, "status: no status packet within 2 s")?,
     }
     if options.drive {
-        client
-            .start(&MotionLimits {
-                max_speed_mm_s: 150,
-                max_turn_rate_deg_s: 30,
-                accel_mm_s2: 200,
-                decel_mm_s2: 200,
-                rot_accel_deg_s2: 60,
-            })
-            .await?;
+        let limits = MotionLimits {
+            max_speed_mm_s: 150,
+            max_turn_rate_deg_s: 30,
+            accel_mm_s2: 200,
+            decel_mm_s2: 200,
+            rot_accel_deg_s2: 60,
+        };
+        client.start(&limits).await?;
+        // The square's velocities go through the same limits the firmware was just given.
+        let clamp = Limits::new(150, 30, 200, 200, 60, 60);
+        let ahead = clamp.clamp(MotionCommand {
+            speed_mm_s: 100,
+            turn_rate_deg_s: 0,
+        });
+        let turn = clamp.clamp(MotionCommand {
+            speed_mm_s: 0,
+            turn_rate_deg_s: 30,
+        });
         let start = odometry.pose_odom();
         for side in 0..4 {
-            drive_for(&mut client, &mut odometry, 100, 0, Duration::from_secs(5)).await?;
-            drive_for(&mut client, &mut odometry, 0, 30, Duration::from_secs(3)).await?;
+            drive_for(&mut client, &mut odometry, ahead, Duration::from_secs(5)).await?;
+            drive_for(&mut client, &mut odometry, turn, Duration::from_secs(3)).await?;
             if let Some(s) = next_status(&mut client, Duration::from_secs(1)).await? {
                 let pose = odometry.update(s.x_pos, s.y_pos, s.th_pos);
                 writeln!(
@@ -771,11 +667,11 @@ fn pose_text(p: crate::geometry::Pose2) -> String {
 async fn next_status(
     client: &mut ArcosClient,
     wait: Duration,
-) -> Result<Option<RobotStatus>, RuntimeError> {
+) -> Result<Option<StatusPacket>, RuntimeError> {
     let deadline = Instant::now() + wait;
     while let Some(ev) = client.next_event(deadline).await? {
         if let super::robot::RobotEvent::Status { status, .. } = ev {
-            return Ok(Some(status));
+            return Ok(Some(*status));
         }
     }
     Ok(None)
@@ -786,13 +682,12 @@ async fn next_status(
 async fn drive_for(
     client: &mut ArcosClient,
     odometry: &mut ArcosOdometry,
-    speed_mm_s: i16,
-    turn_deg_s: i16,
+    velocity: crate::control::command::Velocity,
     duration: Duration,
 ) -> Result<(), RuntimeError> {
     let end = Instant::now() + duration;
     while Instant::now() < end {
-        client.drive(speed_mm_s, turn_deg_s).await?;
+        client.drive(velocity).await?;
         let resend = (Instant::now() + Duration::from_millis(200)).min(end);
         while let Some(ev) = client.next_event(resend).await? {
             if let super::robot::RobotEvent::Status { status: s, .. } = ev {
@@ -800,14 +695,44 @@ async fn drive_for(
             }
         }
     }
-    client.drive(0, 0).await?;
+    client
+        .drive(crate::control::command::Velocity::ZERO)
+        .await?;
     Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+    use crate::onboard::laser::tests::ByteCodec;
+    use crate::onboard::testkit::{CommandLog, FakeRobotScript, run_fake_robot};
+
+    /// A mission that is done at its first step, never moving the robot.
+    struct DoneAtOnce;
+
+    impl MissionDriver for DoneAtOnce {
+        fn on_status(&mut self, _: f64, _: &StatusPacket) {}
+        fn on_scan(&mut self, _: f64, _: &Scan) {}
+        fn on_fault(&mut self, _: f64, _: Fault) {}
+        fn on_reconnect(&mut self) {}
+        fn replanned(&self) -> bool {
+            true
+        }
+        fn step(&mut self, _: f64) -> MissionCommand {
+            MissionCommand::Done
+        }
+        fn snapshot(&self) -> (MissionState, Option<MapImage>) {
+            let state = MissionState {
+                version: STATE_VERSION,
+                ..MissionState::default()
+            };
+            (state, None)
+        }
+    }
+
+    fn byte_codec() -> Box<dyn LaserCodec> {
+        Box::new(ByteCodec::default())
+    }
 
     /// A fake robot behind a loopback TCP listener.
     async fn tcp_robot(script: FakeRobotScript) -> (String, CommandLog) {
@@ -833,26 +758,28 @@ mod tests {
     }
 
     #[tokio::test]
-    async fn run_without_a_mission_starts_up_then_stops_safely() {
+    async fn run_of_a_mission_done_at_once_starts_up_then_stops_safely() {
         let (addr, log) = tcp_robot(FakeRobotScript::default()).await;
+        let laser = super::reconnect_tests::laser_server().await;
         let mut board = BoardConfig::default();
         board.robot.subclass = crate::config::Name::new("p3dx-sh").unwrap();
         board.link.tcp = crate::config::Address::new(&addr);
-        let dir = temp_dir("nomission");
+        board.laser.address = crate::config::Address::new(&laser);
+        board.laser.beam_count = 3;
+        let dir = temp_dir("doneatonce");
         let outcome = run_with(
             RunOptions {
                 board,
                 log_dir: dir.clone(),
                 resume: false,
             },
-            || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
-            || None,
-            |_, _| Ok(None),
+            byte_codec,
+            |_, _| Ok(Box::new(DoneAtOnce) as Box<dyn MissionDriver>),
             std::future::pending(),
         )
         .await
         .unwrap();
-        assert_eq!(outcome, RunOutcome::MissionUnavailable);
+        assert_eq!(outcome, RunOutcome::Finished);
         tokio::time::sleep(Duration::from_millis(50)).await;
         let sent: Vec<(u8, Option<i16>)> = log
             .lock()
@@ -875,8 +802,8 @@ mod tests {
                 .iter()
                 .any(|&(c, a)| (c == 11 || c == 21) && a != Some(0))
         );
-        let telemetry = std::fs::read_to_string(dir.join("telemetry.jsonl")).unwrap();
-        assert!(telemetry.contains("mission not available"));
+        let saved = StateStore::open(&dir).unwrap().load().unwrap();
+        assert!(saved.is_some(), "the mission's state is saved at the end");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -889,34 +816,13 @@ mod tests {
                 log_dir: dir.clone(),
                 resume: true,
             },
-            || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
-            || None,
-            |_, _| Ok(None),
+            byte_codec,
+            |_, _| Ok(Box::new(DoneAtOnce) as Box<dyn MissionDriver>),
             std::future::pending(),
         )
         .await
         .unwrap_err();
         assert!(matches!(err, RuntimeError::NothingToResume(_)));
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[tokio::test]
-    async fn without_a_codec_nothing_is_sent() {
-        let dir = temp_dir("nocodec");
-        let err = run_with(
-            RunOptions {
-                board: BoardConfig::default(),
-                log_dir: dir.clone(),
-                resume: false,
-            },
-            || None,
-            || None,
-            |_, _| Ok(None),
-            std::future::pending(),
-        )
-        .await
-        .unwrap_err();
-        assert!(matches!(err, RuntimeError::NoCodec("ARCOS")));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -930,7 +836,6 @@ mod tests {
                 tcp: Some(addr),
                 drive: false,
             },
-            Some(Box::new(MiniArcos::default())),
             &mut out,
         )
         .await
@@ -951,7 +856,7 @@ mod pump_tests {
     use super::*;
     use crate::onboard::laser::tests::{ByteCodec, streaming_laser};
     use crate::onboard::link::DuplexLink;
-    use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+    use crate::onboard::testkit::{CommandLog, FakeRobotScript, run_fake_robot};
     use std::sync::{Arc, Mutex};
 
     /// Faults a mission saw, with their mission times \[s\].
@@ -969,7 +874,7 @@ mod pump_tests {
     }
 
     impl MissionDriver for ScriptedMission {
-        fn on_status(&mut self, _t_s: f64, _status: &RobotStatus) {
+        fn on_status(&mut self, _t_s: f64, _status: &StatusPacket) {
             self.statuses += 1;
         }
         fn on_scan(&mut self, _t_s: f64, scan: &Scan) {
@@ -995,10 +900,10 @@ mod pump_tests {
             if t_s >= self.done_at_s {
                 MissionCommand::Done
             } else {
-                MissionCommand::Drive {
+                MissionCommand::Drive(Limits::default().clamp(MotionCommand {
                     speed_mm_s: 100,
-                    turn_deg_s: 0,
-                }
+                    turn_rate_deg_s: 0,
+                }))
             }
         }
         fn snapshot(&self) -> (MissionState, Option<MapImage>) {
@@ -1039,13 +944,9 @@ mod pump_tests {
         let mut board = BoardConfig::default();
         board.safety.stale_timeout_s = 0.5;
         board.persistence.save_every_s = 1.0;
-        let client = ArcosClient::connect(
-            Box::new(link),
-            Box::new(MiniArcos::default()),
-            SessionOptions::default(),
-        )
-        .await
-        .unwrap();
+        let client = ArcosClient::connect(Box::new(link), SessionOptions::default())
+            .await
+            .unwrap();
         let (llink, lpeer) = DuplexLink::pair(8192, None);
         tokio::spawn(streaming_laser(lpeer, Duration::from_millis(100), dropout));
         let mut laser_config = board.laser_config();
@@ -1195,7 +1096,7 @@ mod pump_tests {
 mod reconnect_tests {
     use super::*;
     use crate::onboard::laser::tests::{ByteCodec, streaming_laser};
-    use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+    use crate::onboard::testkit::{CommandLog, FakeRobotScript, run_fake_robot};
 
     /// A robot behind a TCP listener; the first connection is cut after `cut_after`.
     async fn flaky_robot(cut_after: Duration) -> (String, CommandLog) {
@@ -1221,7 +1122,9 @@ mod reconnect_tests {
         (addr, log)
     }
 
-    async fn laser_server() -> String {
+    /// An LMS1xx double (the test byte codec's format) streaming 3-beam scans every 50 ms
+    /// behind a loopback TCP listener.
+    pub(super) async fn laser_server() -> String {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap().to_string();
         tokio::spawn(async move {
@@ -1249,7 +1152,7 @@ mod reconnect_tests {
     }
 
     impl MissionDriver for Mission {
-        fn on_status(&mut self, _: f64, _: &RobotStatus) {}
+        fn on_status(&mut self, _: f64, _: &StatusPacket) {}
         fn on_scan(&mut self, _: f64, _: &Scan) {}
         fn on_fault(&mut self, t_s: f64, fault: Fault) {
             self.faults.push((t_s, fault));
@@ -1267,10 +1170,10 @@ mod reconnect_tests {
             if after_fault || t_s > 10.0 {
                 MissionCommand::Done
             } else {
-                MissionCommand::Drive {
+                MissionCommand::Drive(Limits::default().clamp(MotionCommand {
                     speed_mm_s: 120,
-                    turn_deg_s: 0,
-                }
+                    turn_rate_deg_s: 0,
+                }))
             }
         }
         fn snapshot(&self) -> (MissionState, Option<MapImage>) {
@@ -1305,15 +1208,14 @@ mod reconnect_tests {
                 log_dir: dir.clone(),
                 resume: false,
             },
-            || Some(Box::new(MiniArcos::default()) as Box<dyn ArcosCodec>),
-            || Some(Box::new(ByteCodec::default()) as Box<dyn LaserCodec>),
+            || Box::new(ByteCodec::default()) as Box<dyn LaserCodec>,
             |_, _| {
-                Ok(Some(Box::new(Mission {
+                Ok(Box::new(Mission {
                     faults: Vec::new(),
                     fault_at: None,
                     now_s: 0.0,
                     reconnects: 0,
-                }) as Box<dyn MissionDriver>))
+                }) as Box<dyn MissionDriver>)
             },
             std::future::pending(),
         )

@@ -14,8 +14,6 @@
 
 use core::fmt;
 
-use crate::sensor::{Beam, Scan, ScanError};
-use crate::units::{deg_to_rad, mm_to_m};
 use crate::wire::bytes::{Overflow, Reader, Writer};
 
 /// Start byte.
@@ -392,31 +390,13 @@ pub struct MeasuredValues {
 }
 
 impl MeasuredValues {
-    /// Converts the values to a [`Scan`] in the laser frame (x forward, CCW positive).
-    ///
-    /// `first_angle_rad` is the first beam's angle ([`Variant::first_angle_rad`], −90° for a
-    /// 180° scan: the LMS200 sweeps from its right to its left), `step_rad` the resolution.
-    /// `distance_mask` keeps the distance bits (0x1FFF for 13-bit mm data, 0xFFFF to keep
-    /// everything). Zero ranges and ranges above `max_range_m` become "no return".
-    pub fn to_scan(
-        &self,
-        first_angle_rad: f32,
-        step_rad: f32,
-        distance_mask: u16,
-        max_range_m: f32,
-        out: &mut Scan,
-    ) -> Result<(), ScanError> {
-        out.clear();
-        for (i, &raw) in self.values.iter().enumerate() {
-            let mm = (raw & distance_mask) as u32 * self.unit.mm();
-            let range_m = mm_to_m(mm as f32);
-            let range_m = (mm != 0 && range_m <= max_range_m).then_some(range_m);
-            out.push(Beam {
-                angle_rad: first_angle_rad + i as f32 * step_rad,
-                range_m,
-            })?;
-        }
-        Ok(())
+    /// The ranges \[mm\] in scan order: each value's distance bits (`distance_mask`: 0x1FFF
+    /// for 13-bit mm data, 0xFFFF to keep everything) times the unit. 0 means no return.
+    pub fn ranges_mm(&self, distance_mask: u16) -> impl Iterator<Item = u32> + '_ {
+        let unit_mm = self.unit.mm();
+        self.values
+            .iter()
+            .map(move |&raw| u32::from(raw & distance_mask) * unit_mm)
     }
 }
 
@@ -449,14 +429,10 @@ impl Variant {
         self.angle_deg as usize * 100 / self.resolution_cdeg as usize + 1
     }
 
-    /// First beam angle in the laser frame \[rad\] (scans are centred on forward).
-    pub fn first_angle_rad(&self) -> f32 {
-        -deg_to_rad(self.angle_deg as f32 / 2.0)
-    }
-
-    /// Beam step \[rad\].
-    pub fn step_rad(&self) -> f32 {
-        deg_to_rad(self.resolution_cdeg as f32 / 100.0)
+    /// First beam angle in the laser frame \[0.01 deg\]: scans are centred on forward and the
+    /// LMS200 sweeps from its right to its left (−9000 for a 180° scan).
+    pub fn first_angle_cdeg(&self) -> i32 {
+        -i32::from(self.angle_deg) * 50
     }
 }
 
@@ -977,20 +953,10 @@ mod tests {
             panic!("not measured values")
         };
         assert_eq!(back, m);
-        let v = Variant::DEG180_RES1;
-        let mut scan = Scan::new();
-        back.to_scan(v.first_angle_rad(), v.step_rad(), 0x1FFF, 1.1, &mut scan)
-            .unwrap();
-        assert_eq!(scan.len(), v.beam_count());
-        let b = scan.beams();
-        assert!((b[0].angle_rad + core::f32::consts::FRAC_PI_2).abs() < 1e-6);
-        assert!((b[180].angle_rad - core::f32::consts::FRAC_PI_2).abs() < 1e-4);
-        assert_eq!(b[0].range_m, Some(1.0));
-        assert_eq!(b[90].range_m, None);
-        assert_eq!(
-            b[150].range_m, None,
-            "1.150 m is beyond the 1.1 m usable range"
-        );
+        let ranges: Vec<u32> = back.ranges_mm(0x1FFF).collect();
+        assert_eq!(ranges.len(), 181);
+        assert_eq!((ranges[0], ranges[90], ranges[150]), (1000, 0, 1150));
+        assert_eq!(Variant::DEG180_RES1.first_angle_cdeg(), -9000);
     }
 
     fn random_response(rng: &mut ProjectRng) -> Response {

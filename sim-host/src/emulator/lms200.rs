@@ -28,8 +28,8 @@ const STATUS_OK: u8 = 0x10;
 pub fn laser_config(variant: Variant) -> LaserConfig {
     LaserConfig {
         beam_count: variant.beam_count() as u16,
-        first_angle_rad: variant.first_angle_rad(),
-        step_rad: variant.step_rad(),
+        first_angle_rad: papillon::sensor::telegram::lms200_first_angle_rad(variant),
+        step_rad: papillon::sensor::telegram::lms200_step_rad(variant),
         max_range_m: MAX_RANGE_M,
         min_range_m: 0.0,
         noise_fraction: 0.0,

@@ -1,6 +1,6 @@
 use super::*;
 use crate::onboard::link::DuplexLink;
-use crate::onboard::testkit::{CommandLog, FakeRobotScript, MiniArcos, run_fake_robot};
+use crate::onboard::testkit::{CommandLog, FakeRobotScript, run_fake_robot};
 
 fn spawn_robot(script: FakeRobotScript, baud: Option<u32>) -> (Box<dyn RobotLink>, CommandLog) {
     let (link, peer) = DuplexLink::pair(4096, baud);
@@ -17,6 +17,14 @@ fn numbers(log: &CommandLog) -> Vec<(u8, Option<i16>)> {
         .collect()
 }
 
+/// A velocity within the default exploration limits (400 mm/s, 60 deg/s).
+fn velocity(speed_mm_s: i16, turn_rate_deg_s: i16) -> Velocity {
+    crate::control::command::Limits::default().clamp(crate::control::command::MotionCommand {
+        speed_mm_s,
+        turn_rate_deg_s,
+    })
+}
+
 fn options(subclass: &str) -> SessionOptions {
     SessionOptions {
         expected_subclass: Some(subclass.to_string()),
@@ -27,7 +35,7 @@ fn options(subclass: &str) -> SessionOptions {
 #[tokio::test(start_paused = true)]
 async fn handshake_open_config_then_start_sends_the_board_limits() {
     let (link, log) = spawn_robot(FakeRobotScript::default(), None);
-    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("P3DX-SH"))
+    let mut client = ArcosClient::connect(link, options("P3DX-SH"))
         .await
         .unwrap();
     assert_eq!(client.identity().name, "fake");
@@ -68,7 +76,7 @@ async fn handshake_retries_after_silence() {
         ..FakeRobotScript::default()
     };
     let (link, log) = spawn_robot(script, None);
-    let client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+    let client = ArcosClient::connect(link, options("p3dx-sh"))
         .await
         .unwrap();
     assert_eq!(client.identity().subclass, "p3dx-sh");
@@ -90,7 +98,7 @@ async fn handshake_gives_up_when_the_robot_never_answers() {
         sync_attempts: 3,
         ..options("p3dx-sh")
     };
-    match ArcosClient::connect(link, Box::new(MiniArcos::default()), opts).await {
+    match ArcosClient::connect(link, opts).await {
         Err(SessionError::HandshakeFailed {
             attempts: 3,
             last_id: None,
@@ -108,7 +116,7 @@ async fn an_old_open_session_is_closed_first() {
         ..FakeRobotScript::default()
     };
     let (link, log) = spawn_robot(script, None);
-    ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+    ArcosClient::connect(link, options("p3dx-sh"))
         .await
         .unwrap();
     let sent = numbers(&log);
@@ -120,13 +128,7 @@ async fn an_old_open_session_is_closed_first() {
 #[tokio::test(start_paused = true)]
 async fn wrong_subclass_and_class_are_refused() {
     let (link, _) = spawn_robot(FakeRobotScript::default(), None);
-    match ArcosClient::connect(
-        link,
-        Box::new(MiniArcos::default()),
-        options("p3dx-sh-lms1xx"),
-    )
-    .await
-    {
+    match ArcosClient::connect(link, options("p3dx-sh-lms1xx")).await {
         Err(SessionError::WrongSubclass { got, expected }) => {
             assert_eq!(got, "p3dx-sh");
             assert_eq!(expected, "p3dx-sh-lms1xx");
@@ -139,7 +141,7 @@ async fn wrong_subclass_and_class_are_refused() {
     };
     let (link, _) = spawn_robot(script, None);
     assert!(matches!(
-        ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh")).await,
+        ArcosClient::connect(link, options("p3dx-sh")).await,
         Err(SessionError::WrongClass { .. })
     ));
     let script = FakeRobotScript {
@@ -152,7 +154,7 @@ async fn wrong_subclass_and_class_are_refused() {
         ..SessionOptions::default()
     };
     assert!(matches!(
-        ArcosClient::connect(link, Box::new(MiniArcos::default()), opts).await,
+        ArcosClient::connect(link, opts).await,
         Err(SessionError::WrongSubclass { .. })
     ));
 }
@@ -165,7 +167,7 @@ async fn missing_config_is_an_error() {
     };
     let (link, _) = spawn_robot(script, None);
     assert!(matches!(
-        ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh")).await,
+        ArcosClient::connect(link, options("p3dx-sh")).await,
         Err(SessionError::NoConfig)
     ));
 }
@@ -179,13 +181,9 @@ async fn hostbaud_switch_on_a_serial_link() {
         FakeRobotScript::default(),
         log.clone(),
     ));
-    let client = ArcosClient::connect(
-        Box::new(link),
-        Box::new(MiniArcos::default()),
-        options("p3dx-sh"),
-    )
-    .await
-    .unwrap();
+    let client = ArcosClient::connect(Box::new(link), options("p3dx-sh"))
+        .await
+        .unwrap();
     assert_eq!(client.baud_switch(), BaudSwitch::Switched(38400));
     let sent = numbers(&log);
     let hb = sent.iter().position(|&c| c == (50, Some(2))).unwrap();
@@ -199,7 +197,7 @@ async fn hostbaud_reverts_when_nothing_comes_back() {
         ..FakeRobotScript::default()
     };
     let (link, _) = spawn_robot(script, Some(9600));
-    let client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+    let client = ArcosClient::connect(link, options("p3dx-sh"))
         .await
         .unwrap();
     assert_eq!(client.baud_switch(), BaudSwitch::Reverted(38400));
@@ -212,7 +210,7 @@ async fn no_hostbaud_without_autobaud_or_on_tcp() {
         ..FakeRobotScript::default()
     };
     let (link, log) = spawn_robot(script, Some(9600));
-    let client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+    let client = ArcosClient::connect(link, options("p3dx-sh"))
         .await
         .unwrap();
     assert_eq!(client.baud_switch(), BaudSwitch::NotAttempted);
@@ -222,7 +220,7 @@ async fn no_hostbaud_without_autobaud_or_on_tcp() {
 #[tokio::test(start_paused = true)]
 async fn status_events_arrive_and_pulses_keep_the_link_alive() {
     let (link, log) = spawn_robot(FakeRobotScript::default(), None);
-    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+    let mut client = ArcosClient::connect(link, options("p3dx-sh"))
         .await
         .unwrap();
     let start = Instant::now();
@@ -260,7 +258,7 @@ async fn a_short_firmware_watchdog_gets_pulses_four_times_per_period() {
         ..FakeRobotScript::default()
     };
     let (link, log) = spawn_robot(script, None);
-    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+    let mut client = ArcosClient::connect(link, options("p3dx-sh"))
         .await
         .unwrap();
     let start = Instant::now();
@@ -286,13 +284,13 @@ async fn a_short_firmware_watchdog_gets_pulses_four_times_per_period() {
 #[tokio::test(start_paused = true)]
 async fn after_a_fault_motion_is_refused_and_never_resent() {
     let (link, log) = spawn_robot(FakeRobotScript::default(), None);
-    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+    let mut client = ArcosClient::connect(link, options("p3dx-sh"))
         .await
         .unwrap();
-    client.drive(200, 10).await.unwrap();
+    client.drive(velocity(200, 10)).await.unwrap();
     client.halt(Fault::StaleScan).await.unwrap();
     assert!(matches!(
-        client.drive(200, 10).await,
+        client.drive(velocity(200, 10)).await,
         Err(SessionError::Faulted(Fault::StaleScan))
     ));
     let t = Instant::now();
@@ -311,20 +309,20 @@ async fn after_a_fault_motion_is_refused_and_never_resent() {
         "no non-zero velocity after the halt: {sent:?}"
     );
     client.clear_fault();
-    client.drive(100, 0).await.unwrap();
+    client.drive(velocity(100, 0)).await.unwrap();
 }
 
 #[tokio::test(start_paused = true)]
 async fn stop_and_close_disables_motors_and_closes() {
     let (link, log) = spawn_robot(FakeRobotScript::default(), None);
-    let mut client = ArcosClient::connect(link, Box::new(MiniArcos::default()), options("p3dx-sh"))
+    let mut client = ArcosClient::connect(link, options("p3dx-sh"))
         .await
         .unwrap();
     client
         .start(&MotionLimits::from_board(&BoardConfig::default()))
         .await
         .unwrap();
-    client.drive(150, 0).await.unwrap();
+    client.drive(velocity(150, 0)).await.unwrap();
     client.stop_and_close().await.unwrap();
     tokio::time::sleep(Duration::from_millis(50)).await;
     let sent = numbers(&log);
@@ -346,13 +344,9 @@ async fn closed_link_is_reported_and_latches_a_fault() {
     let (link, peer) = DuplexLink::pair(4096, None);
     let log = CommandLog::default();
     let robot = tokio::spawn(run_fake_robot(peer, FakeRobotScript::default(), log));
-    let mut client = ArcosClient::connect(
-        Box::new(link),
-        Box::new(MiniArcos::default()),
-        options("p3dx-sh"),
-    )
-    .await
-    .unwrap();
+    let mut client = ArcosClient::connect(Box::new(link), options("p3dx-sh"))
+        .await
+        .unwrap();
     robot.abort();
     let _ = robot.await;
     let r = client
@@ -366,10 +360,10 @@ async fn closed_link_is_reported_and_latches_a_fault() {
 }
 
 #[test]
-fn garbage_never_panics_the_test_codec() {
+fn garbage_never_panics_the_session_codec() {
     use rand_core::Rng;
     let mut rng = crate::random::seeded(3);
-    let mut codec = MiniArcos::default();
+    let mut codec = ArcosCodec::default();
     let mut out = Vec::new();
     for _ in 0..2000 {
         let n = (rng.next_u32() % 64) as usize;

@@ -9,7 +9,6 @@
 //!   CONFIG, ENCODER, SYNC replies), encoded by the emulator and decoded by the robot PC;
 //!   [`ServerPacket`] dispatches on the packet ID.
 //! - [`stream`]: [`FrameDecoder`], the streaming frame decoder.
-//! - [`odometry`]: unwrapping of the 15-bit x/y and 4096-unit heading counters.
 //!
 //! Source: the protocol fact sheet, section 1 (Pioneer 3 operations manual, ARIA and p2os
 //! behaviour, wire captures).
@@ -18,7 +17,6 @@ pub mod command;
 pub mod config;
 pub mod encoder;
 pub mod frame;
-pub mod odometry;
 pub mod sip;
 pub mod stream;
 pub mod sync;

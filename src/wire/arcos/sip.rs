@@ -60,7 +60,7 @@ pub struct SipExtras {
 pub struct StatusPacket {
     /// ID 0x33 (moving) rather than 0x32 (stopped).
     pub moving: bool,
-    /// XPOS: integrated x, 15 bits used \[mm × DistConvFactor\]; see [`super::odometry`].
+    /// XPOS: integrated x, 15 bits used \[mm × DistConvFactor\]; the control layer unwraps it (`control::odometry`).
     pub x_pos: u16,
     /// YPOS, as `x_pos`.
     pub y_pos: u16,

@@ -8,8 +8,8 @@
 //! - [`command`]: [`Request`]s of both client connect sequences (the clearpath LMS1xx driver
 //!   and ARIA), the laser's [`Reply`]s, and [`command::check_reply`] which turns an unexpected
 //!   or refusing reply into an error.
-//! - [`scandata`]: the `LMDscandata` telegram ([`ScanTelegram`]) and its conversion to a
-//!   [`crate::sensor::Scan`].
+//! - [`scandata`]: the `LMDscandata` telegram ([`ScanTelegram`]), values as the laser sends
+//!   them (the sensor layer (`sensor::telegram`) turns one into a scan).
 
 pub mod command;
 pub mod framing;
@@ -17,7 +17,7 @@ pub mod scandata;
 
 pub use command::{Dialect, Reply, ReplyError, Request, ScanConfig, ScanDataConfig};
 pub use framing::{ColaDecoder, ColaStats};
-pub use scandata::{ScanTelegram, ToScanError};
+pub use scandata::ScanTelegram;
 
 use core::fmt;
 
@@ -121,6 +121,13 @@ pub enum EmitError {
         /// Bytes available.
         capacity: usize,
     },
+    /// More values than a channel holds.
+    TooManyValues {
+        /// Values given.
+        count: usize,
+        /// The capacity.
+        capacity: usize,
+    },
 }
 
 impl fmt::Display for EmitError {
@@ -128,6 +135,9 @@ impl fmt::Display for EmitError {
         match self {
             EmitError::BufferTooSmall { capacity } => {
                 write!(f, "telegram does not fit in {capacity} bytes")
+            }
+            EmitError::TooManyValues { count, capacity } => {
+                write!(f, "{count} values, a channel holds at most {capacity}")
             }
         }
     }

@@ -1,5 +1,6 @@
-//! The `LMDscandata` telegram: parsing into a [`ScanTelegram`], emitting it (for the
-//! emulator), and converting it into a [`Scan`].
+//! The `LMDscandata` telegram: parsing into a [`ScanTelegram`] and emitting it (for the
+//! emulator). The telegram keeps its values as the laser sends them (distances in its units
+//! with scale and offset, angles in 1/10000°); the sensor layer (`sensor::telegram`) turns one into a scan.
 //!
 //! Token layout after `sSN LMDscandata` (or `sRA LMDscandata` when polled), fact sheet
 //! section 2: version, device number, serial number, device status (2), telegram counter,
@@ -20,9 +21,9 @@ use core::fmt::{self, Write};
 
 use super::framing::emit_with;
 use super::{EmitError, ParseError, Tokens, token_text};
-use crate::sensor::{Beam, MAX_BEAMS, Scan, ScanError};
-use crate::units::{deg_to_rad, mm_to_m};
 
+/// Values a channel can carry: an LMS1xx at 0.25° over 270° (1081 beams).
+pub const MAX_VALUES: usize = 1081;
 /// Channels of each width a telegram can carry (DIST1, DIST2, RSSI1, RSSI2).
 pub const MAX_CHANNELS: usize = 4;
 /// Encoders a telegram can carry.
@@ -47,7 +48,7 @@ pub struct Channel<V> {
     /// Angular step \[1/10000 deg\].
     pub step_deg_e4: u16,
     /// Raw values.
-    pub values: heapless::Vec<V, MAX_BEAMS>,
+    pub values: heapless::Vec<V, MAX_VALUES>,
 }
 
 /// A 16-bit channel (distances in mm at scale 1.0).
@@ -156,43 +157,6 @@ pub struct ScanTelegram {
     pub event: Option<EventData>,
 }
 
-/// Errors converting a telegram into a [`Scan`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[non_exhaustive]
-pub enum ToScanError {
-    /// No `DIST` channel in the telegram.
-    NoDistanceChannel,
-    /// A scale factor or offset that is not finite.
-    BadScale {
-        /// The scale factor.
-        scale: f32,
-        /// The offset.
-        offset: f32,
-    },
-    /// The scan cannot hold the beams.
-    Scan(ScanError),
-}
-
-impl fmt::Display for ToScanError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ToScanError::NoDistanceChannel => write!(f, "telegram has no DIST channel"),
-            ToScanError::BadScale { scale, offset } => {
-                write!(f, "scale factor {scale} / offset {offset} not finite")
-            }
-            ToScanError::Scan(e) => write!(f, "{e}"),
-        }
-    }
-}
-
-impl core::error::Error for ToScanError {}
-
-impl From<ScanError> for ToScanError {
-    fn from(e: ScanError) -> Self {
-        ToScanError::Scan(e)
-    }
-}
-
 /// Whether a telegram payload is scan data (`sSN LMDscandata …` or `sRA LMDscandata …`).
 pub fn is_scan_data(payload: &[u8]) -> bool {
     payload.starts_with(b"sSN LMDscandata ") || payload.starts_with(b"sRA LMDscandata ")
@@ -209,11 +173,11 @@ fn parse_channel<V: Copy>(
     let start_angle_deg_e4 = t.int32("start angle")?;
     let step_deg_e4 = t.uint("angular step", u16::MAX as u32)? as u16;
     let count = t.uint("value count", u32::MAX)?;
-    if count as usize > MAX_BEAMS {
+    if count as usize > MAX_VALUES {
         return Err(ParseError::TooMany {
             field: "values",
             count,
-            capacity: MAX_BEAMS,
+            capacity: MAX_VALUES,
         });
     }
     let mut values = heapless::Vec::new();
@@ -260,12 +224,13 @@ impl ScanTelegram {
         step_deg_e4: u16,
         scan_frequency_centi_hz: u32,
         ranges_mm: &[u16],
-    ) -> Result<Self, ScanError> {
+    ) -> Result<Self, EmitError> {
         let mut values = heapless::Vec::new();
         values
             .extend_from_slice(ranges_mm)
-            .map_err(|_| ScanError::TooManyBeams {
-                capacity: MAX_BEAMS,
+            .map_err(|_| EmitError::TooManyValues {
+                count: ranges_mm.len(),
+                capacity: MAX_VALUES,
             })?;
         let mut t = ScanTelegram {
             version: 1,
@@ -468,36 +433,6 @@ impl ScanTelegram {
                     .find(|c| c.content.starts_with("DIST"))
             })
     }
-
-    /// Converts the distance channel into `out` (cleared first): beam angles in the laser
-    /// frame (x forward, CCW positive, see the module doc), ranges = value × scale + offset
-    /// \[mm\] converted to metres. A zero value (no return) and any range above
-    /// `max_range_m` \[m\] become `None`.
-    pub fn to_scan(&self, max_range_m: f32, out: &mut Scan) -> Result<(), ToScanError> {
-        let c = self
-            .distance_channel()
-            .ok_or(ToScanError::NoDistanceChannel)?;
-        if !c.scale.is_finite() || !c.offset.is_finite() {
-            return Err(ToScanError::BadScale {
-                scale: c.scale,
-                offset: c.offset,
-            });
-        }
-        out.clear();
-        let start = c.start_angle_deg_e4 as f64;
-        let step = c.step_deg_e4 as f64;
-        for (i, &v) in c.values.iter().enumerate() {
-            let angle_deg = (start + i as f64 * step) / 10_000.0 - 90.0;
-            let range_mm = v as f32 * c.scale + c.offset;
-            let range_m = mm_to_m(range_mm);
-            let range_m = (v != 0 && range_m > 0.0 && range_m <= max_range_m).then_some(range_m);
-            out.push(Beam {
-                angle_rad: deg_to_rad(angle_deg as f32),
-                range_m,
-            })?;
-        }
-        Ok(())
-    }
 }
 
 fn write_channel<V: Copy>(
@@ -566,20 +501,6 @@ pub(crate) mod tests {
         let mut buf = std::vec![0u8; 8192];
         let n = t.emit(&mut buf).unwrap();
         assert_eq!(&buf[..n], &frame[..]);
-
-        let mut scan = Scan::new();
-        t.to_scan(4.0, &mut scan).unwrap();
-        let b = scan.beams();
-        assert_eq!(b.len(), 541);
-        assert!((b[0].angle_rad - deg_to_rad(-135.0)).abs() < 1e-6);
-        assert!((b[270].angle_rad).abs() < 1e-6);
-        assert!((b[540].angle_rad - deg_to_rad(135.0)).abs() < 1e-5);
-        assert_eq!(b[0].range_m, None, "0 = no return");
-        let near = |r: Option<f32>, m: f32| r.is_some_and(|r| (r - m).abs() < 1e-5);
-        assert!(near(b[1].range_m, 0.51));
-        assert!(near(b[350].range_m, 4.0), "4.0 m is at the usable range");
-        assert_eq!(b[351].range_m, None, "4.01 m is beyond the usable range");
-        assert_eq!(b[300].range_m, None);
     }
 
     #[test]
