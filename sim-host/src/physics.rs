@@ -706,15 +706,17 @@ mod tests {
     #[test]
     fn walls_stop_the_robot_and_set_the_front_bumper() {
         let w = builtin::empty(0.1).unwrap();
-        // Facing the east wall (inner face at x = 23.5 m).
+        // Facing the east wall (inner face at x = 23.5 m): the front edge, 0.21 m ahead of the
+        // axle, stops at the face.
         let mut b = RobotBody::new(no_slip(), Pose2::new(22.0, 5.0, 0.0), 3);
         b.command(500.0, 0.0);
         run(&mut b, &w, 10.0);
         let x = b.true_pose().x;
-        assert!(x <= 23.25 + 1e-3 && x > 23.2, "stopped at {x}");
+        assert!(x <= 23.29 + 1e-3 && x > 23.24, "stopped at {x}");
         assert!(b.stalled() && b.front_bumper() && !b.rear_bumper());
         assert_eq!(b.arcos_stall_bumpers(), 0xFF01);
-        assert!(w.wall_penetration(b.true_pose().position(), 0.25) <= 0.0);
+        let body = BodyOutline::p3dx();
+        assert!(body_penetration(&w, &[], b.true_pose(), &body, 0.25) <= 0.0);
         // Backing off frees it and sets nothing.
         b.command(-200.0, 0.0);
         run(&mut b, &w, 2.0);
@@ -729,7 +731,40 @@ mod tests {
         b.command(-300.0, 0.0);
         run(&mut b, &w, 5.0);
         assert!(b.stalled() && b.rear_bumper() && !b.front_bumper());
-        assert!(b.true_pose().x >= 0.75 - 1e-3);
+        // The rear edge, 0.245 m behind the axle, stops at the west wall's face (x = 0.5 m).
+        assert!(b.true_pose().x >= 0.745 - 1e-3);
+    }
+
+    #[test]
+    fn the_body_passes_a_half_metre_door_straight_but_not_a_forty_centimetre_one() {
+        for (door_m, passes) in [(0.5, true), (0.4, false)] {
+            let mut w = builtin::empty(0.1).unwrap();
+            // A wall across x = 10 m with a door centred on y = 5 m.
+            w.fill_rect(10.0, 0.5, 10.1, 5.0 - door_m / 2.0, true);
+            w.fill_rect(10.0, 5.0 + door_m / 2.0, 10.1, 23.5, true);
+            let mut b = RobotBody::new(no_slip(), Pose2::new(8.0, 5.0, 0.0), 3);
+            b.command(200.0, 0.0);
+            run(&mut b, &w, 20.0);
+            let x = b.true_pose().x;
+            assert_eq!(x > 11.0, passes, "door {door_m} m: stopped at {x}");
+            assert_eq!(b.stalled(), !passes);
+        }
+    }
+
+    #[test]
+    fn turning_in_place_against_a_wall_is_stopped() {
+        let w = builtin::empty(0.1).unwrap();
+        // The rear 0.2 m from the west wall's face: the rear corners hit it when turning.
+        let mut b = RobotBody::new(no_slip(), Pose2::new(0.5 + 0.2 + 0.05, 5.0, 0.0), 3);
+        b.command(0.0, 30.0);
+        run(&mut b, &w, 3.0);
+        // Free of the wall, a turn in place goes round.
+        let mut free = RobotBody::new(no_slip(), Pose2::new(5.0, 5.0, 0.0), 3);
+        free.command(0.0, 30.0);
+        run(&mut free, &w, 3.0);
+        assert!(free.true_pose().theta.abs() > 0.5);
+        assert!(!free.stalled());
+        let _ = b;
     }
 
     #[test]
