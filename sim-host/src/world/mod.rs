@@ -9,6 +9,7 @@
 
 pub mod builtin;
 pub mod csv;
+pub mod generated;
 pub mod image;
 pub mod movingai;
 pub mod rosmap;
@@ -93,7 +94,7 @@ impl fmt::Display for WorldError {
         match self {
             WorldError::UnknownWorld { spec } => write!(
                 f,
-                "unknown world '{spec}': expected one of {} or a .csv, .png, .pgm, .map or .yaml file",
+                "unknown world '{spec}': expected one of {}, gen-00..gen-23, gen-KIND-SEED or a .csv, .png, .pgm, .map or .yaml file",
                 builtin::NAMES.join(", ")
             ),
             WorldError::UnsupportedFormat { path, extension } => write!(
@@ -180,6 +181,7 @@ impl World {
 
     /// A built-in world or a map file, chosen by `spec`:
     /// - `empty`, `house`, `factory`, `lab`: the built-in designs ([`builtin`]);
+    /// - `gen-NN`, `gen-KIND-SEED`: generated floor plans ([`generated`]);
     /// - `*.csv`: the thesis's CSV format ([`csv`]), upsampled to `resolution_m`;
     /// - `*.png`, `*.pgm`: a plain image, one pixel per cell of `resolution_m` ([`image`]);
     /// - `*.map`: a Moving AI grid, one character per cell of `resolution_m` ([`movingai`]);
@@ -188,6 +190,9 @@ impl World {
     pub fn load(spec: &str, resolution_m: f32) -> Result<Self, WorldError> {
         let resolution_m = check_resolution(resolution_m)?;
         if let Some(world) = builtin::by_name(spec, resolution_m) {
+            return world;
+        }
+        if let Some(world) = generated::by_name(spec, resolution_m) {
             return world;
         }
         let path = Path::new(spec);
