@@ -239,6 +239,24 @@ impl RobotBody {
         self.cmd_turn_deg_s = finite(turn_deg_s).clamp(-c.max_turn_deg_s, c.max_turn_deg_s);
     }
 
+    /// Sets the translational acceleration and deceleration \[mm/s²\] and the rotational
+    /// acceleration and deceleration \[deg/s²\] the wheels ramp with (the firmware's SETA and
+    /// SETRA); values that are not positive numbers keep the current ones.
+    pub fn set_accelerations(
+        &mut self,
+        accel_mm_s2: f32,
+        decel_mm_s2: f32,
+        turn_accel_deg_s2: f32,
+        turn_decel_deg_s2: f32,
+    ) {
+        let keep = |v: f32, old: f32| if v.is_finite() && v > 0.0 { v } else { old };
+        let c = &mut self.config;
+        c.accel_mm_s2 = keep(accel_mm_s2, c.accel_mm_s2);
+        c.decel_mm_s2 = keep(decel_mm_s2, c.decel_mm_s2);
+        c.turn_accel_deg_s2 = keep(turn_accel_deg_s2, c.turn_accel_deg_s2);
+        c.turn_decel_deg_s2 = keep(turn_decel_deg_s2, c.turn_decel_deg_s2);
+    }
+
     /// Commands zero speed and turn rate (a normal, decelerated stop).
     pub fn stop(&mut self) {
         self.command(0.0, 0.0);
