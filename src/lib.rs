@@ -23,6 +23,8 @@ pub mod frontier;
 pub mod geometry;
 pub mod grid;
 #[cfg(feature = "std")]
+mod heap;
+#[cfg(feature = "std")]
 pub mod mapfile;
 pub mod math;
 pub mod mission;

@@ -57,7 +57,7 @@ pub(super) enum Yield {
 impl<const N: usize> Mission<N> {
     /// Which other robot, if any, stands at map point `p`.
     pub(super) fn robot_at(&self, map: &SharedMap<N>, now: Time, p: Point2) -> Option<u8> {
-        map.robots
+        map.robots()
             .iter()
             .filter(|m| m.id != self.id && now.saturating_since(m.time) <= MARK_MAX_AGE)
             .find(|m| m.pose.position().distance(p) <= ROBOT_MATCH_M)
@@ -73,7 +73,7 @@ impl<const N: usize> Mission<N> {
         } else {
             &self.last_path
         };
-        map.robots
+        map.robots()
             .iter()
             .filter(|m| m.id != self.id && now.saturating_since(m.time) <= MARK_MAX_AGE)
             .find(|m| {
@@ -224,8 +224,8 @@ impl<const N: usize> Mission<N> {
                 map.grid.set_log_odds(i, occupied, &mut map.trav);
             }
         }
-        for k in 0..map.robots.len() {
-            let m = &map.robots[k];
+        for k in 0..map.robots().len() {
+            let m = &map.robots()[k];
             let p = m.pose.position();
             if m.id == self.id
                 || now.saturating_since(m.time) > MARK_MAX_AGE
@@ -429,7 +429,7 @@ impl<const N: usize> Mission<N> {
 pub(super) fn distance_to_path(p: Point2, other: &RobotMark) -> f32 {
     let mut best = p.distance(other.pose.position());
     let mut a = other.pose.position();
-    for &b in &other.path {
+    for &b in other.path() {
         best = best.min(distance_to_segment(p, a, b));
         a = b;
     }
