@@ -70,6 +70,8 @@ impl<const N: usize, const C: usize, const F: usize> TargetSelector<N>
         req: &DecisionRequest<'_, N>,
         _rng: &mut R,
     ) -> Result<Outcome, DecideError> {
+        // Entries lapse once the map around them changed.
+        self.blacklist.forget_changed(req.grid);
         self.objective.prepare(req, &self.config)?;
         find_frontiers(
             req.grid,

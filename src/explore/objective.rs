@@ -57,51 +57,16 @@ use crate::raycast;
 use crate::sensor::LaserConfig;
 use crate::units;
 
+use super::evaluation::{CandidateStatus, Evaluation, WORST_FITNESS};
 use super::memo::EvalMemo;
 use super::view_cache::{ViewCache, ViewCacheStats};
 use super::{Blacklist, DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS};
 use crate::control::follower::MAX_WAYPOINTS;
 
-/// Fitness of an infeasible or blocked candidate: worse than any feasible one (those lie in
-/// `[-1, 0]`).
-pub const WORST_FITNESS: f32 = 1.0;
 /// Most cells in one leg of a planned path.
 pub const MAX_LEG_CELLS: usize = 4096;
 /// Most predicted scans along one candidate's path.
 pub const MAX_VIEWPOINTS: usize = 1024;
-
-/// Whether a candidate can be driven.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CandidateStatus {
-    /// Reachable and within the battery.
-    Feasible,
-    /// A target lies outside the grid.
-    OutOfBounds,
-    /// A target lies on an Occupied or inflated cell.
-    Blocked,
-    /// No path reaches a target.
-    Unreachable,
-    /// The path costs more than the battery minus the reserve.
-    OverBudget,
-    /// The path does not fit the waypoint, leg or viewpoint capacities.
-    TooLong,
-}
-
-/// A candidate's evaluation.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Evaluation {
-    /// Feasibility.
-    pub status: CandidateStatus,
-    /// Unknown cells predicted to become known \[cells\] (0 unless feasible).
-    pub gain_cells: u32,
-    /// Energy of the path \[steps\] (as far as it was planned).
-    pub energy_steps: f32,
-    /// Length of the waypoint polyline \[m\].
-    pub path_length_m: f32,
-    /// Fitness for the optimizers (minimised): [`WORST_FITNESS`] unless feasible, else in
-    /// `[-1, 0]`.
-    pub fitness: f32,
-}
 
 /// The objective's working memory and the state of the current decision.
 pub struct ExploreObjective<'m, const N: usize> {

@@ -20,7 +20,8 @@
 use crate::optim::{self, MAX_DIM, Method, Optimizer, Population, Problem, StopRules};
 use crate::random;
 
-use super::objective::{BoundObjective, ExploreObjective, WORST_FITNESS};
+use super::evaluation::WORST_FITNESS;
+use super::objective::{BoundObjective, ExploreObjective};
 use super::{
     Blacklist, DecideError, DecisionRequest, ExploreConfig, FrontierScan, MAX_TARGETS, Outcome,
     TargetSelector, nearest_reachable_frontier, sample_reachable_frontier,
@@ -81,6 +82,8 @@ impl<const N: usize> TargetSelector<N> for Optimized<'_, '_, N> {
         rng: &mut R,
     ) -> Result<Outcome, DecideError> {
         self.objective.prepare(req, &self.config)?;
+        // Entries lapse once the map around them changed.
+        self.blacklist.forget_changed(req.grid);
         let fallback =
             match nearest_reachable_frontier(req.grid, self.objective.field(), &self.blacklist) {
                 FrontierScan::NoneReachable => return Ok(Outcome::Done),

@@ -8,7 +8,6 @@ use crate::control::command::MotionCommand;
 use crate::control::follower::{Controller, FollowStatus, MAX_WAYPOINTS, WaypointFollower};
 use crate::control::odometry::MapFromOdom;
 use crate::control::safety::{RobotFlags, SafetyEvent, SafetyInputs, SafetyMonitor, SafetyState};
-use crate::explore::frontier_utility::{MAX_BLACKLIST, known_around};
 use crate::explore::{
     Blacklist, CandidateStatus, DecideError, Decision, DecisionRequest, ExploreConfig,
     FrontierUtility, MAX_DECISION_HISTORY, MAX_TARGETS, NearestFrontier, Optimized, Outcome,
@@ -31,8 +30,6 @@ use super::{
 };
 use robots::{TRAIL_LEN, TRAIL_SPACING_M, Yield};
 
-/// A blacklisted place covers targets within this distance \[m\].
-const BLACKLIST_RADIUS_M: f32 = 0.5;
 /// Search for a passable start cell up to this far from the robot \[m\].
 const START_SNAP_M: f32 = 0.6;
 /// A robot waiting for another to step aside retries its plan this often \[s\].
@@ -120,7 +117,7 @@ pub struct Mission<const N: usize> {
     progress_index: usize,
     progress_best_m: f32,
     progress_time: Time,
-    blacklist: heapless::Vec<(Point2, u32), MAX_BLACKLIST>,
+    blacklist: Blacklist,
     ahead: Option<Ahead>,
     /// Best fitness per generation of the last decision adopted.
     last_history: heapless::Vec<f32, MAX_DECISION_HISTORY>,
@@ -208,7 +205,7 @@ impl<const N: usize> Mission<N> {
             progress_index: 0,
             progress_best_m: f32::INFINITY,
             progress_time: Time::ZERO,
-            blacklist: heapless::Vec::new(),
+            blacklist: Blacklist::default(),
             ahead: None,
             last_history: heapless::Vec::new(),
             last_path: heapless::Vec::new(),
@@ -835,20 +832,17 @@ impl<const N: usize> Mission<N> {
         match self.config.selector {
             SelectorKind::Optimized(method) => {
                 let mut s = Optimized::new(method, config, &mut objective);
-                self.fill_blacklist(&mut s.blacklist)?;
+                s.blacklist.clone_from(&self.blacklist);
                 s.decide(&req, rng)
             }
             SelectorKind::NearestFrontier => {
                 let mut s = NearestFrontier::new(config, &mut objective, frontier);
-                self.fill_blacklist(&mut s.blacklist)?;
+                s.blacklist.clone_from(&self.blacklist);
                 s.decide(&req, rng)
             }
             SelectorKind::FrontierUtility => {
                 let mut s = FrontierUtility::new(config, &mut objective, frontier);
-                s.blacklist_radius_m = BLACKLIST_RADIUS_M;
-                for &(p, _) in &self.blacklist {
-                    s.blacklist(&map.grid, p)?;
-                }
+                s.blacklist.clone_from(&self.blacklist);
                 s.decide(&req, rng)
             }
         }
@@ -919,8 +913,7 @@ impl<const N: usize> Mission<N> {
         self.yielding = None;
         self.conflict_robot = None;
         // Blacklist entries lapse once the map around them changed.
-        self.blacklist
-            .retain(|&(p, known)| known_around(&map.grid, p) == known);
+        self.blacklist.forget_changed(&map.grid);
         if let Some(goal) = self.goal.take() {
             if now < self.goal_retry_at {
                 self.goal = Some(goal);
@@ -988,7 +981,7 @@ impl<const N: usize> Mission<N> {
             Ok(Outcome::Go(d)) => {
                 let last = d.targets.last().copied();
                 let listed = self.config.selector != SelectorKind::FrontierUtility
-                    && last.is_some_and(|t| self.is_blacklisted(t));
+                    && last.is_some_and(|t| self.blacklist.contains(t));
                 if listed {
                     return self.failed(events);
                 }
@@ -1057,21 +1050,6 @@ impl<const N: usize> Mission<N> {
         true
     }
 
-    /// The places this mission failed to reach, for a selector to avoid.
-    fn fill_blacklist(&self, list: &mut Blacklist) -> Result<(), DecideError> {
-        list.radius_m = BLACKLIST_RADIUS_M;
-        for &(p, _) in &self.blacklist {
-            list.push(p)?;
-        }
-        Ok(())
-    }
-
-    fn is_blacklisted(&self, p: Point2) -> bool {
-        self.blacklist
-            .iter()
-            .any(|&(q, _)| q.distance(p) <= BLACKLIST_RADIUS_M)
-    }
-
     /// Gives up the current targets: blacklists the last one and decides again (a go-to
     /// goal is tried again later instead).
     fn abandon(&mut self, map: &SharedMap<N>, events: &mut Events<'_>) {
@@ -1082,10 +1060,7 @@ impl<const N: usize> Mission<N> {
                 self.goal = None;
             }
         } else if let Some(&t) = self.targets.last() {
-            if self.blacklist.is_full() {
-                self.blacklist.remove(0);
-            }
-            let _ = self.blacklist.push((t, known_around(&map.grid, t)));
+            self.blacklist.push_forgetting_oldest(&map.grid, t);
             events.stats.abandoned_targets += 1;
         }
         self.targets.clear();
