@@ -14,14 +14,24 @@
 
 use crate::frontier::{FrontierConfig, FrontierWorkspace, find_frontiers};
 use crate::grid::Cell;
+use crate::planner::{AStar, Planner};
 
 use super::objective::ExploreObjective;
 use super::{
-    Blacklist, DecideError, DecisionRequest, ExploreConfig, Outcome, TargetSelector, reach_frontier_cell,
+    Blacklist, DecideError, DecisionRequest, ExploreConfig, Outcome, TargetSelector,
+    reach_frontier_cell,
 };
 
 /// explore_lite's frontier rule with path distance and a self-clearing blacklist.
-pub struct FrontierUtility<'o, 'm, 'w, const N: usize, const C: usize, const F: usize> {
+pub struct FrontierUtility<
+    'o,
+    'm,
+    'w,
+    const N: usize,
+    const C: usize,
+    const F: usize,
+    P: Planner<N> = AStar<N>,
+> {
     /// Decision settings (only the reserve and viewpoint spacing apply: one target).
     pub config: ExploreConfig,
     /// Frontier search settings.
@@ -33,12 +43,12 @@ pub struct FrontierUtility<'o, 'm, 'w, const N: usize, const C: usize, const F: 
     /// Places the robot failed to reach: a frontier cell near one is skipped (empty by
     /// default).
     pub blacklist: Blacklist,
-    objective: &'o mut ExploreObjective<'m, N>,
+    objective: &'o mut ExploreObjective<'m, N, P>,
     workspace: &'w mut FrontierWorkspace<C, F>,
 }
 
-impl<const N: usize, const C: usize, const F: usize> core::fmt::Debug
-    for FrontierUtility<'_, '_, '_, N, C, F>
+impl<const N: usize, const C: usize, const F: usize, P: Planner<N>> core::fmt::Debug
+    for FrontierUtility<'_, '_, '_, N, C, F, P>
 {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("FrontierUtility")
@@ -50,14 +60,14 @@ impl<const N: usize, const C: usize, const F: usize> core::fmt::Debug
     }
 }
 
-impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize>
-    FrontierUtility<'o, 'm, 'w, N, C, F>
+impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize, P: Planner<N>>
+    FrontierUtility<'o, 'm, 'w, N, C, F, P>
 {
     /// A selector with explore_lite's default weights (potential 3, gain 1) and an empty
     /// blacklist.
     pub fn new(
         config: ExploreConfig,
-        objective: &'o mut ExploreObjective<'m, N>,
+        objective: &'o mut ExploreObjective<'m, N, P>,
         workspace: &'w mut FrontierWorkspace<C, F>,
     ) -> Self {
         Self {
@@ -75,8 +85,8 @@ impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize>
     }
 }
 
-impl<const N: usize, const C: usize, const F: usize> TargetSelector<N>
-    for FrontierUtility<'_, '_, '_, N, C, F>
+impl<const N: usize, const C: usize, const F: usize, P: Planner<N>> TargetSelector<N>
+    for FrontierUtility<'_, '_, '_, N, C, F, P>
 {
     fn decide<R: rand_core::Rng>(
         &mut self,

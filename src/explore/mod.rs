@@ -30,10 +30,10 @@ pub mod view_cache;
 #[cfg(all(test, feature = "std"))]
 mod tests;
 
-pub use frontier_utility::FrontierUtility;
-pub use nearest_frontier::NearestFrontier;
 pub use blacklist::{BLACKLIST_RADIUS_M, Blacklist, MAX_BLACKLISTED};
 pub use evaluation::{CandidateStatus, Evaluation, WORST_FITNESS};
+pub use frontier_utility::FrontierUtility;
+pub use nearest_frontier::NearestFrontier;
 pub use objective::ExploreObjective;
 pub use optimized::{InitialPopulation, Optimized};
 pub use view_cache::{ViewCache, ViewCacheStats};

@@ -19,6 +19,7 @@ use crate::control::follower::{Controller, WaypointFollower};
 use crate::control::safety::{RobotFlags, SafetyInputs, SafetyMonitor, SafetyState};
 use crate::explore::{Blacklist, Decision, MAX_DECISION_HISTORY, MAX_TARGETS};
 use crate::geometry::{Point2, Pose2};
+use crate::planner::Planner;
 use crate::sensor::{Scan, integrate_scan};
 
 use super::shared::{SharedMap, Workspace};
@@ -313,11 +314,11 @@ impl<const N: usize> Mission<N> {
     }
 
     /// One control period at `now`. Decisions are computed here when needed.
-    pub fn step<R: rand_core::Rng>(
+    pub fn step<R: rand_core::Rng, P: Planner<N>>(
         &mut self,
         now: Time,
         map: &mut SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         rng: &mut R,
     ) -> StepOutput {
         let mut stats = self.stats;
@@ -373,11 +374,11 @@ impl<const N: usize> Mission<N> {
     }
 
     /// The state machine proper: the follower's proposal for this period.
-    fn run<R: rand_core::Rng>(
+    fn run<R: rand_core::Rng, P: Planner<N>>(
         &mut self,
         now: Time,
         map: &mut SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         rng: &mut R,
         events: &mut Events<'_>,
     ) -> MotionCommand {
@@ -443,12 +444,10 @@ impl<const N: usize> Mission<N> {
                     Some(cmd) => return cmd,
                     None => continue,
                 },
-                Phase::Rotating | Phase::Driving => {
-                    match self.follow(now, map, ws, rng, events) {
-                        Some(cmd) => return cmd,
-                        None => continue,
-                    }
-                }
+                Phase::Rotating | Phase::Driving => match self.follow(now, map, ws, rng, events) {
+                    Some(cmd) => return cmd,
+                    None => continue,
+                },
                 _ => return MotionCommand::ZERO,
             }
         }

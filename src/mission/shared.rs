@@ -12,7 +12,7 @@ use crate::explore::{ExploreObjective, ViewCache};
 use crate::frontier::FrontierWorkspace;
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{GridGeometry, OccupancyGrid};
-use crate::planner::{AStar, DistanceField, Traversability};
+use crate::planner::{AStar, DistanceField, Planner, Traversability};
 
 use super::{MissionConfig, MissionError};
 
@@ -165,19 +165,23 @@ impl<const N: usize> SharedMap<N> {
     }
 }
 
-/// Decision working memory: distance field, A*, visited-cell stamps, the visibility cache of
-/// the exploration objective (16.0 MB, whatever `N`) and frontier search memory. One per
-/// process is enough, as robots decide one after the other.
+/// Decision working memory: distance field, path planner, visited-cell stamps, the visibility
+/// cache of the exploration objective (16.0 MB, whatever `N`) and frontier search memory. One
+/// per process is enough, as robots decide one after the other.
+///
+/// The planner that joins the targets of a decision (the legs after the first, which the
+/// distance field answers) is `P`: A* ([`AStar`]) unless a test double stands in (any
+/// [`Planner`]); the mission is generic over it, so the choice costs nothing at run time.
 #[derive(bytemuck::Zeroable)]
-pub struct Workspace<const N: usize> {
+pub struct Workspace<const N: usize, P = AStar<N>> {
     field: DistanceField<N>,
-    astar: AStar<N>,
+    planner: P,
     stamps: [u32; N],
     views: ViewCache,
     frontier: FrontierWorkspace<N, MAX_FRONTIERS>,
 }
 
-impl<const N: usize> core::fmt::Debug for Workspace<N> {
+impl<const N: usize, P: Planner<N>> core::fmt::Debug for Workspace<N, P> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Workspace")
             .field("capacity", &N)
@@ -192,37 +196,54 @@ impl<const N: usize> Default for Workspace<N> {
 }
 
 impl<const N: usize> Workspace<N> {
-    /// Working memory built on the stack (or in a `static`); about 90 bytes per cell plus
-    /// the 16.0 MB visibility cache.
+    /// Working memory with A*, built on the stack (or in a `static`); about 90 bytes per
+    /// cell plus the 16.0 MB visibility cache.
     pub const fn new() -> Self {
+        Self::with_planner(AStar::new())
+    }
+}
+
+impl<const N: usize, P: Planner<N>> Workspace<N, P> {
+    /// Working memory around `planner`, built on the stack (or in a `static`).
+    pub const fn with_planner(planner: P) -> Self {
         Self {
             field: DistanceField::new(),
-            astar: AStar::new(),
+            planner,
             stamps: [0; N],
             views: ViewCache::new(),
             frontier: FrontierWorkspace::new(),
         }
     }
 
-    /// Working memory built on the heap, whatever `N`.
+    /// Working memory built on the heap, whatever `N`, its planner all zero bytes (A*'s
+    /// empty memory).
     #[cfg(feature = "std")]
-    pub fn new_boxed() -> std::boxed::Box<Self> {
+    pub fn new_boxed() -> std::boxed::Box<Self>
+    where
+        P: bytemuck::Zeroable,
+    {
         let mut ws = crate::heap::boxed_zeroed::<Self>();
-        ws.views.set_entry_limit(crate::explore::view_cache::MAX_VIEWS);
+        ws.views
+            .set_entry_limit(crate::explore::view_cache::MAX_VIEWS);
         ws
+    }
+
+    /// The path planner.
+    pub fn planner(&self) -> &P {
+        &self.planner
     }
 
     /// The exploration objective over this memory, and the frontier search memory.
     pub(crate) fn parts(
         &mut self,
     ) -> (
-        ExploreObjective<'_, N>,
+        ExploreObjective<'_, N, P>,
         &mut FrontierWorkspace<N, MAX_FRONTIERS>,
     ) {
         (
             ExploreObjective::with_view_cache(
                 &mut self.field,
-                &mut self.astar,
+                &mut self.planner,
                 &mut self.stamps,
                 &mut self.views,
             ),

@@ -10,6 +10,7 @@ use crate::explore::{
 use crate::geometry::{Point2, Pose2};
 use crate::grid::Cell;
 use crate::math;
+use crate::planner::Planner;
 use crate::units;
 
 use super::super::shared::{MAX_SHARED_WAYPOINTS, SharedMap, Workspace};
@@ -83,11 +84,11 @@ impl GoalRequest {
 impl<const N: usize> Mission<N> {
     /// A decision (or the pending go-to goal). Returns whether the robot now has a path (or
     /// the mission ended); `false`: try again next period.
-    pub(super) fn decide<R: rand_core::Rng>(
+    pub(super) fn decide<R: rand_core::Rng, P: Planner<N>>(
         &mut self,
         now: Time,
         map: &mut SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         rng: &mut R,
         events: &mut Events<'_>,
     ) -> bool {
@@ -142,12 +143,12 @@ impl<const N: usize> Mission<N> {
     }
 
     /// The pending go-to goal as the next errand, once its retry time has come.
-    fn decide_goal(
+    fn decide_goal<P: Planner<N>>(
         &mut self,
         now: Time,
         goal: heapless::Vec<Point2, MAX_TARGETS>,
         map: &mut SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         events: &mut Events<'_>,
     ) -> bool {
         if now < self.goal.retry_at {
@@ -304,7 +305,11 @@ impl<const N: usize> Mission<N> {
     }
 
     /// The decision request from `pose` on the current map.
-    pub(super) fn request<'a>(&'a self, map: &'a SharedMap<N>, pose: Pose2) -> DecisionRequest<'a, N> {
+    pub(super) fn request<'a>(
+        &'a self,
+        map: &'a SharedMap<N>,
+        pose: Pose2,
+    ) -> DecisionRequest<'a, N> {
         DecisionRequest {
             grid: &map.grid,
             trav: &map.trav,
@@ -315,11 +320,11 @@ impl<const N: usize> Mission<N> {
     }
 
     /// Runs the configured selector from `pose`, avoiding the blacklisted places.
-    pub(super) fn run_selector<R: rand_core::Rng>(
+    pub(super) fn run_selector<R: rand_core::Rng, P: Planner<N>>(
         &self,
         pose: Pose2,
         map: &SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         rng: &mut R,
     ) -> Result<Outcome, DecideError> {
         let req = self.request(map, pose);
@@ -345,12 +350,12 @@ impl<const N: usize> Mission<N> {
     }
 
     /// Plans a path from `pose` through `targets` on the current map.
-    pub(super) fn plan_to(
+    pub(super) fn plan_to<P: Planner<N>>(
         &self,
         pose: Pose2,
         targets: &[Point2],
         map: &SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
     ) -> Result<heapless::Vec<Point2, MAX_WAYPOINTS>, CandidateStatus> {
         let req = self.request(map, pose);
         let config = ExploreConfig {

@@ -7,6 +7,7 @@ use crate::control::command::MotionCommand;
 use crate::control::follower::{Controller, FollowStatus};
 use crate::explore::Outcome;
 use crate::geometry::{Point2, Pose2};
+use crate::planner::Planner;
 use crate::planner::waypoints::supercover;
 
 use super::super::shared::{MAX_SHARED_WAYPOINTS, SharedMap, Workspace};
@@ -65,11 +66,11 @@ impl<const N: usize> Mission<N> {
     }
 
     /// A fresh path to the remaining targets from the current pose.
-    pub(super) fn replan(
+    pub(super) fn replan<P: Planner<N>>(
         &mut self,
         now: Time,
         map: &mut SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         events: &mut Events<'_>,
     ) {
         if self.errand.targets.is_empty() {
@@ -122,11 +123,11 @@ impl<const N: usize> Mission<N> {
     }
 
     /// One period of path following; `None` when the state changed.
-    pub(super) fn follow<R: rand_core::Rng>(
+    pub(super) fn follow<R: rand_core::Rng, P: Planner<N>>(
         &mut self,
         now: Time,
         map: &mut SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         rng: &mut R,
         events: &mut Events<'_>,
     ) -> Option<MotionCommand> {
@@ -204,11 +205,11 @@ impl<const N: usize> Mission<N> {
 
     /// Once less than [`MissionConfig::decide_ahead_m`](super::super::MissionConfig) of the
     /// path is left, the next decision from the path's end pose.
-    fn decide_ahead<R: rand_core::Rng>(
+    fn decide_ahead<R: rand_core::Rng, P: Planner<N>>(
         &mut self,
         here: Point2,
         map: &SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         rng: &mut R,
         events: &mut Events<'_>,
     ) {

@@ -13,8 +13,8 @@ use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::CellClass;
 use crate::math;
 
-use super::super::shared::SharedMap;
 use super::super::ReplanCause;
+use super::super::shared::SharedMap;
 use super::robots::Yield;
 use super::{Events, Mission, Phase, secs};
 

@@ -13,6 +13,7 @@ use crate::explore::{CandidateStatus, ExploreConfig};
 use crate::geometry::Point2;
 use crate::grid::{Cell, CellClass};
 use crate::math;
+use crate::planner::Planner;
 
 use super::super::shared::{RobotMark, SharedMap, Workspace};
 use super::super::{MissionEvent, ReplanCause};
@@ -252,12 +253,12 @@ impl<const N: usize> Mission<N> {
     }
 
     /// One period of yielding; `None` when the state changed and the machine should go on.
-    pub(super) fn yield_step(
+    pub(super) fn yield_step<P: Planner<N>>(
         &mut self,
         now: Time,
         y: Yield,
         map: &mut SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         events: &mut Events<'_>,
     ) -> Option<MotionCommand> {
         let pose = self.senses.pose_map;
@@ -368,11 +369,11 @@ impl<const N: usize> Mission<N> {
 
     /// A path to the nearest reachable place out of `other`'s way: at least
     /// `ASIDE_CLEARANCE_M` from its remaining path and `ASIDE_DISTANCE_M` from it.
-    pub(super) fn place_aside(
+    pub(super) fn place_aside<P: Planner<N>>(
         &self,
         other: &RobotMark,
         map: &SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
     ) -> Option<heapless::Vec<Point2, MAX_WAYPOINTS>> {
         let req = self.request(map, self.senses.pose_map);
         let config = ExploreConfig {
