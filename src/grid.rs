@@ -282,7 +282,9 @@ impl GridGeometry {
 }
 
 /// Saturation bounds of the log-odds.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize, bytemuck::Zeroable)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize, bytemuck::Zeroable,
+)]
 pub struct LogOddsBounds {
     /// Lowest value (most certainly free); negative.
     pub min: f32,

@@ -313,4 +313,3 @@ impl BoardConfig {
 fn positive(v: f32) -> bool {
     v.is_finite() && v > 0.0
 }
-
