@@ -11,6 +11,7 @@
 //! - [`optim`]: xBOA and the methods the thesis compares.
 //! - [`explore`]: the exploration objective and target selectors.
 //! - [`control`]: odometry, PID, path following, safety.
+//! - [`localize`]: scan-to-map matching that corrects the odometry.
 //! - [`mission`]: the mission state machine, one or several robots.
 //! - [`wire`]: ARCOS, SICK LMS1xx (CoLa-A) and LMS200 wire formats.
 #![cfg_attr(not(feature = "std"), no_std)]
@@ -22,6 +23,7 @@ pub mod explore;
 pub mod frontier;
 pub mod geometry;
 pub mod grid;
+pub mod localize;
 #[cfg(feature = "std")]
 pub mod mapfile;
 pub mod math;
