@@ -8,6 +8,7 @@ pub mod emulator;
 pub mod faults;
 pub mod laser;
 pub mod movingai;
+pub mod odometry_error;
 pub mod physics;
 pub mod render;
 pub mod runner;

@@ -57,7 +57,8 @@ pub struct Args {
     pub start: Option<Vec<String>>,
     /// Odometry slip of the simulated robots: thesis (a 1.5 cm slide at the end of each move,
     /// what the thesis saw), full (also heading and distance random walks, see
-    /// docs/simulator.md) or none.
+    /// docs/simulator.md), realistic (also per-robot wheel-diameter and wheelbase errors and
+    /// fast-turn slip, see sim-host/src/odometry_error.rs) or none.
     #[arg(long, default_value = "thesis")]
     pub slip: String,
     /// Cell size in metres (the map file's own for .yaml).
@@ -186,9 +187,10 @@ impl Setup {
             "thesis" => SlipConfig::thesis(),
             "full" => SlipConfig::default(),
             "none" => SlipConfig::none(),
+            "realistic" => SlipConfig::realistic(),
             other => {
                 return Err(format!(
-                    "--slip: expected thesis, full or none, got '{other}'"
+                    "--slip: expected thesis, full, realistic or none, got '{other}'"
                 ));
             }
         };
