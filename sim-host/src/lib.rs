@@ -7,6 +7,8 @@ pub mod dynamic;
 pub mod emulator;
 pub mod faults;
 pub mod laser;
+pub mod localization_report;
+pub mod map_accuracy;
 pub mod movingai;
 pub mod odometry_error;
 pub mod physics;

@@ -35,6 +35,8 @@ use papillon::sensor::{LaserConfig, Scan};
 
 use crate::dynamic::Dynamics;
 use crate::laser::LaserSim;
+use crate::localization_report::LocalizationReport;
+use crate::map_accuracy::{self, MapAccuracy};
 use crate::physics::{BodyConfig, Disc, RobotBody, SlipConfig, advance_all};
 use crate::render::Track;
 use crate::world::{Truth, World};
@@ -307,6 +309,8 @@ pub struct RobotReport {
     pub final_pose: Pose2,
     /// Final distance between the true and the estimated position \[m\].
     pub pose_error_m: f32,
+    /// Final poses and pose errors of the estimate and of the raw odometry.
+    pub localization: LocalizationReport,
 }
 
 /// What the run did.
@@ -333,6 +337,8 @@ pub struct RunReport {
     pub coverage_time_curve: Vec<(f64, f32)>,
     /// Decisions, replans, yields, faults and ends, in order.
     pub events: Vec<LoggedEvent>,
+    /// The final map against the truth.
+    pub map_accuracy: MapAccuracy,
 }
 
 impl RunReport {
@@ -864,9 +870,11 @@ impl Runner {
                     .true_pose()
                     .position()
                     .distance(rb.mission.pose_map().position());
+                rep.localization = LocalizationReport::of(body, &rb.mission);
                 rep
             })
             .collect();
+        r.map_accuracy = map_accuracy::measure(&self.map.grid, &self.world, &self.coverage.truth);
         r
     }
 

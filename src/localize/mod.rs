@@ -19,7 +19,8 @@
 //! Then the prediction is returned unchanged. [`MatchQuality`] reports what the decision was
 //! based on.
 //!
-//! [`tracker`] applies matches to the mission's map-from-odometry transform, every N-th scan.
+//! [`tracker`] applies matches to the mission's map-from-odometry transform, every N-th scan,
+//! blended with the prediction by their variances.
 //!
 //! `no_std`, allocation-free (the working memory is [`ScanMatcher`], sized by its const
 //! generic), sans-IO and deterministic: the same grid, scan and prediction give the same pose.
@@ -63,7 +64,8 @@ pub struct MatchConfig {
     pub max_points: usize,
     /// Fewer usable returns than this: no match.
     pub min_points: usize,
-    /// Fewer returns than this fraction on known cells (at the fitted pose): no match.
+    /// Fewer returns than this fraction on known cells or near known walls (at the
+    /// prediction): no match.
     pub min_known_fraction: f32,
     /// Mean likelihood of the returns below this after the fit: no match.
     pub min_score: f32,
@@ -134,7 +136,8 @@ pub enum Distrust {
 pub struct MatchQuality {
     /// Returns used.
     pub points: u16,
-    /// Fraction of them on known cells at the fitted pose.
+    /// Fraction of them on known cells or near known walls at the prediction (only those
+    /// take part in the fit).
     pub known_fraction: f32,
     /// Mean likelihood of the returns at the result, 0..=1.
     pub score: f32,
@@ -289,6 +292,29 @@ impl<const T: usize> ScanMatcher<T> {
             return refuse(quality, Distrust::WindowTooLarge);
         }
 
+        // Only returns that land on what the map knows, or near a wall it knows, take part: a
+        // return beyond the end of a wall seen so far would otherwise pull the scan back onto
+        // the known part, a bias in the direction the robot turns or drives.
+        let total = self.points.len();
+        let mut kept = 0;
+        for i in 0..total {
+            let q = predicted.transform_point(self.points[i]);
+            let known = grid
+                .class_of(geom.cell_at_unchecked(q))
+                .is_some_and(|c| c.is_known());
+            if known || self.field.sample(q).0 > 0.0 {
+                self.points[kept] = self.points[i];
+                self.weights[kept] = self.weights[i];
+                kept += 1;
+            }
+        }
+        self.points.truncate(kept);
+        self.weights.truncate(kept);
+        quality.known_fraction = kept as f32 / total as f32;
+        if quality.known_fraction < config.min_known_fraction || kept < config.min_points.max(1) {
+            return refuse(quality, Distrust::MostlyUnknown);
+        }
+
         // Olson's search, then Hector's refinement.
         let steps = if config.theta_step_rad > 0.0 {
             math::floor(config.search_theta_rad / config.theta_step_rad) as i32
@@ -318,19 +344,6 @@ impl<const T: usize> ScanMatcher<T> {
             config.length_scale_m,
         );
 
-        // How much of the scan falls on what the map knows, at the fitted pose.
-        let known = self
-            .points
-            .iter()
-            .filter(|&&p| {
-                grid.class_of(geom.cell_at_unchecked(fine.pose.transform_point(p)))
-                    .is_some_and(|c| c.is_known())
-            })
-            .count();
-        quality.known_fraction = known as f32 / self.points.len() as f32;
-        if quality.known_fraction < config.min_known_fraction {
-            return refuse(quality, Distrust::MostlyUnknown);
-        }
         let constraint = Constraint::analyse(
             &fine.information,
             config.min_information,

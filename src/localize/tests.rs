@@ -220,45 +220,63 @@ fn a_match_is_deterministic() {
 }
 
 #[test]
-fn the_tracker_moves_the_odometry_frame_by_the_correction() {
+fn the_tracker_moves_the_odometry_frame_by_the_correction_it_trusts() {
     use crate::control::odometry::MapFromOdom;
     let (walls, geom) = room();
     let grid = draw(&walls, geom, Point2::new(0.5, 0.5), Point2::new(8.5, 6.5));
     let laser = LaserConfig::lms1xx();
     let truth = Pose2::new(4.0, 3.0, 0.3);
     let scan = scan_at(&walls, truth, &laser, 0.0, 1);
-    // The odometry believes it is 12 cm east and 0.04 rad left of the truth.
+    // The odometry believes the robot is 12 cm east and 0.04 rad left of the truth.
     let pose_odom = Pose2::new(1.0, 0.5, 0.1);
     let mut transform = MapFromOdom::from_start(Pose2::new(4.12, 3.0, 0.34), pose_odom);
-    let mut tracker = Box::new(Tracker::new());
+    let mut tracker = Tracker::new();
+    let mut m = matcher();
     let off = LocalizeConfig::default();
     assert_eq!(
-        tracker.on_scan(&off, &grid, &scan, &laser, pose_odom, &mut transform),
+        tracker.on_scan(
+            &off,
+            &grid,
+            &mut m,
+            &scan,
+            &laser,
+            pose_odom,
+            &mut transform
+        ),
         None
     );
     let on = LocalizeConfig {
         enabled: true,
         every_n_scans: 2,
         matcher: config(),
+        ..LocalizeConfig::default()
     };
-    let corrected = tracker
-        .on_scan(&on, &grid, &scan, &laser, pose_odom, &mut transform)
+    // Standing still, the prediction is as good as a match: the pose stays.
+    let still = tracker
+        .on_scan(&on, &grid, &mut m, &scan, &laser, pose_odom, &mut transform)
         .unwrap();
-    let err = corrected.position().distance(truth.position());
-    assert!(err < 0.03, "{err} m, {:?}", tracker.last());
-    let mapped = transform.map_pose(pose_odom);
-    assert!(mapped.position().distance(corrected.position()) < 1e-4);
-    // The next scan is skipped (every second), the one after matched again.
+    assert!(
+        still
+            .position()
+            .distance(Pose2::new(4.12, 3.0, 0.34).position())
+            < 1e-4
+    );
+    // After 20 m and 3 rad of odometry (two scans, the first not matched), the prediction is
+    // uncertain and the match wins.
+    let away = Pose2::new(-19.0, 0.5, 3.1);
     let before = transform;
     assert_eq!(
-        tracker.on_scan(&on, &grid, &scan, &laser, pose_odom, &mut transform),
+        tracker.on_scan(&on, &grid, &mut m, &scan, &laser, away, &mut transform),
         None
     );
     assert_eq!(transform, before);
-    assert!(
-        tracker
-            .on_scan(&on, &grid, &scan, &laser, pose_odom, &mut transform)
-            .is_some()
-    );
+    let corrected = tracker
+        .on_scan(&on, &grid, &mut m, &scan, &laser, pose_odom, &mut transform)
+        .unwrap();
+    let err = corrected.position().distance(truth.position());
+    assert!(err < 0.03, "{err} m, {:?}", tracker.last());
+    assert!(normalize_angle(corrected.theta - truth.theta).abs() < 0.01);
+    let mapped = transform.map_pose(pose_odom);
+    assert!(mapped.position().distance(corrected.position()) < 1e-4);
     assert_eq!((tracker.matches(), tracker.trusted()), (2, 2));
 }

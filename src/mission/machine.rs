@@ -136,6 +136,7 @@ pub struct Mission<const N: usize> {
     holds_in_row: u32,
     hold_anchor: Point2,
     escape: Option<Escape>,
+    localizer: crate::localize::Tracker,
 }
 
 impl<const N: usize> core::fmt::Debug for Mission<N> {
@@ -218,6 +219,7 @@ impl<const N: usize> Mission<N> {
             holds_in_row: 0,
             hold_anchor: start_map.position(),
             escape: None,
+            localizer: crate::localize::Tracker::new(),
             config,
         })
     }
@@ -269,7 +271,9 @@ impl<const N: usize> Mission<N> {
     }
 
     /// A scan taken at `now` from the current pose: integrated into the shared map (before
-    /// the first odometry, at the start pose). Occupied evidence along the robot's last metre
+    /// the first odometry, at the start pose). With [`MissionConfig::localize`] on, the scan
+    /// is first matched to the map at the odometry pose and a trusted match corrects the
+    /// map-from-odometry transform ([`crate::localize::tracker`]). Occupied evidence along the robot's last metre
     /// (not under its current body) is weakened to a weak Free value: the robot stood there,
     /// so what another robot's scan saw there was this robot, not a wall.
     ///
@@ -281,6 +285,16 @@ impl<const N: usize> Mission<N> {
         scan: &Scan,
         map: &mut SharedMap<N>,
     ) -> Result<(), MissionError> {
+        self.localizer.correct(
+            &self.config.localize,
+            &map.grid,
+            &mut map.matcher,
+            scan,
+            &self.config.laser,
+            self.pose_odom,
+            &mut self.map_from_odom,
+            &mut self.pose_map,
+        );
         integrate_scan(
             &mut map.grid,
             scan,
@@ -355,6 +369,11 @@ impl<const N: usize> Mission<N> {
     /// The current map-frame pose estimate.
     pub fn pose_map(&self) -> Pose2 {
         self.pose_map
+    }
+
+    /// The scan matcher's counters and last match ([`MissionConfig::localize`]).
+    pub fn localizer(&self) -> &crate::localize::Tracker {
+        &self.localizer
     }
 
     /// The current waypoints (map frame \[m\]).

@@ -46,6 +46,9 @@ pub struct SharedMap<const N: usize> {
     pub trav: Traversability<N>,
     /// One mark per robot.
     pub robots: heapless::Vec<RobotMark, MAX_ROBOTS>,
+    /// Scan-matching working memory (robots integrate their scans one after the other, so one
+    /// is enough; [`crate::localize`]).
+    pub matcher: crate::localize::ScanMatcher<{ crate::localize::WINDOW_CELLS }>,
 }
 
 impl<const N: usize> core::fmt::Debug for SharedMap<N> {
@@ -69,6 +72,7 @@ impl<const N: usize> SharedMap<N> {
             grid,
             trav,
             robots: heapless::Vec::new(),
+            matcher: crate::localize::ScanMatcher::new(),
         })
     }
 
@@ -87,7 +91,7 @@ impl<const N: usize> SharedMap<N> {
         // geometry). Each field is written below before the box is formed: the grid and the
         // layer are copied bit for bit from their own heap boxes (plain data without drop glue,
         // whose boxes are then freed without dropping their contents twice, as they have no
-        // drop glue), and the robot list is written as an empty vector.
+        // drop glue), and the robot list and the matcher are written empty.
         unsafe {
             let raw = std::alloc::alloc(layout) as *mut Self;
             if raw.is_null() {
@@ -96,6 +100,7 @@ impl<const N: usize> SharedMap<N> {
             core::ptr::copy_nonoverlapping(&*grid, core::ptr::addr_of_mut!((*raw).grid), 1);
             core::ptr::copy_nonoverlapping(&*trav, core::ptr::addr_of_mut!((*raw).trav), 1);
             core::ptr::addr_of_mut!((*raw).robots).write(heapless::Vec::new());
+            core::ptr::addr_of_mut!((*raw).matcher).write(crate::localize::ScanMatcher::new());
             Ok(std::boxed::Box::from_raw(raw))
         }
     }

@@ -61,6 +61,9 @@ pub struct Args {
     /// fast-turn slip, see sim-host/src/odometry_error.rs) or none.
     #[arg(long, default_value = "thesis")]
     pub slip: String,
+    /// Scan-to-map matching before each scan is integrated: on or off.
+    #[arg(long, default_value = "off")]
+    pub localize: String,
     /// Cell size in metres (the map file's own for .yaml).
     #[arg(long, default_value = "0.1")]
     pub resolution: String,
@@ -194,6 +197,11 @@ impl Setup {
                 ));
             }
         };
+        run.mission.localize.enabled = match args.localize.as_str() {
+            "on" => true,
+            "off" => false,
+            other => return Err(format!("--localize: expected on or off, got '{other}'")),
+        };
         if !world.start_is_clear(run.body.radius_m) {
             let s = world.start();
             return Err(format!(
@@ -239,6 +247,7 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
                 "battery_steps": r.battery_steps,
                 "done": r.done.map(|d| runner::EndReason::from(d).name()),
                 "pose_error_m": r.pose_error_m,
+                "localization": r.localization,
             })
         })
         .collect();
@@ -254,7 +263,9 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
         "targets": m.explore.targets,
         "battery_steps": m.battery_steps,
         "slip": setup.slip,
+        "localize": m.localize.enabled,
         "coverage": report.coverage,
+        "map_accuracy": report.map_accuracy,
         "observable_cells": report.observable_cells,
         "known_cells": report.known_cells,
         "steps": report.steps(),
@@ -451,6 +462,7 @@ mod tests {
             start: None,
             resolution: "0.1".into(),
             slip: "thesis".into(),
+            localize: "off".into(),
             json: false,
             png: None,
             frames: None,
