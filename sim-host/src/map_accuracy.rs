@@ -49,14 +49,14 @@ pub fn measure<const N: usize>(
     let (mut free_known, mut free_right) = (0usize, 0usize);
     let (mut wall_known, mut wall_right) = (0usize, 0usize);
     let (mut occupied, mut distance_sum) = (0usize, 0.0f64);
-    for i in 0..geom.cell_count().min(mask.len()) {
+    for (i, &observable) in mask.iter().enumerate().take(geom.cell_count()) {
         let class = grid.class(i);
         let blocked = world.is_blocked_index(i);
         if class == CellClass::Occupied {
             occupied += 1;
             distance_sum += nearest_wall_cells(world, geom.cell(i)) as f64;
         }
-        if !mask[i] || class == CellClass::Unknown {
+        if !observable || class == CellClass::Unknown {
             continue;
         }
         known += 1;

@@ -145,7 +145,8 @@ impl<const T: usize> LikelihoodField<T> {
 
         // The separable max-convolution with a Gaussian of σ, cut at 2σ.
         let mut kernel = [0.0f32; MAX_KERNEL + 1];
-        let reach = ((2.0 * sigma_m / geom.resolution_m).ceil().max(0.0) as usize).min(MAX_KERNEL);
+        let reach =
+            (math::ceil(2.0 * sigma_m / geom.resolution_m).max(0.0) as usize).min(MAX_KERNEL);
         for (k, w) in kernel.iter_mut().enumerate().take(reach + 1) {
             let d = k as f32 * geom.resolution_m;
             *w = math::exp(-d * d / (2.0 * sigma_m * sigma_m));
