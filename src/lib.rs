@@ -12,6 +12,7 @@
 //! - [`optim`]: xBOA and the methods the thesis compares.
 //! - [`explore`]: the exploration objective and target selectors.
 //! - [`control`]: odometry, PID, path following, safety.
+//! - [`localize`]: scan-to-map matching that corrects the odometry.
 //! - [`mission`]: the mission state machine, one or several robots.
 //! - [`config`]: the board file (robot, link, laser, grid, mission, PID, safety), parsed
 //!   without an allocator; [`mapfile`] (host only): map files read into an occupancy grid.
@@ -26,6 +27,7 @@ pub mod explore;
 pub mod frontier;
 pub mod geometry;
 pub mod grid;
+pub mod localize;
 #[cfg(feature = "std")]
 mod heap;
 #[cfg(feature = "std")]

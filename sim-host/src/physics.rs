@@ -30,6 +30,7 @@ use papillon::math;
 use papillon::random::{self, ProjectRng};
 use papillon::units::{deg_to_rad, m_to_mm, rad_to_arcos_angle, rad_to_deg};
 
+use crate::odometry_error::{DrawnWheels, WheelErrors};
 use crate::world::World;
 
 /// A disc obstacle in the map frame: another robot or a person.
@@ -61,6 +62,8 @@ pub struct SlipConfig {
     pub end_of_move_m: f32,
     /// Standard deviation of the heading slip when a move ends \[rad\].
     pub end_of_move_rad: f32,
+    /// Systematic wheel errors and fast-turn slip ([`crate::odometry_error`]).
+    pub wheels: WheelErrors,
 }
 
 impl SlipConfig {
@@ -72,6 +75,7 @@ impl SlipConfig {
             drift_var_rad2_per_m: 0.0,
             end_of_move_m: 0.0,
             end_of_move_rad: 0.0,
+            wheels: WheelErrors::none(),
         }
     }
 
@@ -95,6 +99,7 @@ impl Default for SlipConfig {
             drift_var_rad2_per_m: 1e-4,
             end_of_move_m: 0.015,
             end_of_move_rad: 0.5 * PI / 180.0,
+            wheels: WheelErrors::none(),
         }
     }
 }
@@ -189,6 +194,7 @@ pub struct RobotBody {
     time_s: f64,
     pending_s: f32,
     moving: bool,
+    wheels: DrawnWheels,
 }
 
 impl RobotBody {
@@ -198,9 +204,11 @@ impl RobotBody {
         if !(config.step_s.is_finite() && config.step_s > 0.0) {
             config.step_s = 0.01;
         }
+        let mut rng = random::seeded(seed);
+        let wheels = config.slip.wheels.draw(&mut rng);
         Self {
             config,
-            rng: random::seeded(seed),
+            rng,
             true_pose: pose,
             start_pose: pose,
             odom_pose: Pose2::default(),
@@ -221,12 +229,18 @@ impl RobotBody {
             time_s: 0.0,
             pending_s: 0.0,
             moving: false,
+            wheels,
         }
     }
 
     /// The parameters.
     pub fn config(&self) -> &BodyConfig {
         &self.config
+    }
+
+    /// This robot's systematic wheel errors, drawn at creation.
+    pub fn wheels(&self) -> &DrawnWheels {
+        &self.wheels
     }
 
     /// Commands a translational speed \[mm/s\] (positive forward) and a turn rate \[deg/s\]
@@ -446,11 +460,14 @@ impl RobotBody {
         self.moving = true;
         // True motion = measured motion + slip.
         let s = c.slip;
-        let d_true = d + gauss(&mut self.rng, s.distance_var_m2_per_m * d.abs());
-        let dth_true = dth
+        let (d_sys, dth_sys) = self.wheels.true_motion(d, dth, c.track_m);
+        let d_true = d_sys + gauss(&mut self.rng, s.distance_var_m2_per_m * d.abs());
+        let dth_true = dth_sys
             + gauss(
                 &mut self.rng,
-                s.rotation_var_rad2_per_rad * dth.abs() + s.drift_var_rad2_per_m * d.abs(),
+                s.rotation_var_rad2_per_rad * dth.abs()
+                    + s.drift_var_rad2_per_m * d.abs()
+                    + self.wheels.fast_turn_var(dth, self.turn_deg_s),
             );
         let from = self.true_pose;
         let mid = from.theta + dth_true / 2.0;

@@ -122,6 +122,7 @@ pub struct Mission<const N: usize> {
     /// when it is remembered: obstacles the laser may not see (glass, low objects).
     contacts: heapless::Deque<(Point2, Point2, Time), MAX_CONTACTS>,
     last_step: Option<Time>,
+    localizer: crate::localize::Tracker,
 }
 
 impl<const N: usize> core::fmt::Debug for Mission<N> {
@@ -177,6 +178,7 @@ impl<const N: usize> Mission<N> {
             holds: Holds::new(start_map.position()),
             contacts: heapless::Deque::new(),
             last_step: None,
+            localizer: crate::localize::Tracker::new(),
             config,
         })
     }
@@ -199,7 +201,9 @@ impl<const N: usize> Mission<N> {
     }
 
     /// A scan taken at `now` from the current pose: integrated into the shared map (before
-    /// the first odometry, at the start pose). Occupied evidence along the robot's last metre
+    /// the first odometry, at the start pose). With [`MissionConfig::localize`] on, the scan
+    /// is first matched to the map at the odometry pose and a trusted match corrects the
+    /// map-from-odometry transform ([`crate::localize::tracker`]). Occupied evidence along the robot's last metre
     /// (not under its current body) is weakened to a weak Free value: the robot stood there,
     /// so what another robot's scan saw there was this robot, not a wall.
     ///
@@ -211,6 +215,16 @@ impl<const N: usize> Mission<N> {
         scan: &Scan,
         map: &mut SharedMap<N>,
     ) -> Result<(), MissionError> {
+        self.localizer.correct(
+            &self.config.localize,
+            &map.grid,
+            &mut map.matcher,
+            scan,
+            &self.config.laser,
+            self.senses.pose_odom,
+            &mut self.senses.map_from_odom,
+            &mut self.senses.pose_map,
+        );
         integrate_scan(
             &mut map.grid,
             scan,
@@ -280,6 +294,11 @@ impl<const N: usize> Mission<N> {
     /// The current map-frame pose estimate.
     pub fn pose_map(&self) -> Pose2 {
         self.senses.pose_map
+    }
+
+    /// The scan matcher's counters and last match ([`MissionConfig::localize`]).
+    pub fn localizer(&self) -> &crate::localize::Tracker {
+        &self.localizer
     }
 
     /// The current waypoints (map frame \[m\]).

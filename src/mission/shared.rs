@@ -73,6 +73,9 @@ pub struct SharedMap<const N: usize> {
     /// One mark per robot, the first `mark_count` of them written.
     marks: [RobotMark; MAX_ROBOTS],
     mark_count: usize,
+    /// Scan-matching working memory (robots integrate their scans one after the other, so one
+    /// is enough; [`crate::localize`]).
+    pub matcher: crate::localize::ScanMatcher<{ crate::localize::WINDOW_CELLS }>,
 }
 
 impl<const N: usize> core::fmt::Debug for SharedMap<N> {
@@ -97,6 +100,7 @@ impl<const N: usize> SharedMap<N> {
             trav,
             marks: [bytemuck::Zeroable::zeroed(); MAX_ROBOTS],
             mark_count: 0,
+            matcher: crate::localize::ScanMatcher::new(),
         })
     }
 
