@@ -69,7 +69,7 @@ impl core::fmt::Display for FrontierError {
 impl core::error::Error for FrontierError {}
 
 /// One 8-connected frontier.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Zeroable)]
 pub struct Frontier {
     /// Number of cells \[cells\].
     pub size_cells: usize,
@@ -99,6 +99,7 @@ impl Frontier {
 /// Scratch memory and results of a frontier search: up to `CELLS` frontier cells and `FRONTIERS`
 /// frontiers. About `16 · CELLS` bytes plus 40 bytes per frontier; build a large one with
 /// [`Self::new_boxed`] on a host.
+#[derive(bytemuck::Zeroable)]
 pub struct FrontierWorkspace<const CELLS: usize, const FRONTIERS: usize> {
     /// Frontier cells in flat-index order.
     cells: [u32; CELLS],
@@ -136,9 +137,8 @@ impl<const CELLS: usize, const FRONTIERS: usize> FrontierWorkspace<CELLS, FRONTI
     /// An empty workspace built directly on the heap.
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
-        // SAFETY: every field is an integer, an `f32` or an array of plain structs of them,
-        // for which all-zero bits are valid; zero lengths mean empty.
-        unsafe { crate::grid::boxed_zeroed::<Self>() }
+        // Zero lengths mean empty.
+        crate::heap::boxed_zeroed::<Self>()
     }
 
     /// The frontiers of the last search, in the order of their lowest flat index.

@@ -9,7 +9,9 @@ use core::f32::consts::{PI, TAU};
 use crate::math;
 
 /// A point \[m\].
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize, bytemuck::Zeroable,
+)]
 pub struct Point2 {
     /// East \[m\].
     pub x: f32,
@@ -35,7 +37,9 @@ impl Point2 {
 }
 
 /// A planar pose: position \[m\] and heading \[rad\].
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize, bytemuck::Zeroable,
+)]
 pub struct Pose2 {
     /// East \[m\].
     pub x: f32,

@@ -25,7 +25,7 @@ pub const DEFAULT_CELL_CAPACITY: usize = 150_000;
 pub const DEFAULT_RESOLUTION_M: f32 = 0.10;
 
 /// A grid cell address: column (east) and row (north), row 0 at the south edge.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord, bytemuck::Zeroable)]
 pub struct Cell {
     /// Column \[cells\], growing east.
     pub col: i32,
@@ -152,7 +152,7 @@ impl core::fmt::Display for CoverageError {
 impl core::error::Error for CoverageError {}
 
 /// Size and placement of a grid in the map frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Zeroable)]
 pub struct GridGeometry {
     /// Columns \[cells\].
     pub width: usize,
@@ -281,31 +281,10 @@ impl GridGeometry {
     }
 }
 
-/// A zero-filled `T` allocated directly on the heap, never on the stack (for large
-/// fixed-capacity structures on a host).
-///
-/// # Safety
-/// The all-zero bit pattern must be a valid `T`.
-#[cfg(feature = "std")]
-pub(crate) unsafe fn boxed_zeroed<T>() -> std::boxed::Box<T> {
-    let layout = std::alloc::Layout::new::<T>();
-    if layout.size() == 0 {
-        // SAFETY: the caller guarantees zero bits are a valid `T`; a zero-sized value
-        // occupies no stack.
-        return std::boxed::Box::new(unsafe { core::mem::zeroed() });
-    }
-    // SAFETY: the layout has a non-zero size.
-    let ptr = unsafe { std::alloc::alloc_zeroed(layout) } as *mut T;
-    if ptr.is_null() {
-        std::alloc::handle_alloc_error(layout);
-    }
-    // SAFETY: `ptr` was allocated by the global allocator with `T`'s layout and holds a valid
-    // (all-zero) `T`, as the caller guarantees.
-    unsafe { std::boxed::Box::from_raw(ptr) }
-}
-
 /// Saturation bounds of the log-odds.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize, bytemuck::Zeroable,
+)]
 pub struct LogOddsBounds {
     /// Lowest value (most certainly free); negative.
     pub min: f32,
@@ -338,7 +317,7 @@ impl LogOddsBounds {
 }
 
 /// Counters of cell classes, maintained incrementally.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Zeroable)]
 pub struct CellCounts {
     /// Free cells.
     pub free: usize,
@@ -375,7 +354,7 @@ impl<F: FnMut(usize, CellClass, CellClass)> CellObserver for F {
 }
 
 /// An occupancy grid holding up to `N` cells.
-#[derive(Clone)]
+#[derive(Clone, bytemuck::Zeroable)]
 pub struct OccupancyGrid<const N: usize> {
     geometry: GridGeometry,
     bounds: LogOddsBounds,
@@ -415,15 +394,23 @@ impl<const N: usize> OccupancyGrid<N> {
         geometry: GridGeometry,
         bounds: LogOddsBounds,
     ) -> Result<std::boxed::Box<Self>, GridError> {
-        Self::check_fits(&geometry)?;
-        let bounds = bounds.check()?;
-        // SAFETY: every field of `Self` is plain data (`usize`, `f32` and arrays of them) for
-        // which the all-zero bit pattern is a valid value; zero log-odds is Unknown and the
-        // zero counters match it.
-        let mut grid = unsafe { boxed_zeroed::<Self>() };
-        grid.geometry = geometry;
-        grid.bounds = bounds;
+        let mut grid = crate::heap::boxed_zeroed::<Self>();
+        grid.set_up_zeroed(geometry, bounds)?;
         Ok(grid)
+    }
+
+    /// Gives an all-zero grid (as [`crate::heap::boxed_zeroed`] makes it) its geometry and
+    /// bounds: zero log-odds is Unknown and the zero counters match it.
+    #[cfg(feature = "std")]
+    pub(crate) fn set_up_zeroed(
+        &mut self,
+        geometry: GridGeometry,
+        bounds: LogOddsBounds,
+    ) -> Result<(), GridError> {
+        Self::check_fits(&geometry)?;
+        self.bounds = bounds.check()?;
+        self.geometry = geometry;
+        Ok(())
     }
 
     fn check_fits(geometry: &GridGeometry) -> Result<(), GridError> {

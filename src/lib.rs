@@ -5,14 +5,19 @@
 //! the host simulator (`papillon-sim`) are two pumps around it. See `docs/architecture.md`.
 //!
 //! Layers, bottom up:
-//! - [`math`], [`units`], [`geometry`], [`random`]: numbers, units and frames.
+//! - [`math`], [`units`], [`geometry`], [`random`]: numbers, units and frames; `heap` (host
+//!   only, crate-private): large fixed-capacity structures allocated zero-filled on the heap.
 //! - [`grid`], [`raycast`], [`sensor`], [`frontier`]: the occupancy grid and the LIDAR model.
 //! - [`planner`]: traversability, A*, distance fields, waypoints.
 //! - [`optim`]: xBOA and the methods the thesis compares.
 //! - [`explore`]: the exploration objective and target selectors.
 //! - [`control`]: odometry, PID, path following, safety.
+//! - [`localize`]: scan-to-map matching that corrects the odometry.
 //! - [`mission`]: the mission state machine, one or several robots.
+//! - [`config`]: the board file (robot, link, laser, grid, mission, PID, safety), parsed
+//!   without an allocator; [`mapfile`] (host only): map files read into an occupancy grid.
 //! - [`wire`]: ARCOS, SICK LMS1xx (CoLa-A) and LMS200 wire formats.
+//! - `onboard` (feature `onboard`): the runtime around the core on the robot.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![warn(missing_docs)]
 
@@ -22,6 +27,9 @@ pub mod explore;
 pub mod frontier;
 pub mod geometry;
 pub mod grid;
+#[cfg(feature = "std")]
+mod heap;
+pub mod localize;
 #[cfg(feature = "std")]
 pub mod mapfile;
 pub mod math;

@@ -35,6 +35,7 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
                 "battery_steps": r.battery_steps,
                 "done": r.done.map(|d| runner::EndReason::from(d).name()),
                 "pose_error_m": r.pose_error_m,
+                "localization": r.localization,
             })
         })
         .collect();
@@ -50,7 +51,9 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
         "targets": m.explore.targets,
         "battery_steps": m.battery_steps,
         "slip": setup.slip.name(),
+        "localize": m.localize.enabled,
         "coverage": report.coverage,
+        "map_accuracy": report.map_accuracy,
         "observable_cells": report.observable_cells,
         "known_cells": report.known_cells,
         "steps": report.steps(),

@@ -35,6 +35,7 @@ use papillon::math;
 use papillon::random::{self, ProjectRng};
 use papillon::units::{deg_to_rad, m_to_mm, rad_to_arcos_angle, rad_to_deg};
 
+use crate::odometry_error::{DrawnWheels, WheelErrors};
 use crate::world::World;
 
 /// A disc obstacle in the map frame: another robot or a person.
@@ -66,6 +67,8 @@ pub struct SlipConfig {
     pub end_of_move_m: f32,
     /// Standard deviation of the heading slip when a move ends \[rad\].
     pub end_of_move_rad: f32,
+    /// Systematic wheel errors and fast-turn slip ([`crate::odometry_error`]).
+    pub wheels: WheelErrors,
 }
 
 impl SlipConfig {
@@ -77,6 +80,7 @@ impl SlipConfig {
             drift_var_rad2_per_m: 0.0,
             end_of_move_m: 0.0,
             end_of_move_rad: 0.0,
+            wheels: WheelErrors::none(),
         }
     }
 
@@ -100,6 +104,7 @@ impl Default for SlipConfig {
             drift_var_rad2_per_m: 1e-4,
             end_of_move_m: 0.015,
             end_of_move_rad: 0.5 * PI / 180.0,
+            wheels: WheelErrors::none(),
         }
     }
 }
@@ -256,6 +261,7 @@ pub struct RobotBody {
     time_s: f64,
     pending_s: f32,
     moving: bool,
+    wheels: DrawnWheels,
 }
 
 impl RobotBody {
@@ -265,9 +271,11 @@ impl RobotBody {
         if !(config.step_s.is_finite() && config.step_s > 0.0) {
             config.step_s = 0.01;
         }
+        let mut rng = random::seeded(seed);
+        let wheels = config.slip.wheels.draw(&mut rng);
         Self {
             config,
-            rng: random::seeded(seed),
+            rng,
             true_pose: pose,
             start_pose: pose,
             odom_pose: Pose2::default(),
@@ -288,12 +296,18 @@ impl RobotBody {
             time_s: 0.0,
             pending_s: 0.0,
             moving: false,
+            wheels,
         }
     }
 
     /// The parameters.
     pub fn config(&self) -> &BodyConfig {
         &self.config
+    }
+
+    /// This robot's systematic wheel errors, drawn at creation.
+    pub fn wheels(&self) -> &DrawnWheels {
+        &self.wheels
     }
 
     /// Commands a translational speed \[mm/s\] (positive forward) and a turn rate \[deg/s\]
@@ -304,6 +318,24 @@ impl RobotBody {
         let c = &self.config;
         self.cmd_speed_mm_s = finite(speed_mm_s).clamp(-c.max_speed_mm_s, c.max_speed_mm_s);
         self.cmd_turn_deg_s = finite(turn_deg_s).clamp(-c.max_turn_deg_s, c.max_turn_deg_s);
+    }
+
+    /// Sets the translational acceleration and deceleration \[mm/s²\] and the rotational
+    /// acceleration and deceleration \[deg/s²\] the wheels ramp with (the firmware's SETA and
+    /// SETRA); values that are not positive numbers keep the current ones.
+    pub fn set_accelerations(
+        &mut self,
+        accel_mm_s2: f32,
+        decel_mm_s2: f32,
+        turn_accel_deg_s2: f32,
+        turn_decel_deg_s2: f32,
+    ) {
+        let keep = |v: f32, old: f32| if v.is_finite() && v > 0.0 { v } else { old };
+        let c = &mut self.config;
+        c.accel_mm_s2 = keep(accel_mm_s2, c.accel_mm_s2);
+        c.decel_mm_s2 = keep(decel_mm_s2, c.decel_mm_s2);
+        c.turn_accel_deg_s2 = keep(turn_accel_deg_s2, c.turn_accel_deg_s2);
+        c.turn_decel_deg_s2 = keep(turn_decel_deg_s2, c.turn_decel_deg_s2);
     }
 
     /// Commands zero speed and turn rate (a normal, decelerated stop).
@@ -495,11 +527,14 @@ impl RobotBody {
         self.moving = true;
         // True motion = measured motion + slip.
         let s = c.slip;
-        let d_true = d + gauss(&mut self.rng, s.distance_var_m2_per_m * d.abs());
-        let dth_true = dth
+        let (d_sys, dth_sys) = self.wheels.true_motion(d, dth, c.track_m);
+        let d_true = d_sys + gauss(&mut self.rng, s.distance_var_m2_per_m * d.abs());
+        let dth_true = dth_sys
             + gauss(
                 &mut self.rng,
-                s.rotation_var_rad2_per_rad * dth.abs() + s.drift_var_rad2_per_m * d.abs(),
+                s.rotation_var_rad2_per_rad * dth.abs()
+                    + s.drift_var_rad2_per_m * d.abs()
+                    + self.wheels.fast_turn_var(dth, self.turn_deg_s),
             );
         let from = self.true_pose;
         let mid = from.theta + dth_true / 2.0;

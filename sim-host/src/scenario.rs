@@ -60,16 +60,20 @@ pub enum Slip {
     Thesis,
     /// Also heading and distance random walks ([`SlipConfig::default`]).
     Full,
+    /// Per-robot wheel-diameter and wheelbase errors, random errors, fast-turn slip and the
+    /// end-of-move slide ([`SlipConfig::realistic`], [`crate::odometry_error`]).
+    Realistic,
     /// Perfect odometry.
     None,
 }
 
 impl Slip {
-    /// `thesis`, `full` or `none`.
+    /// `thesis`, `full`, `realistic` or `none`.
     pub fn name(self) -> &'static str {
         match self {
             Slip::Thesis => "thesis",
             Slip::Full => "full",
+            Slip::Realistic => "realistic",
             Slip::None => "none",
         }
     }
@@ -79,9 +83,10 @@ impl Slip {
         match name {
             "thesis" => Ok(Slip::Thesis),
             "full" => Ok(Slip::Full),
+            "realistic" => Ok(Slip::Realistic),
             "none" => Ok(Slip::None),
             other => Err(format!(
-                "--slip: expected thesis, full or none, got '{other}'"
+                "--slip: expected thesis, full, realistic or none, got '{other}'"
             )),
         }
     }
@@ -91,6 +96,7 @@ impl Slip {
         match self {
             Slip::Thesis => SlipConfig::thesis(),
             Slip::Full => SlipConfig::default(),
+            Slip::Realistic => SlipConfig::realistic(),
             Slip::None => SlipConfig::none(),
         }
     }
@@ -153,6 +159,8 @@ pub struct ScenarioSpec {
     pub start: Option<Pose2>,
     /// Odometry slip.
     pub slip: Slip,
+    /// Scan-to-map matching before each scan is integrated ([`papillon::localize`]).
+    pub localize: bool,
 }
 
 impl Default for ScenarioSpec {
@@ -170,6 +178,7 @@ impl Default for ScenarioSpec {
             battery_steps: None,
             start: None,
             slip: Slip::Thesis,
+            localize: false,
         }
     }
 }
@@ -253,6 +262,7 @@ impl Setup {
         }
         let mut run = RunConfig::new(mission, robots, spec.seed);
         run.body.slip = spec.slip.config();
+        run.mission.localize.enabled = spec.localize;
         if !world.start_is_clear(run.body.radius_m) {
             let s = world.start();
             return Err(format!(

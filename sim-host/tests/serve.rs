@@ -968,3 +968,72 @@ fn lms200_on_a_second_pty_answers_aria_s_sequence_and_streams_matching_scans() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// While client A drives, client B's connection is closed without a reply (its SYNC0 gets
+/// nothing) and A keeps control: its robot keeps moving and its status packets keep coming.
+/// After A leaves, a new client is served.
+#[test]
+fn a_second_tcp_client_is_refused_while_the_first_drives() {
+    let server = Server::start(&["--tcp", "127.0.0.1:0"]);
+    let addr = server.endpoint("arcos tcp");
+    let mut a = TcpStream::connect(&addr).unwrap();
+    a.set_read_timeout(Some(Duration::from_millis(20))).unwrap();
+    let mut dec = FrameDecoder::new();
+    for (n, cmd) in [Command::SYNC0, Command::SYNC1, Command::SYNC2]
+        .into_iter()
+        .enumerate()
+    {
+        a.write_all(&bytes_of(cmd)).unwrap();
+        assert!(read_until(&mut a, &mut dec, Duration::from_secs(2), |p| {
+            matches!(p, Packet::Sync(s) if s.id() as usize == n)
+        }));
+    }
+    a.write_all(&bytes_of(Command::Open(Some(1)))).unwrap();
+    a.write_all(&bytes_of(Command::Enable(true))).unwrap();
+    a.write_all(&bytes_of(Command::Vel(300))).unwrap();
+    let mut last = None;
+    read_until(&mut a, &mut dec, Duration::from_millis(1500), |p| {
+        if let Packet::Status(s) = p {
+            last = Some(s.clone());
+        }
+        false
+    });
+    let before = last.take().expect("status packets for A");
+    assert!(before.left_vel_mm_s > 250, "{before:?}");
+
+    // B connects and tries the handshake and an OPEN: no reply, the connection ends.
+    let mut b = TcpStream::connect(&addr).unwrap();
+    b.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+    let _ = b.write_all(&bytes_of(Command::SYNC0));
+    let _ = b.write_all(&bytes_of(Command::Open(Some(1))));
+    let mut b_dec = FrameDecoder::new();
+    let mut b_packets = 0;
+    let b_open = read_until(&mut b, &mut b_dec, Duration::from_millis(800), |_| {
+        b_packets += 1;
+        false
+    });
+    assert_eq!(b_packets, 0, "B got packets");
+    assert!(!b_open, "B's connection stays usable");
+
+    // A still drives.
+    a.write_all(&bytes_of(Command::Vel(300))).unwrap();
+    read_until(&mut a, &mut dec, Duration::from_millis(600), |p| {
+        if let Packet::Status(s) = p {
+            last = Some(s.clone());
+        }
+        false
+    });
+    let after = last.take().expect("A still gets status packets");
+    assert!(after.motors_enabled());
+    assert!(after.left_vel_mm_s > 250, "{after:?}");
+    assert!(after.x_pos.wrapping_sub(before.x_pos) as i16 > 100);
+
+    // A leaves; C is served.
+    a.write_all(&bytes_of(Command::Close(Some(1)))).unwrap();
+    drop(a);
+    std::thread::sleep(Duration::from_millis(100));
+    let mut c = TcpStream::connect(&addr).unwrap();
+    c.set_read_timeout(Some(Duration::from_millis(20))).unwrap();
+    let (first, last) = drive_session(&mut c);
+    assert_moved(&first, &last);
+}

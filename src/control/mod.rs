@@ -34,7 +34,7 @@ use core::time::Duration;
 /// and never read a clock. Differences between two `Time`s are [`core::time::Duration`]s.
 /// Microseconds give exact arithmetic over 584 000 years and resolve the 100 ms ARCOS cycle
 /// and a 25 Hz laser without rounding.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, bytemuck::Zeroable)]
 pub struct Time {
     micros: u64,
 }

@@ -99,7 +99,8 @@ pub struct SafetyConfig {
     /// Clearance always kept ahead of (or behind) the robot's edge, on top of the braking
     /// distance \[m\]. Default 0.10.
     pub min_clearance_m: f32,
-    /// Added to the turning radius when turning in place \[m\]. Default 0.05.
+    /// Added to the turning radius when turning in place \[m\]. Default 0.03 (laser noise at
+    /// close range is about 1.5 cm).
     pub turn_margin_m: f32,
     /// The control period, for the distance covered before the next check \[s\]. Default 0.1.
     pub control_period_s: f32,
@@ -123,7 +124,7 @@ impl Default for SafetyConfig {
             side_margin_m: 0.02,
             side_margin_s: 0.1,
             min_clearance_m: 0.10,
-            turn_margin_m: 0.05,
+            turn_margin_m: 0.03,
             control_period_s: 0.1,
             max_input_age: Duration::from_millis(500),
             backoff_distance_m: 0.15,

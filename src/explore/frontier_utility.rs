@@ -10,29 +10,28 @@
 //!   frontier cells near it are skipped (the rest of the frontier stays selectable);
 //!   the entry lapses as soon as the number of known cells around it changes (the map there
 //!   was updated, so the frontier may have become reachable), so the robot does not give up
-//!   with unknown space left.
+//!   with unknown space left (see [`super::blacklist`]).
 
 use crate::frontier::{FrontierConfig, FrontierWorkspace, find_frontiers};
-use crate::geometry::Point2;
-use crate::grid::{Cell, OccupancyGrid};
+use crate::grid::Cell;
+use crate::planner::{AStar, Planner};
 
 use super::objective::ExploreObjective;
 use super::{
-    DecideError, DecisionRequest, ExploreConfig, Outcome, TargetSelector, reach_frontier_cell,
+    Blacklist, DecideError, DecisionRequest, ExploreConfig, Outcome, TargetSelector,
+    reach_frontier_cell,
 };
 
-/// Blacklist capacity.
-pub const MAX_BLACKLIST: usize = 32;
-
-/// One blacklisted place.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Blacklisted {
-    point: Point2,
-    known_around: u32,
-}
-
 /// explore_lite's frontier rule with path distance and a self-clearing blacklist.
-pub struct FrontierUtility<'o, 'm, 'w, const N: usize, const C: usize, const F: usize> {
+pub struct FrontierUtility<
+    'o,
+    'm,
+    'w,
+    const N: usize,
+    const C: usize,
+    const F: usize,
+    P: Planner<N> = AStar<N>,
+> {
     /// Decision settings (only the reserve and viewpoint spacing apply: one target).
     pub config: ExploreConfig,
     /// Frontier search settings.
@@ -41,16 +40,15 @@ pub struct FrontierUtility<'o, 'm, 'w, const N: usize, const C: usize, const F: 
     pub potential_scale: f32,
     /// Weight of the frontier size \[1/m\] (explore_lite's default 1).
     pub gain_scale: f32,
-    /// A frontier whose chosen cell lies within this distance of a blacklisted point is skipped
-    /// \[m\].
-    pub blacklist_radius_m: f32,
-    blacklist: heapless::Vec<Blacklisted, MAX_BLACKLIST>,
-    objective: &'o mut ExploreObjective<'m, N>,
+    /// Places the robot failed to reach: a frontier cell near one is skipped (empty by
+    /// default).
+    pub blacklist: Blacklist,
+    objective: &'o mut ExploreObjective<'m, N, P>,
     workspace: &'w mut FrontierWorkspace<C, F>,
 }
 
-impl<const N: usize, const C: usize, const F: usize> core::fmt::Debug
-    for FrontierUtility<'_, '_, '_, N, C, F>
+impl<const N: usize, const C: usize, const F: usize, P: Planner<N>> core::fmt::Debug
+    for FrontierUtility<'_, '_, '_, N, C, F, P>
 {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("FrontierUtility")
@@ -62,36 +60,14 @@ impl<const N: usize, const C: usize, const F: usize> core::fmt::Debug
     }
 }
 
-/// Half-width of the window whose known-cell count decides when a blacklist entry lapses
-/// \[m\].
-pub(crate) const WINDOW_HALF_M: f32 = 1.0;
-
-pub(crate) fn known_around<const N: usize>(grid: &OccupancyGrid<N>, p: Point2) -> u32 {
-    let g = grid.geometry();
-    let c = g.cell_at_unchecked(p);
-    let r = (WINDOW_HALF_M / g.resolution_m) as i32;
-    let mut n = 0u32;
-    for row in c.row - r..=c.row + r {
-        for col in c.col - r..=c.col + r {
-            if grid
-                .class_of(Cell::new(col, row))
-                .is_some_and(|k| k.is_known())
-            {
-                n += 1;
-            }
-        }
-    }
-    n
-}
-
-impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize>
-    FrontierUtility<'o, 'm, 'w, N, C, F>
+impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize, P: Planner<N>>
+    FrontierUtility<'o, 'm, 'w, N, C, F, P>
 {
-    /// A selector with explore_lite's default weights (potential 3, gain 1) and a 0.5 m
-    /// blacklist radius.
+    /// A selector with explore_lite's default weights (potential 3, gain 1) and an empty
+    /// blacklist.
     pub fn new(
         config: ExploreConfig,
-        objective: &'o mut ExploreObjective<'m, N>,
+        objective: &'o mut ExploreObjective<'m, N, P>,
         workspace: &'w mut FrontierWorkspace<C, F>,
     ) -> Self {
         Self {
@@ -102,44 +78,15 @@ impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize>
             frontier: FrontierConfig::default(),
             potential_scale: 3.0,
             gain_scale: 1.0,
-            blacklist_radius_m: 0.5,
-            blacklist: heapless::Vec::new(),
+            blacklist: Blacklist::default(),
             objective,
             workspace,
         }
     }
-
-    /// Records that the robot failed to reach `target` on the map `grid`: frontiers near it are
-    /// skipped until the map around it changes.
-    pub fn blacklist(
-        &mut self,
-        grid: &OccupancyGrid<N>,
-        target: Point2,
-    ) -> Result<(), DecideError> {
-        self.blacklist
-            .push(Blacklisted {
-                point: target,
-                known_around: known_around(grid, target),
-            })
-            .map_err(|_| DecideError::BlacklistFull {
-                capacity: MAX_BLACKLIST,
-            })
-    }
-
-    /// Active blacklist entries.
-    pub fn blacklisted(&self) -> usize {
-        self.blacklist.len()
-    }
-
-    fn is_blacklisted(&self, p: Point2) -> bool {
-        self.blacklist
-            .iter()
-            .any(|b| b.point.distance(p) <= self.blacklist_radius_m)
-    }
 }
 
-impl<const N: usize, const C: usize, const F: usize> TargetSelector<N>
-    for FrontierUtility<'_, '_, '_, N, C, F>
+impl<const N: usize, const C: usize, const F: usize, P: Planner<N>> TargetSelector<N>
+    for FrontierUtility<'_, '_, '_, N, C, F, P>
 {
     fn decide<R: rand_core::Rng>(
         &mut self,
@@ -148,8 +95,7 @@ impl<const N: usize, const C: usize, const F: usize> TargetSelector<N>
     ) -> Result<Outcome, DecideError> {
         self.objective.prepare(req, &self.config)?;
         // Entries lapse once the map around them changed.
-        self.blacklist
-            .retain(|b| known_around(req.grid, b.point) == b.known_around);
+        self.blacklist.forget_changed(req.grid);
         find_frontiers(
             req.grid,
             req.pose.position(),
@@ -173,7 +119,7 @@ impl<const N: usize, const C: usize, const F: usize> TargetSelector<N>
                 };
                 reachable = true;
                 if near.is_none_or(|(_, b)| d < b)
-                    && !self.is_blacklisted(req.grid.geometry().cell_center(c))
+                    && !self.blacklist.contains(req.grid.geometry().cell_center(c))
                 {
                     near = Some((c, d));
                 }

@@ -8,7 +8,7 @@
 //! three-quarters full, further evaluations are computed without being remembered.
 
 use super::MAX_TARGETS;
-use super::objective::{CandidateStatus, Evaluation, WORST_FITNESS};
+use super::evaluation::{CandidateStatus, Evaluation, WORST_FITNESS};
 
 /// Slots of the table.
 pub const MEMO_SLOTS: usize = 512;

@@ -8,12 +8,18 @@
 //! - [`nearest_frontier`]: Yamauchi (1997): the frontier with the shortest path distance.
 //! - [`frontier_utility`]: explore_lite's rule (frontier size minus a distance cost), with path
 //!   distance and a blacklist of frontiers the robot failed to reach.
+//! - [`blacklist`]: places the robot failed to reach, avoided by every selector until the map
+//!   around them changes.
+//! - [`evaluation`]: a candidate's status and score, what the objective computes and the memo
+//!   keeps.
 //! - [`view_cache`] and [`memo`]: what one decision computes once and reuses (each viewpoint's
 //!   visible Unknown cells; each candidate's evaluation).
 //!
 //! Every selector implements [`TargetSelector`] and fills the same [`Decision`]; the caller
 //! measures the compute time (the core reads no clock).
 
+pub mod blacklist;
+pub mod evaluation;
 pub mod frontier_utility;
 pub mod memo;
 pub mod nearest_frontier;
@@ -24,9 +30,11 @@ pub mod view_cache;
 #[cfg(all(test, feature = "std"))]
 mod tests;
 
+pub use blacklist::{BLACKLIST_RADIUS_M, Blacklist, MAX_BLACKLISTED};
+pub use evaluation::{CandidateStatus, Evaluation, WORST_FITNESS};
 pub use frontier_utility::FrontierUtility;
 pub use nearest_frontier::NearestFrontier;
-pub use objective::{CandidateStatus, Evaluation, ExploreObjective};
+pub use objective::ExploreObjective;
 pub use optimized::{InitialPopulation, Optimized};
 pub use view_cache::{ViewCache, ViewCacheStats};
 
@@ -234,56 +242,6 @@ pub(crate) fn reach_frontier_cell<const N: usize>(
         }
     }
     best
-}
-
-/// Most places a [`Blacklist`] holds.
-pub const MAX_BLACKLISTED: usize = frontier_utility::MAX_BLACKLIST;
-
-/// Places the robot failed to reach (its caller decides when an entry lapses): a decision
-/// never chooses a target within [`Blacklist::radius_m`] of one of them.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Blacklist {
-    /// A target this close to a listed place counts as listed \[m\].
-    pub radius_m: f32,
-    points: heapless::Vec<Point2, MAX_BLACKLISTED>,
-}
-
-impl Default for Blacklist {
-    fn default() -> Self {
-        Self::new(0.5)
-    }
-}
-
-impl Blacklist {
-    /// An empty list covering `radius_m` around each place.
-    pub const fn new(radius_m: f32) -> Self {
-        Self {
-            radius_m,
-            points: heapless::Vec::new(),
-        }
-    }
-
-    /// Adds a place; [`DecideError::BlacklistFull`] when [`MAX_BLACKLISTED`] are listed.
-    pub fn push(&mut self, p: Point2) -> Result<(), DecideError> {
-        self.points.push(p).map_err(|_| DecideError::BlacklistFull {
-            capacity: MAX_BLACKLISTED,
-        })
-    }
-
-    /// Listed places.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// Whether nothing is listed.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
-
-    /// Whether `p` lies within the radius of a listed place.
-    pub fn contains(&self, p: Point2) -> bool {
-        self.points.iter().any(|q| q.distance(p) <= self.radius_m)
-    }
 }
 
 /// What a scan of the frontier cells found.

@@ -9,6 +9,7 @@
 
 use crate::frontier::{FrontierConfig, FrontierWorkspace, find_frontiers};
 use crate::grid::Cell;
+use crate::planner::{AStar, Planner};
 
 use super::objective::ExploreObjective;
 use super::{
@@ -17,7 +18,15 @@ use super::{
 };
 
 /// Yamauchi's nearest-frontier rule.
-pub struct NearestFrontier<'o, 'm, 'w, const N: usize, const C: usize, const F: usize> {
+pub struct NearestFrontier<
+    'o,
+    'm,
+    'w,
+    const N: usize,
+    const C: usize,
+    const F: usize,
+    P: Planner<N> = AStar<N>,
+> {
     /// Decision settings (only the reserve and viewpoint spacing apply: one target).
     pub config: ExploreConfig,
     /// Frontier search settings.
@@ -25,12 +34,12 @@ pub struct NearestFrontier<'o, 'm, 'w, const N: usize, const C: usize, const F: 
     /// Places the robot failed to reach: frontier cells near them are skipped (empty by
     /// default).
     pub blacklist: Blacklist,
-    objective: &'o mut ExploreObjective<'m, N>,
+    objective: &'o mut ExploreObjective<'m, N, P>,
     workspace: &'w mut FrontierWorkspace<C, F>,
 }
 
-impl<const N: usize, const C: usize, const F: usize> core::fmt::Debug
-    for NearestFrontier<'_, '_, '_, N, C, F>
+impl<const N: usize, const C: usize, const F: usize, P: Planner<N>> core::fmt::Debug
+    for NearestFrontier<'_, '_, '_, N, C, F, P>
 {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("NearestFrontier")
@@ -40,13 +49,13 @@ impl<const N: usize, const C: usize, const F: usize> core::fmt::Debug
     }
 }
 
-impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize>
-    NearestFrontier<'o, 'm, 'w, N, C, F>
+impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize, P: Planner<N>>
+    NearestFrontier<'o, 'm, 'w, N, C, F, P>
 {
     /// A selector using `objective` for planning and `workspace` for the frontier search.
     pub fn new(
         config: ExploreConfig,
-        objective: &'o mut ExploreObjective<'m, N>,
+        objective: &'o mut ExploreObjective<'m, N, P>,
         workspace: &'w mut FrontierWorkspace<C, F>,
     ) -> Self {
         Self {
@@ -62,14 +71,16 @@ impl<'o, 'm, 'w, const N: usize, const C: usize, const F: usize>
     }
 }
 
-impl<const N: usize, const C: usize, const F: usize> TargetSelector<N>
-    for NearestFrontier<'_, '_, '_, N, C, F>
+impl<const N: usize, const C: usize, const F: usize, P: Planner<N>> TargetSelector<N>
+    for NearestFrontier<'_, '_, '_, N, C, F, P>
 {
     fn decide<R: rand_core::Rng>(
         &mut self,
         req: &DecisionRequest<'_, N>,
         _rng: &mut R,
     ) -> Result<Outcome, DecideError> {
+        // Entries lapse once the map around them changed.
+        self.blacklist.forget_changed(req.grid);
         self.objective.prepare(req, &self.config)?;
         find_frontiers(
             req.grid,

@@ -52,61 +52,29 @@ use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::{Cell, CellClass, OccupancyGrid};
 use crate::math;
 use crate::optim::Problem;
-use crate::planner::{AStar, DistanceField, prune_to_waypoints, prune_to_waypoints_with_boxes};
+use crate::planner::{
+    AStar, DistanceField, Planner, prune_to_waypoints, prune_to_waypoints_with_boxes,
+};
 use crate::raycast;
 use crate::sensor::LaserConfig;
 use crate::units;
 
+use super::evaluation::{CandidateStatus, Evaluation, WORST_FITNESS};
 use super::memo::EvalMemo;
 use super::view_cache::{ViewCache, ViewCacheStats};
 use super::{Blacklist, DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS};
 use crate::control::follower::MAX_WAYPOINTS;
 
-/// Fitness of an infeasible or blocked candidate: worse than any feasible one (those lie in
-/// `[-1, 0]`).
-pub const WORST_FITNESS: f32 = 1.0;
 /// Most cells in one leg of a planned path.
 pub const MAX_LEG_CELLS: usize = 4096;
 /// Most predicted scans along one candidate's path.
 pub const MAX_VIEWPOINTS: usize = 1024;
 
-/// Whether a candidate can be driven.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CandidateStatus {
-    /// Reachable and within the battery.
-    Feasible,
-    /// A target lies outside the grid.
-    OutOfBounds,
-    /// A target lies on an Occupied or inflated cell.
-    Blocked,
-    /// No path reaches a target.
-    Unreachable,
-    /// The path costs more than the battery minus the reserve.
-    OverBudget,
-    /// The path does not fit the waypoint, leg or viewpoint capacities.
-    TooLong,
-}
-
-/// A candidate's evaluation.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Evaluation {
-    /// Feasibility.
-    pub status: CandidateStatus,
-    /// Unknown cells predicted to become known \[cells\] (0 unless feasible).
-    pub gain_cells: u32,
-    /// Energy of the path \[steps\] (as far as it was planned).
-    pub energy_steps: f32,
-    /// Length of the waypoint polyline \[m\].
-    pub path_length_m: f32,
-    /// Fitness for the optimizers (minimised): [`WORST_FITNESS`] unless feasible, else in
-    /// `[-1, 0]`.
-    pub fitness: f32,
-}
-
-/// The objective's working memory and the state of the current decision.
-pub struct ExploreObjective<'m, const N: usize> {
+/// The objective's working memory and the state of the current decision. Paths through the
+/// targets are planned by `P` (A* unless a test double stands in).
+pub struct ExploreObjective<'m, const N: usize, P: Planner<N> = AStar<N>> {
     field: &'m mut DistanceField<N>,
-    astar: &'m mut AStar<N>,
+    planner: &'m mut P,
     stamps: &'m mut [u32],
     generation: u32,
     leg: [Cell; MAX_LEG_CELLS],
@@ -126,7 +94,7 @@ pub struct ExploreObjective<'m, const N: usize> {
     cached: bool,
 }
 
-impl<const N: usize> core::fmt::Debug for ExploreObjective<'_, N> {
+impl<const N: usize, P: Planner<N>> core::fmt::Debug for ExploreObjective<'_, N, P> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("ExploreObjective")
             .field("start", &self.start)
@@ -136,16 +104,12 @@ impl<const N: usize> core::fmt::Debug for ExploreObjective<'_, N> {
     }
 }
 
-impl<'m, const N: usize> ExploreObjective<'m, N> {
+impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
     /// An objective over the caller's planner memory and a visited-cell stamp slice of at
     /// least the grid's cell count (on a host: `DistanceField::new_boxed()`,
     /// `AStar::new_boxed()` and `vec![0; N]`).
-    pub fn new(
-        field: &'m mut DistanceField<N>,
-        astar: &'m mut AStar<N>,
-        stamps: &'m mut [u32],
-    ) -> Self {
-        Self::build(field, astar, stamps, None)
+    pub fn new(field: &'m mut DistanceField<N>, planner: &'m mut P, stamps: &'m mut [u32]) -> Self {
+        Self::build(field, planner, stamps, None)
     }
 
     /// An objective predicting gains with the cached model (see [Speed](self#speed)), over the
@@ -153,23 +117,23 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
     /// host: `ViewCache::new_boxed()`).
     pub fn with_view_cache(
         field: &'m mut DistanceField<N>,
-        astar: &'m mut AStar<N>,
+        planner: &'m mut P,
         stamps: &'m mut [u32],
         views: &'m mut ViewCache,
     ) -> Self {
-        Self::build(field, astar, stamps, Some(views))
+        Self::build(field, planner, stamps, Some(views))
     }
 
     fn build(
         field: &'m mut DistanceField<N>,
-        astar: &'m mut AStar<N>,
+        planner: &'m mut P,
         stamps: &'m mut [u32],
         views: Option<&'m mut ViewCache>,
     ) -> Self {
         stamps.fill(0);
         Self {
             field,
-            astar,
+            planner,
             stamps,
             generation: 0,
             leg: [Cell::new(0, 0); MAX_LEG_CELLS],
@@ -382,7 +346,7 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
             let planned = if k == 0 {
                 self.field.path_to(cell, &mut self.leg)
             } else {
-                self.astar.find_path(req.trav, prev, cell, &mut self.leg)
+                self.planner.plan(req.trav, prev, cell, &mut self.leg)
             };
             let planned = planned.map_err(|e| match e {
                 crate::planner::PlanError::CapacityExceeded { .. } => CandidateStatus::TooLong,
@@ -507,7 +471,7 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
     pub fn problem<'s, 'r>(
         &'s mut self,
         req: &'s DecisionRequest<'r, N>,
-    ) -> BoundObjective<'s, 'm, 'r, N> {
+    ) -> BoundObjective<'s, 'm, 'r, N, P> {
         BoundObjective {
             objective: self,
             req,
@@ -521,7 +485,7 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
         &'s mut self,
         req: &'s DecisionRequest<'r, N>,
         blacklist: &'s Blacklist,
-    ) -> BoundObjective<'s, 'm, 'r, N> {
+    ) -> BoundObjective<'s, 'm, 'r, N, P> {
         BoundObjective {
             objective: self,
             req,
@@ -531,26 +495,26 @@ impl<'m, const N: usize> ExploreObjective<'m, N> {
 }
 
 /// An [`ExploreObjective`] bound to a request: the optimizer's view.
-pub struct BoundObjective<'s, 'm, 'r, const N: usize> {
-    objective: &'s mut ExploreObjective<'m, N>,
+pub struct BoundObjective<'s, 'm, 'r, const N: usize, P: Planner<N> = AStar<N>> {
+    objective: &'s mut ExploreObjective<'m, N, P>,
     req: &'s DecisionRequest<'r, N>,
     blacklist: Option<&'s Blacklist>,
 }
 
-impl<const N: usize> core::fmt::Debug for BoundObjective<'_, '_, '_, N> {
+impl<const N: usize, P: Planner<N>> core::fmt::Debug for BoundObjective<'_, '_, '_, N, P> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         self.objective.fmt(f)
     }
 }
 
-impl<const N: usize> BoundObjective<'_, '_, '_, N> {
+impl<const N: usize, P: Planner<N>> BoundObjective<'_, '_, '_, N, P> {
     /// The decision's distance field.
     pub(crate) fn field(&self) -> &DistanceField<N> {
         self.objective.field
     }
 }
 
-impl<const N: usize> Problem for BoundObjective<'_, '_, '_, N> {
+impl<const N: usize, P: Planner<N>> Problem for BoundObjective<'_, '_, '_, N, P> {
     fn dim(&self) -> usize {
         2 * self.objective.config.targets
     }
@@ -598,7 +562,7 @@ impl<const N: usize> Problem for BoundObjective<'_, '_, '_, N> {
     }
 }
 
-impl<const N: usize> ExploreObjective<'_, N> {
+impl<const N: usize, P: Planner<N>> ExploreObjective<'_, N, P> {
     /// The [`super::Decision`] for the last evaluated candidate, if it was feasible.
     pub(crate) fn decision(
         &self,

@@ -18,9 +18,11 @@
 //! blacklisted.
 
 use crate::optim::{self, MAX_DIM, Method, Optimizer, Population, Problem, StopRules};
+use crate::planner::{AStar, Planner};
 use crate::random;
 
-use super::objective::{BoundObjective, ExploreObjective, WORST_FITNESS};
+use super::evaluation::WORST_FITNESS;
+use super::objective::{BoundObjective, ExploreObjective};
 use super::{
     Blacklist, DecideError, DecisionRequest, ExploreConfig, FrontierScan, MAX_TARGETS, Outcome,
     TargetSelector, nearest_reachable_frontier, sample_reachable_frontier,
@@ -44,7 +46,7 @@ pub enum InitialPopulation {
 
 /// Optimizer-based target selection.
 #[derive(Debug)]
-pub struct Optimized<'o, 'm, const N: usize> {
+pub struct Optimized<'o, 'm, const N: usize, P: Planner<N> = AStar<N>> {
     /// The optimization method.
     pub method: Method,
     /// Decision settings (k, reserve, population, generations).
@@ -54,15 +56,15 @@ pub struct Optimized<'o, 'm, const N: usize> {
     /// Places the robot failed to reach: candidates with a target near one score worst, and
     /// the fallback frontier avoids them (empty by default).
     pub blacklist: Blacklist,
-    objective: &'o mut ExploreObjective<'m, N>,
+    objective: &'o mut ExploreObjective<'m, N, P>,
 }
 
-impl<'o, 'm, const N: usize> Optimized<'o, 'm, N> {
+impl<'o, 'm, const N: usize, P: Planner<N>> Optimized<'o, 'm, N, P> {
     /// A selector running `method` over `objective`'s working memory.
     pub fn new(
         method: Method,
         config: ExploreConfig,
-        objective: &'o mut ExploreObjective<'m, N>,
+        objective: &'o mut ExploreObjective<'m, N, P>,
     ) -> Self {
         Self {
             method,
@@ -74,13 +76,15 @@ impl<'o, 'm, const N: usize> Optimized<'o, 'm, N> {
     }
 }
 
-impl<const N: usize> TargetSelector<N> for Optimized<'_, '_, N> {
+impl<const N: usize, P: Planner<N>> TargetSelector<N> for Optimized<'_, '_, N, P> {
     fn decide<R: rand_core::Rng>(
         &mut self,
         req: &DecisionRequest<'_, N>,
         rng: &mut R,
     ) -> Result<Outcome, DecideError> {
         self.objective.prepare(req, &self.config)?;
+        // Entries lapse once the map around them changed.
+        self.blacklist.forget_changed(req.grid);
         let fallback =
             match nearest_reachable_frontier(req.grid, self.objective.field(), &self.blacklist) {
                 FrontierScan::NoneReachable => return Ok(Outcome::Done),
@@ -145,8 +149,8 @@ impl<const N: usize> TargetSelector<N> for Optimized<'_, '_, N> {
 }
 
 /// An initial population with `share` of its individuals on reachable frontier cells.
-fn near_frontiers<const N: usize, R: rand_core::Rng>(
-    problem: &BoundObjective<'_, '_, '_, N>,
+fn near_frontiers<const N: usize, P: Planner<N>, R: rand_core::Rng>(
+    problem: &BoundObjective<'_, '_, '_, N, P>,
     req: &DecisionRequest<'_, N>,
     size: usize,
     share: f32,

@@ -1,6 +1,6 @@
 //! Tests of the exploration objective and the target selectors on small hand-made maps.
 
-use super::objective::{CandidateStatus, WORST_FITNESS};
+use super::evaluation::{CandidateStatus, WORST_FITNESS};
 use super::*;
 use crate::frontier::FrontierWorkspace;
 use crate::grid::{GridGeometry, LogOddsBounds};
@@ -454,13 +454,13 @@ fn a_blacklisted_frontier_is_skipped_until_the_map_around_it_changes() {
         };
         d.targets[0]
     };
-    sel.blacklist(&grid, first).unwrap();
+    sel.blacklist.push(&grid, first).unwrap();
     {
         let req = request(&grid, &trav, &laser);
         let Outcome::Go(d) = run_selector(&mut sel, &req, 1) else {
             panic!()
         };
-        assert!(d.targets[0].distance(first) > sel.blacklist_radius_m);
+        assert!(d.targets[0].distance(first) > sel.blacklist.radius_m);
     }
     // The map near the blacklisted point changes: the entry lapses.
     let g = *grid.geometry();
@@ -470,7 +470,7 @@ fn a_blacklisted_frontier_is_skipped_until_the_map_around_it_changes() {
     let trav = trav_of(&grid);
     let req = request(&grid, &trav, &laser);
     let _ = run_selector(&mut sel, &req, 1);
-    assert_eq!(sel.blacklisted(), 0);
+    assert_eq!(sel.blacklist.len(), 0);
 }
 
 // The mid-mission House snapshot of `fixtures/` (see `fixtures/README.md`) and the caches.
@@ -771,7 +771,7 @@ fn no_selector_chooses_a_place_the_robot_failed_to_reach() {
     let mut east = Blacklist::new(0.6);
     for x in [3.0f32, 4.0, 5.0] {
         for y in [0.5f32, 1.5, 2.5, 3.5] {
-            east.push(Point2::new(x, y)).unwrap();
+            east.push(&grid, Point2::new(x, y)).unwrap();
         }
     }
     let check = |name: &str, o: Outcome, list: &Blacklist| {
@@ -792,7 +792,7 @@ fn no_selector_chooses_a_place_the_robot_failed_to_reach() {
                 run_selector(&mut sel, &req, round),
                 &sel.blacklist,
             );
-            sel.blacklist.push(t).unwrap();
+            sel.blacklist.push(&grid, t).unwrap();
         }
         sel.blacklist = east.clone();
         let o = run_selector(&mut sel, &req, 7);
@@ -805,7 +805,7 @@ fn no_selector_chooses_a_place_the_robot_failed_to_reach() {
             run_selector(&mut sel, &req, round),
             &sel.blacklist,
         );
-        sel.blacklist.push(t).unwrap();
+        sel.blacklist.push(&grid, t).unwrap();
     }
 }
 
@@ -882,7 +882,7 @@ fn with_every_reachable_frontier_blacklisted_the_selectors_say_so() {
     let mut ws = FrontierWorkspace::<1024, 64>::new_boxed();
     let config = ExploreConfig::default();
     let mut list = Blacklist::default();
-    list.push(Point2::new(1.35, 0.75)).unwrap();
+    list.push(&grid, Point2::new(1.35, 0.75)).unwrap();
     let mut sel = Optimized::new(Method::Pso, config, &mut obj);
     sel.blacklist = list.clone();
     assert_eq!(

@@ -87,7 +87,7 @@ type Extent = [u8; 2];
 const NO_ROWS: Extent = [1, 0];
 
 /// Counters of the current decision.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Zeroable)]
 pub struct ViewCacheStats {
     /// Viewpoints found in the cache.
     pub hits: u32,
@@ -99,7 +99,7 @@ pub struct ViewCacheStats {
     pub unobstructed: u32,
 }
 
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Zeroable)]
 struct Slot {
     generation: u32,
     cell: u32,
@@ -108,7 +108,7 @@ struct Slot {
 }
 
 /// The laser and resolution the templates were built for.
-#[derive(Clone, Copy, PartialEq)]
+#[derive(Clone, Copy, PartialEq, bytemuck::Zeroable)]
 struct TemplateKey {
     beam_count: u16,
     first_angle_rad: f32,
@@ -125,6 +125,7 @@ enum Window {
 }
 
 /// Per-decision visibility cache of predicted scans; see the [module documentation](self).
+#[derive(bytemuck::Zeroable)]
 pub struct ViewCache {
     // Templates: depend on the laser and the resolution only, kept across decisions.
     key: TemplateKey,
@@ -346,17 +347,7 @@ impl ViewCache {
     /// An empty cache built directly on the heap (16.0 MB).
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
-        // SAFETY: every field is an integer, a float, a bool, an array or a plain struct of
-        // them (no references, enums or niches; `BlockedBoxes` likewise), for which all-zero
-        // bytes are valid values.
-        let mut cache = unsafe {
-            let layout = std::alloc::Layout::new::<Self>();
-            let raw = std::alloc::alloc_zeroed(layout) as *mut Self;
-            if raw.is_null() {
-                std::alloc::handle_alloc_error(layout);
-            }
-            std::boxed::Box::from_raw(raw)
-        };
+        let mut cache = crate::heap::boxed_zeroed::<Self>();
         cache.entry_limit = MAX_VIEWS;
         cache
     }

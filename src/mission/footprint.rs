@@ -73,3 +73,84 @@ mod tests {
         assert!(t.bands.near_radius_m > t.bands.no_turn_radius_m);
     }
 }
+
+/// Most map obstacles passed to the safety monitor in one period.
+pub const MAX_REMEMBERED: usize = 128;
+
+/// Speed while any part of the body is in the no-turn band (a door, a narrow aisle)
+/// \[mm/s\]: slow enough that the safety monitor's corridor is only a little wider than the
+/// body (its side margin grows with speed) and that path tracking stays within centimetres.
+pub const NARROW_SPEED_MM_S: i16 = 150;
+
+/// How far ahead of the robot a narrow place already slows it \[m\].
+pub const NARROW_LOOKAHEAD_M: f32 = 0.4;
+
+/// The Occupied cells of `grid` within `radius_m` of the robot at `pose`, as the point of
+/// each cell nearest the robot, in the robot's frame, into `out` (the nearest first fill it;
+/// the rest are dropped). What the laser cannot see (behind a 180° laser, inside its blind
+/// zone) the map still knows: the safety monitor checks turns and back-offs against it.
+pub fn remembered_obstacles<const N: usize>(
+    grid: &crate::grid::OccupancyGrid<N>,
+    pose: crate::geometry::Pose2,
+    radius_m: f32,
+    out: &mut heapless::Vec<crate::geometry::Point2, MAX_REMEMBERED>,
+) {
+    use crate::geometry::Point2;
+    use crate::grid::{Cell, CellClass};
+    out.clear();
+    let g = *grid.geometry();
+    let res = g.resolution_m;
+    let reach = crate::math::ceil(radius_m / res) as i32 + 1;
+    let Some(centre) = g.cell_at(pose.position()) else {
+        return;
+    };
+    let (sin, cos) = (crate::math::sin(pose.theta), crate::math::cos(pose.theta));
+    for dr in -reach..=reach {
+        for dc in -reach..=reach {
+            let cell = Cell::new(centre.col + dc, centre.row + dr);
+            let Some(i) = g.index(cell) else { continue };
+            if grid.class(i) != CellClass::Occupied {
+                continue;
+            }
+            // The nearest point of the cell's square to the robot.
+            let c = g.cell_center(cell);
+            let half = 0.5 * res;
+            let near = Point2::new(
+                pose.x.clamp(c.x - half, c.x + half),
+                pose.y.clamp(c.y - half, c.y + half),
+            );
+            let (dx, dy) = (near.x - pose.x, near.y - pose.y);
+            if dx * dx + dy * dy > radius_m * radius_m {
+                continue;
+            }
+            let base = Point2::new(cos * dx + sin * dy, -sin * dx + cos * dy);
+            if out.push(base).is_err() {
+                return;
+            }
+        }
+    }
+}
+
+/// The speed cap where the body is, or is about to be, in the no-turn band of `trav`
+/// (within [`NARROW_LOOKAHEAD_M`] ahead along the heading): [`NARROW_SPEED_MM_S`]; `None`
+/// elsewhere.
+pub fn narrow_speed_cap<const N: usize>(
+    trav: &crate::planner::Traversability<N>,
+    pose: crate::geometry::Pose2,
+) -> Option<i16> {
+    use crate::geometry::Point2;
+    let g = trav.geometry();
+    let steps = 4;
+    for k in 0..=steps {
+        let d = NARROW_LOOKAHEAD_M * k as f32 / steps as f32;
+        let p = Point2::new(
+            pose.x + d * crate::math::cos(pose.theta),
+            pose.y + d * crate::math::sin(pose.theta),
+        );
+        let Some(cell) = g.cell_at(p) else { continue };
+        if trav.wall_band(cell) == Some(crate::planner::traversability::BAND_NO_TURN) {
+            return Some(NARROW_SPEED_MM_S);
+        }
+    }
+    None
+}

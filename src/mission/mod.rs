@@ -180,6 +180,8 @@ pub struct MissionConfig {
     pub decide_while_driving: bool,
     /// Remaining path length below which the next decision is computed ahead \[m\].
     pub decide_ahead_m: f32,
+    /// Scan-to-map matching before each scan is integrated (off by default).
+    pub localize: crate::localize::LocalizeConfig,
 }
 
 impl Default for MissionConfig {
@@ -210,6 +212,7 @@ impl Default for MissionConfig {
             low_battery_steps: 10.0,
             decide_while_driving: false,
             decide_ahead_m: 0.6,
+            localize: crate::localize::LocalizeConfig::default(),
         }
     }
 }

@@ -12,7 +12,7 @@ use crate::explore::{ExploreObjective, ViewCache};
 use crate::frontier::FrontierWorkspace;
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{GridGeometry, OccupancyGrid};
-use crate::planner::{AStar, DistanceField, Traversability};
+use crate::planner::{AStar, DistanceField, Planner, Traversability};
 
 use super::{MissionConfig, MissionError};
 
@@ -24,7 +24,7 @@ pub const MAX_SHARED_WAYPOINTS: usize = 16;
 pub const MAX_FRONTIERS: usize = 256;
 
 /// A robot's mark on the shared map.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, bytemuck::Zeroable)]
 pub struct RobotMark {
     /// The robot's mission id.
     pub id: u8,
@@ -32,20 +32,50 @@ pub struct RobotMark {
     pub pose: Pose2,
     /// When the pose was written.
     pub time: Time,
+    path_len: usize,
+    path: [Point2; MAX_SHARED_WAYPOINTS],
+}
+
+impl RobotMark {
     /// The waypoints it still means to drive, nearest first (at most
     /// [`MAX_SHARED_WAYPOINTS`]); empty while it stands still.
-    pub path: heapless::Vec<Point2, MAX_SHARED_WAYPOINTS>,
+    pub fn path(&self) -> &[Point2] {
+        &self.path[..self.path_len]
+    }
+}
+
+impl PartialEq for RobotMark {
+    fn eq(&self, other: &Self) -> bool {
+        (self.id, self.pose, self.time) == (other.id, other.pose, other.time)
+            && self.path() == other.path()
+    }
+}
+
+impl core::fmt::Debug for RobotMark {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("RobotMark")
+            .field("id", &self.id)
+            .field("pose", &self.pose)
+            .field("time", &self.time)
+            .field("path", &self.path())
+            .finish()
+    }
 }
 
 /// The map all robots of one mission share (in process): the occupancy grid and its
 /// traversability layer, kept in step (scans integrate into both), and the robots' marks.
+#[derive(bytemuck::Zeroable)]
 pub struct SharedMap<const N: usize> {
     /// The occupancy grid.
     pub grid: OccupancyGrid<N>,
     /// Its traversability layer (inflated by the robot radius).
     pub trav: Traversability<N>,
-    /// One mark per robot.
-    pub robots: heapless::Vec<RobotMark, MAX_ROBOTS>,
+    /// One mark per robot, the first `mark_count` of them written.
+    marks: [RobotMark; MAX_ROBOTS],
+    mark_count: usize,
+    /// Scan-matching working memory (robots integrate their scans one after the other, so one
+    /// is enough; [`crate::localize`]).
+    pub matcher: crate::localize::ScanMatcher<{ crate::localize::WINDOW_CELLS }>,
 }
 
 impl<const N: usize> core::fmt::Debug for SharedMap<N> {
@@ -53,7 +83,7 @@ impl<const N: usize> core::fmt::Debug for SharedMap<N> {
         f.debug_struct("SharedMap")
             .field("grid", &self.grid)
             .field("trav", &self.trav)
-            .field("robots", &self.robots)
+            .field("robots", &self.robots())
             .finish()
     }
 }
@@ -68,7 +98,9 @@ impl<const N: usize> SharedMap<N> {
         Ok(Self {
             grid,
             trav,
-            robots: heapless::Vec::new(),
+            marks: [bytemuck::Zeroable::zeroed(); MAX_ROBOTS],
+            mark_count: 0,
+            matcher: crate::localize::ScanMatcher::new(),
         })
     }
 
@@ -78,26 +110,19 @@ impl<const N: usize> SharedMap<N> {
         geometry: GridGeometry,
         config: &MissionConfig,
     ) -> Result<std::boxed::Box<Self>, MissionError> {
-        let grid = OccupancyGrid::<N>::new_boxed(geometry, config.grid_bounds)
+        let mut map = crate::heap::boxed_zeroed::<Self>();
+        map.grid
+            .set_up_zeroed(geometry, config.grid_bounds)
             .map_err(MissionError::Grid)?;
-        let trav = Traversability::<N>::new_boxed(geometry, config.traversability)
+        map.trav
+            .set_up_zeroed(geometry, config.traversability)
             .map_err(MissionError::Map)?;
-        let layout = std::alloc::Layout::new::<Self>();
-        // SAFETY: the layout is non-zero (it holds two arrays of N > 0 cells... or at least the
-        // geometry). Each field is written below before the box is formed: the grid and the
-        // layer are copied bit for bit from their own heap boxes (plain data without drop glue,
-        // whose boxes are then freed without dropping their contents twice, as they have no
-        // drop glue), and the robot list is written as an empty vector.
-        unsafe {
-            let raw = std::alloc::alloc(layout) as *mut Self;
-            if raw.is_null() {
-                std::alloc::handle_alloc_error(layout);
-            }
-            core::ptr::copy_nonoverlapping(&*grid, core::ptr::addr_of_mut!((*raw).grid), 1);
-            core::ptr::copy_nonoverlapping(&*trav, core::ptr::addr_of_mut!((*raw).trav), 1);
-            core::ptr::addr_of_mut!((*raw).robots).write(heapless::Vec::new());
-            Ok(std::boxed::Box::from_raw(raw))
-        }
+        Ok(map)
+    }
+
+    /// The robots' marks, in the order they were first written.
+    pub fn robots(&self) -> &[RobotMark] {
+        &self.marks[..self.mark_count]
     }
 
     /// Reloads the traversability layer from the grid (after the caller edited the grid
@@ -110,7 +135,7 @@ impl<const N: usize> SharedMap<N> {
 
     /// The mark of robot `id`, if it wrote one.
     pub fn robot(&self, id: u8) -> Option<&RobotMark> {
-        self.robots.iter().find(|m| m.id == id)
+        self.robots().iter().find(|m| m.id == id)
     }
 
     /// Writes robot `id`'s mark. Errors if more than [`MAX_ROBOTS`] robots share the map.
@@ -121,45 +146,46 @@ impl<const N: usize> SharedMap<N> {
         time: Time,
         path: &[Point2],
     ) -> Result<(), MissionError> {
-        let slot = match self.robots.iter().position(|m| m.id == id) {
-            Some(i) => &mut self.robots[i],
+        let slot = match self.robots().iter().position(|m| m.id == id) {
+            Some(i) => i,
+            None if self.mark_count < MAX_ROBOTS => {
+                self.mark_count += 1;
+                self.mark_count - 1
+            }
             None => {
-                self.robots
-                    .push(RobotMark {
-                        id,
-                        pose,
-                        time,
-                        path: heapless::Vec::new(),
-                    })
-                    .map_err(|_| MissionError::TooManyRobots {
-                        capacity: MAX_ROBOTS,
-                    })?;
-                let last = self.robots.len() - 1;
-                &mut self.robots[last]
+                return Err(MissionError::TooManyRobots {
+                    capacity: MAX_ROBOTS,
+                });
             }
         };
+        let n = path.len().min(MAX_SHARED_WAYPOINTS);
+        let slot = &mut self.marks[slot];
+        slot.id = id;
         slot.pose = pose;
         slot.time = time;
-        slot.path.clear();
-        let n = path.len().min(MAX_SHARED_WAYPOINTS);
-        // Capacity checked.
-        let _ = slot.path.extend_from_slice(&path[..n]);
+        slot.path_len = n;
+        slot.path[..n].copy_from_slice(&path[..n]);
         Ok(())
     }
 }
 
-/// Decision working memory: distance field, A*, visited-cell stamps, the visibility cache of
-/// the exploration objective (16.0 MB, whatever `N`) and frontier search memory. One per
-/// process is enough, as robots decide one after the other.
-pub struct Workspace<const N: usize> {
+/// Decision working memory: distance field, path planner, visited-cell stamps, the visibility
+/// cache of the exploration objective (16.0 MB, whatever `N`) and frontier search memory. One
+/// per process is enough, as robots decide one after the other.
+///
+/// The planner that joins the targets of a decision (the legs after the first, which the
+/// distance field answers) is `P`: A* ([`AStar`]) unless a test double stands in (any
+/// [`Planner`]); the mission is generic over it, so the choice costs nothing at run time.
+#[derive(bytemuck::Zeroable)]
+pub struct Workspace<const N: usize, P = AStar<N>> {
     field: DistanceField<N>,
-    astar: AStar<N>,
+    planner: P,
     stamps: [u32; N],
     views: ViewCache,
     frontier: FrontierWorkspace<N, MAX_FRONTIERS>,
 }
 
-impl<const N: usize> core::fmt::Debug for Workspace<N> {
+impl<const N: usize, P: Planner<N>> core::fmt::Debug for Workspace<N, P> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Workspace")
             .field("capacity", &N)
@@ -174,53 +200,54 @@ impl<const N: usize> Default for Workspace<N> {
 }
 
 impl<const N: usize> Workspace<N> {
-    /// Working memory built on the stack (or in a `static`); about 90 bytes per cell plus
-    /// the 16.0 MB visibility cache.
+    /// Working memory with A*, built on the stack (or in a `static`); about 90 bytes per
+    /// cell plus the 16.0 MB visibility cache.
     pub const fn new() -> Self {
+        Self::with_planner(AStar::new())
+    }
+}
+
+impl<const N: usize, P: Planner<N>> Workspace<N, P> {
+    /// Working memory around `planner`, built on the stack (or in a `static`).
+    pub const fn with_planner(planner: P) -> Self {
         Self {
             field: DistanceField::new(),
-            astar: AStar::new(),
+            planner,
             stamps: [0; N],
             views: ViewCache::new(),
             frontier: FrontierWorkspace::new(),
         }
     }
 
-    /// Working memory built on the heap, whatever `N`.
+    /// Working memory built on the heap, whatever `N`, its planner all zero bytes (A*'s
+    /// empty memory).
     #[cfg(feature = "std")]
-    pub fn new_boxed() -> std::boxed::Box<Self> {
-        let field = DistanceField::<N>::new_boxed();
-        let astar = AStar::<N>::new_boxed();
-        let frontier = FrontierWorkspace::<N, MAX_FRONTIERS>::new_boxed();
-        let views = ViewCache::new_boxed();
-        let layout = std::alloc::Layout::new::<Self>();
-        // SAFETY: zeroed memory is a valid `[u32; N]`; the four other fields are copied bit
-        // for bit from their own heap boxes (plain data without drop glue, so freeing those
-        // boxes afterwards drops nothing twice).
-        unsafe {
-            let raw = std::alloc::alloc_zeroed(layout) as *mut Self;
-            if raw.is_null() {
-                std::alloc::handle_alloc_error(layout);
-            }
-            core::ptr::copy_nonoverlapping(&*field, core::ptr::addr_of_mut!((*raw).field), 1);
-            core::ptr::copy_nonoverlapping(&*astar, core::ptr::addr_of_mut!((*raw).astar), 1);
-            core::ptr::copy_nonoverlapping(&*frontier, core::ptr::addr_of_mut!((*raw).frontier), 1);
-            core::ptr::copy_nonoverlapping(&*views, core::ptr::addr_of_mut!((*raw).views), 1);
-            std::boxed::Box::from_raw(raw)
-        }
+    pub fn new_boxed() -> std::boxed::Box<Self>
+    where
+        P: bytemuck::Zeroable,
+    {
+        let mut ws = crate::heap::boxed_zeroed::<Self>();
+        ws.views
+            .set_entry_limit(crate::explore::view_cache::MAX_VIEWS);
+        ws
+    }
+
+    /// The path planner.
+    pub fn planner(&self) -> &P {
+        &self.planner
     }
 
     /// The exploration objective over this memory, and the frontier search memory.
     pub(crate) fn parts(
         &mut self,
     ) -> (
-        ExploreObjective<'_, N>,
+        ExploreObjective<'_, N, P>,
         &mut FrontierWorkspace<N, MAX_FRONTIERS>,
     ) {
         (
             ExploreObjective::with_view_cache(
                 &mut self.field,
-                &mut self.astar,
+                &mut self.planner,
                 &mut self.stamps,
                 &mut self.views,
             ),

@@ -15,6 +15,7 @@ use crate::control::sim_double::{Slip, Unicycle};
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{CellClass, GridGeometry};
 use crate::math;
+use crate::planner::{AStar, PlanError, PlannedPath, Planner, Traversability};
 use crate::random::{ProjectRng, below, chance, range_f32, seeded};
 use crate::raycast;
 use crate::sensor::{Beam, LaserConfig, Scan};
@@ -224,11 +225,12 @@ impl Bot {
     }
 }
 
-/// Several robots in one world, one shared map, stepped at 10 Hz.
-struct Sim {
+/// Several robots in one world, one shared map, stepped at 10 Hz; decisions plan their paths
+/// with `P`.
+struct Sim<P: Planner<CELLS> = AStar<CELLS>> {
     world: World,
     map: Box<SharedMap<CELLS>>,
-    ws: Box<Workspace<CELLS>>,
+    ws: Box<Workspace<CELLS, P>>,
     bots: Vec<Bot>,
     rng: ProjectRng,
     now: Time,
@@ -237,6 +239,12 @@ struct Sim {
 
 impl Sim {
     fn new(world: World, config: &MissionConfig, seed: u64) -> Self {
+        Self::with_planner(world, config, seed)
+    }
+}
+
+impl<P: Planner<CELLS> + bytemuck::Zeroable> Sim<P> {
+    fn with_planner(world: World, config: &MissionConfig, seed: u64) -> Self {
         let map = SharedMap::new_boxed(world.map_geometry(), config).unwrap();
         Self {
             world,
@@ -325,8 +333,18 @@ fn frontier_config() -> MissionConfig {
 
 /// Runs one robot until Done or `max_s`; returns the sim.
 fn explore(config: MissionConfig, slip: Slip, seed: u64, max_s: f32) -> Sim {
+    explore_with(config, slip, seed, max_s)
+}
+
+/// As [`explore`], the decisions planning their paths with `P`.
+fn explore_with<P: Planner<CELLS> + bytemuck::Zeroable>(
+    config: MissionConfig,
+    slip: Slip,
+    seed: u64,
+    max_s: f32,
+) -> Sim<P> {
     let world = two_rooms();
-    let mut sim = Sim::new(world, &config, seed);
+    let mut sim = Sim::with_planner(world, &config, seed);
     sim.add(config, Pose2::new(1.0, 1.0, 0.3), slip);
     while sim.secs() < max_s {
         sim.period();
@@ -344,7 +362,7 @@ fn explore(config: MissionConfig, slip: Slip, seed: u64, max_s: f32) -> Sim {
     sim
 }
 
-fn known_fraction(sim: &Sim) -> f32 {
+fn known_fraction<P: Planner<CELLS>>(sim: &Sim<P>) -> f32 {
     let g = *sim.map.grid.geometry();
     let free = sim.world.free_mask(&g);
     let total = free.iter().filter(|&&f| f).count();
@@ -1287,4 +1305,44 @@ fn unmapped_scans_keep_the_robot_going_and_the_map_unchanged() {
         sim.map.grid.log_odds() == before.as_slice(),
         "the map changed"
     );
+}
+
+/// A planner double: A* that counts the paths it was asked for.
+#[derive(bytemuck::Zeroable)]
+struct CountingPlanner {
+    astar: AStar<CELLS>,
+    plans: u32,
+}
+
+impl Planner<CELLS> for CountingPlanner {
+    fn plan(
+        &mut self,
+        trav: &Traversability<CELLS>,
+        start: crate::grid::Cell,
+        goal: crate::grid::Cell,
+        path: &mut [crate::grid::Cell],
+    ) -> Result<PlannedPath, PlanError> {
+        self.plans += 1;
+        self.astar.find_path(trav, start, goal, path)
+    }
+}
+
+#[test]
+fn the_mission_plans_its_paths_through_the_planner_it_is_given() {
+    // Two targets per decision: the leg from the robot comes from the distance field, the
+    // leg between the targets from the planner.
+    let config = || {
+        let mut c = MissionConfig::default();
+        c.explore.targets = 2;
+        c.explore.max_generations = 5;
+        c
+    };
+    let plain = explore(config(), Slip::thesis(), 4, 40.0);
+    let counted = explore_with::<CountingPlanner>(config(), Slip::thesis(), 4, 40.0);
+    let stats = counted.bots[0].mission.stats();
+    assert!(stats.decisions > 0, "{stats:?}");
+    assert!(counted.ws.planner().plans > 0, "{stats:?}");
+    // The double, being A*, changes nothing.
+    assert_eq!(plain.bots[0].mission.stats(), stats);
+    assert_eq!(plain.bots[0].true_pose(), counted.bots[0].true_pose());
 }

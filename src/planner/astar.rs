@@ -23,6 +23,7 @@ use crate::grid::Cell;
 
 /// An A* planner with working memory for grids of up to `N` cells.
 #[repr(transparent)]
+#[derive(bytemuck::Zeroable)]
 pub struct AStar<const N: usize> {
     memory: SearchMemory<N>,
 }
@@ -51,11 +52,8 @@ impl<const N: usize> AStar<N> {
     /// A planner built directly on the heap.
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
-        // Re-wrap the boxed memory without moving the large arrays through the stack.
-        let raw = std::boxed::Box::into_raw(SearchMemory::<N>::new_boxed()) as *mut Self;
-        // SAFETY: `AStar<N>` is `#[repr(transparent)]` over `SearchMemory<N>`, so the pointer
-        // and its allocation layout are valid for `Self`.
-        unsafe { std::boxed::Box::from_raw(raw) }
+        // All-zero memory is what `SearchMemory::new` produces.
+        crate::heap::boxed_zeroed()
     }
 
     /// Shortest path from `start` to `goal`, cells written into `path` (start first).

@@ -17,6 +17,7 @@ use crate::grid::Cell;
 pub const MAX_BOX_TABLE: usize = (1 << 20) + (1 << 12);
 
 /// Summed-area table of the blocked cells of a traversability layer.
+#[derive(bytemuck::Zeroable)]
 pub struct BlockedBoxes {
     width: usize,
     height: usize,
@@ -56,15 +57,8 @@ impl BlockedBoxes {
     /// An empty table built directly on the heap (4.2 MB).
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
-        // SAFETY: integers, a bool and an array of integers: all-zero bytes are valid.
-        unsafe {
-            let layout = std::alloc::Layout::new::<Self>();
-            let raw = std::alloc::alloc_zeroed(layout) as *mut Self;
-            if raw.is_null() {
-                std::alloc::handle_alloc_error(layout);
-            }
-            std::boxed::Box::from_raw(raw)
-        }
+        // Zero sizes, not ready: what `new` produces.
+        crate::heap::boxed_zeroed()
     }
 
     /// Counts the blocked cells of `trav`. Returns `false` (and answers no box query) if the

@@ -28,6 +28,7 @@ use super::{PlanError, PlannedPath, Planner, Traversability, path_length_m};
 use crate::grid::{Cell, GridGeometry};
 
 /// The state of a sweep: search memory, the copy of the layer it runs on and how far it got.
+#[derive(bytemuck::Zeroable)]
 struct Sweep<const N: usize> {
     memory: SearchMemory<N>,
     /// Step codes of the traversability layer at the start of the sweep.
@@ -79,12 +80,21 @@ impl<const N: usize> Sweep<N> {
 ///
 /// The queries take `&self` yet may advance a lazy sweep: the sweep state sits in an
 /// [`UnsafeCell`], so a field is not `Sync`.
+#[derive(bytemuck::Zeroable)]
 pub struct DistanceField<const N: usize> {
     sweep: UnsafeCell<Sweep<N>>,
-    /// Geometry of the current sweep; `None` before the first.
-    geometry: Option<GridGeometry>,
+    /// Geometry of the current sweep; [`NO_GEOMETRY`] (no cells) before the first.
+    geometry: GridGeometry,
     source: Cell,
 }
+
+/// The geometry of a field that has not swept: no cells, so no cell has an index.
+const NO_GEOMETRY: GridGeometry = GridGeometry {
+    width: 0,
+    height: 0,
+    resolution_m: 0.0,
+    origin: crate::geometry::Point2::new(0.0, 0.0),
+};
 
 impl<const N: usize> core::fmt::Debug for DistanceField<N> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -118,7 +128,7 @@ impl<const N: usize> DistanceField<N> {
                 reached: 0,
                 done: true,
             }),
-            geometry: None,
+            geometry: NO_GEOMETRY,
             source: Cell::new(0, 0),
         }
     }
@@ -126,21 +136,15 @@ impl<const N: usize> DistanceField<N> {
     /// An empty field built directly on the heap.
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
-        // SAFETY: the sweep (inside an `UnsafeCell`, which has the layout of its content) is
-        // integers, floats, a bool and arrays of structs of them, all valid at zero (zero
-        // reached cells, not done, no geometry: nothing is answered before a sweep starts).
-        // The all-zero pattern may not be a valid `Option`, so `geometry` is written through a
-        // raw pointer before the box is formed (GridGeometry has no drop glue, so nothing is
-        // dropped); `source` is valid at zero.
-        unsafe {
-            let layout = std::alloc::Layout::new::<Self>();
-            let raw = std::alloc::alloc_zeroed(layout) as *mut Self;
-            if raw.is_null() {
-                std::alloc::handle_alloc_error(layout);
-            }
-            core::ptr::addr_of_mut!((*raw).geometry).write(None);
-            std::boxed::Box::from_raw(raw)
-        }
+        // Zero reached cells, not done, no geometry: nothing is answered before a sweep
+        // starts.
+        crate::heap::boxed_zeroed()
+    }
+
+    /// The geometry of the current sweep; `None` before the first (or after a failed start).
+    #[inline]
+    fn swept(&self) -> Option<GridGeometry> {
+        (self.geometry.width > 0).then_some(self.geometry)
     }
 
     /// The sweep state, for reading.
@@ -174,7 +178,7 @@ impl<const N: usize> DistanceField<N> {
         trav: &Traversability<M>,
         source: Cell,
     ) -> Result<(), PlanError> {
-        self.geometry = None;
+        self.geometry = NO_GEOMETRY;
         let sweep = self.sweep.get_mut();
         sweep.reached = 0;
         sweep.done = true;
@@ -197,7 +201,7 @@ impl<const N: usize> DistanceField<N> {
         sweep
             .memory
             .start_sweep(s, sweep.width, n, DIAGONAL * trav.max_factor());
-        self.geometry = Some(*trav.geometry());
+        self.geometry = *trav.geometry();
         self.source = source;
         Ok(())
     }
@@ -232,7 +236,7 @@ impl<const N: usize> DistanceField<N> {
     /// sweep was made.
     #[inline]
     fn index(&self, cell: Cell) -> Option<usize> {
-        let i = self.geometry?.index(cell)?;
+        let i = self.swept()?.index(cell)?;
         self.settle(Some(i));
         let memory = &self.state().memory;
         memory.is_closed_in(i, memory.generation()).then_some(i)
@@ -244,7 +248,7 @@ impl<const N: usize> DistanceField<N> {
     #[inline]
     pub fn distance_to(&self, cell: Cell) -> Option<f32> {
         let i = self.index(cell)?;
-        Some(self.state().memory.g(i) * self.geometry?.resolution_m)
+        Some(self.state().memory.g(i) * self.swept()?.resolution_m)
     }
 
     /// Whether `cell` is reachable from the source.
@@ -256,7 +260,7 @@ impl<const N: usize> DistanceField<N> {
     /// The first step from the source towards `cell` (the cell itself if adjacent, the source
     /// if `cell` is the source); `None` if unreachable. O(path length).
     pub fn first_step_towards(&self, cell: Cell) -> Option<Cell> {
-        let g = self.geometry?;
+        let g = self.swept()?;
         let mut i = self.index(cell)?;
         let memory = &self.state().memory;
         let mut prev = i;
@@ -277,7 +281,7 @@ impl<const N: usize> DistanceField<N> {
             start: self.source,
             goal: cell,
         };
-        let g = self.geometry.ok_or(no_path)?;
+        let g = self.swept().ok_or(no_path)?;
         if !g.contains(cell) {
             return Err(PlanError::OutOfBounds {
                 cell,

@@ -135,7 +135,7 @@ pub trait Planner<const N: usize> {
 /// A test double: returns the two-cell path `[start, goal]` with its straight-line length,
 /// ignoring obstacles (but still checking bounds and the endpoints). For testing the layers
 /// above the planner without a map.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Zeroable)]
 pub struct StraightLinePlanner;
 
 impl<const N: usize> Planner<N> for StraightLinePlanner {

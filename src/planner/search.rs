@@ -15,7 +15,7 @@ const NO_PARENT: u32 = u32::MAX;
 
 /// Per-cell state read on every relaxation: kept to 8 bytes so that the cells a search
 /// touches stay in cache.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Zeroable)]
 struct Node {
     /// `2 * generation` when the cell was reached this query, `+ 1` once it is closed.
     stamp: u32,
@@ -23,7 +23,7 @@ struct Node {
 }
 
 /// Per-cell state written when a cell is opened or improved.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Zeroable)]
 struct Link {
     /// Parent cell times 8 plus the index in [`MOVES`] of the step from it
     /// (`NO_PARENT` for the source).
@@ -34,7 +34,7 @@ struct Link {
 
 /// Open-list links of a cell: its key and its neighbours in a bucket list of the radix heap
 /// (or in the bypass stack).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, bytemuck::Zeroable)]
 struct QLink {
     key: u32,
     next: u32,
@@ -160,6 +160,7 @@ impl<'a> StepCosts<'a> {
 /// expanded next (one of the optimisations of Sun, Yeoh, Chen & Koenig, "Simple optimization
 /// techniques for A*-based search", AAMAS 2009). It pays on open ground, where straight runs
 /// keep f constant.
+#[derive(bytemuck::Zeroable)]
 pub(crate) struct SearchMemory<const N: usize> {
     nodes: [Node; N],
     links: [Link; N],
@@ -773,35 +774,4 @@ pub(crate) fn octile(c0: usize, r0: usize, c1: usize, r1: usize) -> f32 {
     let dr = (r0 as i32 - r1 as i32).abs() as f32;
     let (lo, hi) = if dc < dr { (dc, dr) } else { (dr, dc) };
     (hi - lo) + DIAGONAL * lo
-}
-
-#[cfg(feature = "std")]
-impl<const N: usize> SearchMemory<N> {
-    /// Memory built on the heap.
-    pub(crate) fn new_boxed() -> std::boxed::Box<Self> {
-        // SAFETY: all fields are integers, floats and arrays of structs of them; all-zero is
-        // valid and is what `new` produces.
-        unsafe { boxed_zeroed() }
-    }
-}
-
-/// A `T` allocated on the heap with every byte zero, never built on the stack.
-///
-/// # Safety
-/// The all-zero bit pattern must be a valid `T`.
-#[cfg(feature = "std")]
-pub(crate) unsafe fn boxed_zeroed<T>() -> std::boxed::Box<T> {
-    let layout = std::alloc::Layout::new::<T>();
-    if layout.size() == 0 {
-        // SAFETY: a zero-sized `T` needs no memory; the caller vouches that zero is valid.
-        return unsafe { std::boxed::Box::new(core::mem::zeroed()) };
-    }
-    // SAFETY: the layout has a non-zero size.
-    let ptr = unsafe { std::alloc::alloc_zeroed(layout) } as *mut T;
-    if ptr.is_null() {
-        std::alloc::handle_alloc_error(layout);
-    }
-    // SAFETY: `ptr` was allocated by the global allocator with `T`'s layout and holds a valid
-    // `T` (all zero, valid per the caller).
-    unsafe { std::boxed::Box::from_raw(ptr) }
 }

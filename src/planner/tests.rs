@@ -497,8 +497,8 @@ fn planners_are_interchangeable() {
 fn the_bucket_queue_finds_the_radix_heap_costs_bit_for_bit() {
     use super::search::{DIAGONAL, SearchMemory, StepCosts, Zero};
     let mut rng = random::seeded(17);
-    let mut radix = SearchMemory::<CAP>::new_boxed();
-    let mut buckets = SearchMemory::<CAP>::new_boxed();
+    let mut radix = crate::heap::boxed_zeroed::<SearchMemory<CAP>>();
+    let mut buckets = crate::heap::boxed_zeroed::<SearchMemory<CAP>>();
     let mut field = DistanceField::<CAP>::new();
     let mut checked_cells = 0;
     for (case, factor) in [1.0f32, 1.0, 1.6, 2.9, 30.0, 43.0, 45.0, 250.0]

@@ -96,7 +96,7 @@ pub enum UnknownPolicy {
 
 /// The cost bands beside the blocked band (see the module documentation). A radius no larger
 /// than the robot radius leaves its band empty; [`WallBands::NONE`] has none.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Zeroable)]
 pub struct WallBands {
     /// Cells whose centre lies closer than this to an Occupied cell's centre are where the
     /// robot cannot turn in place (its swing radius plus a margin) \[m\].
@@ -213,7 +213,7 @@ impl core::error::Error for TraversabilityError {}
 /// [`Self::rebuild_from`]; then pass it as the observer of every grid update
 /// (`grid.add_evidence(i, delta, &mut trav)`) so it stays current. For benchmarks on plain
 /// blocked/passable maps, [`Self::from_blocked`] builds it without a grid or inflation.
-#[derive(Clone)]
+#[derive(Clone, bytemuck::Zeroable)]
 pub struct Traversability<const N: usize> {
     geometry: GridGeometry,
     robot_radius_m: f32,
@@ -292,13 +292,22 @@ impl<const N: usize> Traversability<N> {
         geometry: GridGeometry,
         config: TraversabilityConfig,
     ) -> Result<std::boxed::Box<Self>, TraversabilityError> {
-        // SAFETY: every field is plain data (integers, floats, a bool, arrays of them, and
-        // `GridGeometry` made of a `usize`, floats and a `Point2` of floats), for which the
-        // all-zero bit pattern is valid. `configure` and `reset_cells` then set every field.
-        let mut t: std::boxed::Box<Self> = unsafe { super::search::boxed_zeroed() };
-        t.configure(geometry, config)?;
-        t.reset_cells();
+        let mut t = crate::heap::boxed_zeroed::<Self>();
+        t.set_up_zeroed(geometry, config)?;
         Ok(t)
+    }
+
+    /// Gives an all-zero layer (as [`crate::heap::boxed_zeroed`] makes it) its geometry and
+    /// configuration: `configure` and `reset_cells` set every field.
+    #[cfg(feature = "std")]
+    pub(crate) fn set_up_zeroed(
+        &mut self,
+        geometry: GridGeometry,
+        config: TraversabilityConfig,
+    ) -> Result<(), TraversabilityError> {
+        self.configure(geometry, config)?;
+        self.reset_cells();
+        Ok(())
     }
 
     /// A layer over a plain blocked/passable map of `width` x `height` cells (resolution 1 m,

@@ -29,6 +29,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
         battery_steps: spec.battery_steps,
         start: None,
         slip: Slip::Thesis,
+        localize: false,
     })
 }
 

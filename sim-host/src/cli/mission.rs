@@ -52,9 +52,13 @@ pub struct Args {
     pub start: Option<Vec<String>>,
     /// Odometry slip of the simulated robots: thesis (a 1.5 cm slide at the end of each move,
     /// what the thesis saw), full (also heading and distance random walks, see
-    /// docs/simulator.md) or none.
+    /// docs/simulator.md), realistic (also per-robot wheel-diameter and wheelbase errors and
+    /// fast-turn slip, see sim-host/src/odometry_error.rs) or none.
     #[arg(long, default_value = "thesis")]
     pub slip: String,
+    /// Scan-to-map matching before each scan is integrated: on or off.
+    #[arg(long, default_value = "off")]
+    pub localize: String,
     /// Cell size in metres (the map file's own for .yaml).
     #[arg(long, default_value = "0.1")]
     pub resolution: String,
@@ -107,6 +111,11 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         None => None,
     };
     let slip = Slip::from_name(&args.slip)?;
+    let localize = match args.localize.as_str() {
+        "on" => true,
+        "off" => false,
+        other => return Err(format!("--localize: expected on or off, got '{other}'")),
+    };
     Ok(ScenarioSpec {
         map: args.map.clone(),
         resolution_m,
@@ -120,6 +129,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         battery_steps,
         start,
         slip,
+        localize,
     })
 }
 
@@ -180,6 +190,7 @@ mod tests {
             start: None,
             resolution: "0.1".into(),
             slip: "thesis".into(),
+            localize: "off".into(),
             json: false,
             png: None,
             frames: None,

@@ -7,6 +7,7 @@ use std::io::{self, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use crate::emulator::arcos;
 use crate::faults::Faults;
 use crate::serve::{self, ServeConfig, Server};
 
@@ -49,6 +50,36 @@ pub struct Args {
     /// command for this long on an open session the robot halts at its deceleration.
     #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u16).range(100..))]
     pub watchdog_ms: u16,
+    /// What the microcontroller presents itself as: `robot` (a robot's serial number; ARIA
+    /// then connects the laser on its own port) or `mobilesim` (serial number `SIM`, as
+    /// MobileSim: ARIA then asks for the laser over the robot link and gets it there).
+    #[arg(long, value_enum, default_value = "robot")]
+    pub identity: Identity,
+    /// The P3-DX subclass emulated: `p3dx-sh` (ARCOS, DistConvFactor 1.0) or `p3dx` (old
+    /// AROS firmware, positions in units of 0.485 mm).
+    #[arg(long, value_enum, default_value = "p3dx-sh")]
+    pub subclass: Subclass,
+}
+
+/// What `serve` presents itself as.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Identity {
+    /// A robot: a robot's serial number, the laser on its own link.
+    Robot,
+    /// MobileSim: serial number `SIM`, the laser also over the robot link.
+    #[value(name = "mobilesim")]
+    MobileSim,
+}
+
+/// The P3-DX subclass `serve` emulates.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Subclass {
+    /// `p3dx`: DistConvFactor 0.485.
+    #[value(name = "p3dx")]
+    P3dx,
+    /// `p3dx-sh`: DistConvFactor 1.0.
+    #[value(name = "p3dx-sh")]
+    P3dxSh,
 }
 
 /// Which laser `serve` emulates.
@@ -82,6 +113,14 @@ impl From<Args> for ServeConfig {
             robots: usize::from(a.robots),
             truth_log: a.truth_log,
             watchdog_ms: a.watchdog_ms,
+            identity: match a.identity {
+                Identity::Robot => arcos::Identity::Robot,
+                Identity::MobileSim => arcos::Identity::MobileSim,
+            },
+            subclass: match a.subclass {
+                Subclass::P3dx => arcos::Subclass::P3dx,
+                Subclass::P3dxSh => arcos::Subclass::P3dxSh,
+            },
         }
     }
 }

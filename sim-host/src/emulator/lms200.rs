@@ -5,10 +5,17 @@
 //! a telegram with a bad CRC or an unknown command gets NACK (0x15). Mode changes (setup with
 //! the password, continuous output, stop, baud rates) answer 0xA0 with result 0 (a wrong
 //! password: result 1); a variant (0x3B) of 100° or 180° at 1°, 0.5° or 0.25° is accepted and
-//! answered 0xBB; reset (0x10) is answered with the power-on telegram 0x90. In continuous
-//! mode, measured values (0xB0, millimetres, 13 distance bits: nothing within 8.191 m reads 0)
-//! stream at [`SCAN_RATE_HZ`]. Baud-rate changes are accepted and ignored (a pty has no baud
-//! rate).
+//! answered 0xBB; the configuration telegram (0x77) is answered 0xF7 (first byte 1 =
+//! accepted, then the configuration as set, then the status byte); reset (0x10) is answered
+//! with the power-on telegram 0x90. In continuous mode, measured values (0xB0) stream at
+//! [`SCAN_RATE_HZ`] in the configured unit and measuring mode: by default millimetres with 13
+//! distance bits (nothing within 8.191 m reads 0). Baud-rate changes are accepted and ignored
+//! (a pty has no baud rate).
+//!
+//! The configuration's layout is ARIA's LMS2xx client's (fact sheet section 3, AC:L2): blanking
+//! (2 bytes), peak/stop threshold (2), fog correction (1), measuring mode (1: 5, 3 or 1 = one,
+//! two or three reflector bits above 15, 14 or 13 distance bits), unit (1: 0 cm, 1 mm, 2 10 cm),
+//! then the contour and field settings, which the emulator keeps and echoes but does not use.
 
 use papillon::sensor::{LaserConfig, Scan};
 use papillon::units::m_to_mm;
@@ -23,6 +30,24 @@ pub const MAX_RANGE_M: f32 = 8.191;
 pub const SCAN_RATE_HZ: f64 = 10.0;
 /// Status byte of the laser's replies (no error).
 const STATUS_OK: u8 = 0x10;
+/// Bytes of the configuration telegram's data the emulator reads (up to the unit byte).
+const CONFIG_MIN_LEN: usize = 7;
+/// Offset of the measuring mode in the configuration data.
+const CONFIG_MODE: usize = 5;
+/// Offset of the unit in the configuration data.
+const CONFIG_UNIT: usize = 6;
+/// Longest range of an LMS200 in any unit \[m\].
+const LMS200_RANGE_LIMIT_M: f32 = 80.0;
+
+/// Distance bits of the measured values in a measuring mode (ARIA's codes), if known.
+fn distance_bits(mode: u8) -> Option<u32> {
+    match mode {
+        5 => Some(15),
+        3 => Some(14),
+        1 => Some(13),
+        _ => None,
+    }
+}
 
 /// The beam layout of an LMS200 with `variant`, noise-free, at the robot's centre.
 pub fn laser_config(variant: Variant) -> LaserConfig {
@@ -53,6 +78,10 @@ pub struct Lms200Emulator {
     continuous: bool,
     next_scan_s: f64,
     requests: u64,
+    unit: RangeUnit,
+    distance_bits: u32,
+    /// The last configuration accepted (0x77 data), echoed in 0xF7.
+    configuration: Option<papillon::wire::lms200::Data>,
 }
 
 impl Default for Lms200Emulator {
@@ -70,7 +99,26 @@ impl Lms200Emulator {
             continuous: false,
             next_scan_s: 0.0,
             requests: 0,
+            unit: RangeUnit::Mm,
+            distance_bits: 13,
+            configuration: None,
         }
+    }
+
+    /// The unit of the measured values.
+    pub fn unit(&self) -> RangeUnit {
+        self.unit
+    }
+
+    /// Distance bits of the measured values (13 to 15).
+    pub fn distance_bits(&self) -> u32 {
+        self.distance_bits
+    }
+
+    /// The longest range the measured values can carry \[m\].
+    pub fn max_range_m(&self) -> f32 {
+        let mask = (1u32 << self.distance_bits) - 1;
+        (mask as f32 * self.unit.mm() as f32 / 1000.0).min(LMS200_RANGE_LIMIT_M)
     }
 
     /// The current angular range and resolution.
@@ -150,6 +198,33 @@ impl Lms200Emulator {
                         status: STATUS_OK,
                     }
                 }
+                Request::Other {
+                    command: cmd::CONFIG,
+                    data,
+                } if data.len() >= CONFIG_MIN_LEN => {
+                    let unit = match data[CONFIG_UNIT] {
+                        0 => Some(RangeUnit::Cm),
+                        1 => Some(RangeUnit::Mm),
+                        2 => Some(RangeUnit::Dm),
+                        _ => None,
+                    };
+                    let bits = distance_bits(data[CONFIG_MODE]);
+                    let accepted = unit.is_some() && bits.is_some();
+                    if let (Some(unit), Some(bits)) = (unit, bits) {
+                        self.unit = unit;
+                        self.distance_bits = bits;
+                        self.configuration = Some(data.clone());
+                    }
+                    let mut reply = papillon::wire::lms200::Data::new();
+                    let _ = reply.push(u8::from(accepted));
+                    let echoed = self.configuration.as_ref().unwrap_or(&data);
+                    let _ = reply.extend_from_slice(echoed);
+                    let _ = reply.push(STATUS_OK);
+                    Response::Other {
+                        command: cmd::CONFIG_REPLY,
+                        data: reply,
+                    }
+                }
                 _ => {
                     out.push(NACK);
                     continue;
@@ -171,17 +246,23 @@ impl Lms200Emulator {
         if self.next_scan_s <= now_s {
             self.next_scan_s = now_s + period;
         }
-        let s = scan(laser_config(self.variant));
+        let mut config = laser_config(self.variant);
+        config.max_range_m = self.max_range_m();
+        let s = scan(config);
+        let mask = ((1u32 << self.distance_bits) - 1) as u16;
+        let unit_mm = self.unit.mm() as f32;
         let mut values = MeasuredValues {
-            unit: RangeUnit::Mm,
+            unit: self.unit,
             flags: 0,
             values: Default::default(),
             status: STATUS_OK,
         };
         for beam in s.beams() {
-            let mm = beam.range_m.map_or(0, |r| m_to_mm(r).round() as u16);
+            let v = beam.range_m.map_or(0, |r| {
+                (m_to_mm(r) / unit_mm).round().clamp(0.0, f32::from(mask)) as u16
+            });
             // The variant was checked against MAX_VALUES, so this cannot overflow.
-            let _ = values.values.push(mm & 0x1FFF);
+            let _ = values.values.push(v & mask);
         }
         emit(out, &Response::MeasuredValues(values));
     }

@@ -104,6 +104,10 @@ impl CoverageCounter {
         self.count = self.count + now_known - was_known;
     }
 
+    pub(super) fn truth(&self) -> &Truth {
+        &self.truth
+    }
+
     pub(super) fn coverage(&self) -> f32 {
         if self.truth.is_empty() {
             0.0

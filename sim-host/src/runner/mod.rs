@@ -32,6 +32,8 @@ use papillon::sensor::Scan;
 
 use crate::dynamic::Dynamics;
 use crate::laser::LaserSim;
+use crate::localization_report::LocalizationReport;
+use crate::map_accuracy;
 use crate::physics::{Disc, RobotBody, advance_all};
 use crate::placement::start_poses;
 use crate::render::Track;
@@ -358,9 +360,11 @@ impl Runner {
                     .true_pose()
                     .position()
                     .distance(rb.mission.pose_map().position());
+                rep.localization = LocalizationReport::of(body, &rb.mission);
                 rep
             })
             .collect();
+        r.map_accuracy = map_accuracy::measure(&self.map.grid, &self.world, self.coverage.truth());
         r
     }
 

@@ -99,6 +99,8 @@ pub struct RobotReport {
     pub final_pose: Pose2,
     /// Final distance between the true and the estimated position \[m\].
     pub pose_error_m: f32,
+    /// Final poses and pose errors of the estimate and of the raw odometry.
+    pub localization: crate::localization_report::LocalizationReport,
 }
 
 /// What the run did.
@@ -125,6 +127,8 @@ pub struct RunReport {
     pub coverage_time_curve: Vec<(f64, f32)>,
     /// Decisions, replans, yields, faults and ends, in order.
     pub events: Vec<LoggedEvent>,
+    /// The final map against the truth.
+    pub map_accuracy: crate::map_accuracy::MapAccuracy,
 }
 
 impl RunReport {

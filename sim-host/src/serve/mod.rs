@@ -33,6 +33,7 @@ use std::time::{Duration, Instant};
 
 use papillon::sensor::{LaserConfig, Scan};
 
+use crate::emulator::arcos::{Identity, Subclass};
 use crate::faults::Faults;
 use crate::laser::LaserSim;
 use crate::physics::{BodyConfig, Disc, RobotBody, SlipConfig, advance_all};
@@ -84,6 +85,10 @@ pub struct ServeConfig {
     pub truth_log: Option<PathBuf>,
     /// The emulated firmware's watchdog \[ms\].
     pub watchdog_ms: u16,
+    /// What the microcontroller presents itself as (a robot, or MobileSim).
+    pub identity: Identity,
+    /// The P3-DX subclass emulated (its name and DistConvFactor).
+    pub subclass: Subclass,
 }
 
 /// An endpoint the server opened, for the announcement line.
@@ -100,6 +105,11 @@ pub struct Endpoint {
 struct Sim {
     world: World,
     watchdog_ms: u16,
+    identity: Identity,
+    subclass: Subclass,
+    /// Per robot: whether a client owns its microcontroller (one client at a time, as a
+    /// serial port has one owner and AMRISim answers one client).
+    owned: Vec<AtomicBool>,
     bodies: Mutex<Vec<RobotBody>>,
     start: Instant,
     seed: u64,
@@ -116,6 +126,18 @@ impl Sim {
 
     fn stopped(&self) -> bool {
         self.stop.load(Ordering::SeqCst)
+    }
+
+    /// Claims robot `robot`'s microcontroller for one client; false if another has it.
+    fn claim(&self, robot: usize) -> bool {
+        self.owned[robot]
+            .compare_exchange(false, true, Ordering::SeqCst, Ordering::SeqCst)
+            .is_ok()
+    }
+
+    /// Gives robot `robot`'s microcontroller back.
+    fn release(&self, robot: usize) {
+        self.owned[robot].store(false, Ordering::SeqCst);
     }
 
     fn bodies(&self) -> MutexGuard<'_, Vec<RobotBody>> {
@@ -172,11 +194,19 @@ impl Server {
             .map_err(|e| format!("{e} in map {:?}", world.name()))?
             .into_iter()
             .enumerate()
-            .map(|(i, pose)| RobotBody::new(body, pose, config.seed.wrapping_add(i as u64)))
+            .map(|(i, pose)| {
+                let mut b = RobotBody::new(body, pose, config.seed.wrapping_add(i as u64));
+                // The motors are disabled at power-on until a client enables them.
+                b.set_motors_enabled(false);
+                b
+            })
             .collect();
         let sim = Arc::new(Sim {
             world,
             watchdog_ms: config.watchdog_ms,
+            identity: config.identity,
+            subclass: config.subclass,
+            owned: (0..n).map(|_| AtomicBool::new(false)).collect(),
             bodies: Mutex::new(bodies),
             start: Instant::now(),
             seed: config.seed,

@@ -1,8 +1,14 @@
 //! The endpoint threads of the server: one ARCOS session or laser stream per client, each a
 //! sans-IO emulator ([`crate::emulator`]) driven by a loop that reads what the client sent
-//! (polling every [`POLL_MS`] ms when idle), hands it to the emulator with the server's clock
-//! and its robot's body, passes the reply through the fault injectors ([`crate::faults`]) and
-//! writes it back.
+//! (waiting at most [`POLL_MS`] ms, and never past the next status packet's deadline, so status
+//! packets leave on their cycle however long the work took), hands it to the emulator with the
+//! server's clock and its robot's body, passes the reply through the fault injectors
+//! ([`crate::faults`]) and writes it back.
+//!
+//! A robot's microcontroller has one client at a time: a TCP client holds it for its whole
+//! connection, the pty from its SYNC to its CLOSE. A second TCP client is refused (its
+//! connection closed at once, and the refusal logged on stderr) and the first keeps control;
+//! bytes on the pty while a TCP client holds the robot are ignored.
 
 use std::io::{self, Read, Write};
 use std::net::{TcpListener, TcpStream};
@@ -14,7 +20,7 @@ use std::time::Duration;
 use papillon::random::{self, ProjectRng};
 
 use super::{ROBOT_NAME, Sim};
-use crate::emulator::arcos::ArcosEmulator;
+use crate::emulator::arcos::{ArcosEmulator, Link};
 use crate::emulator::lms1xx::Lms1xxEmulator;
 use crate::emulator::lms200::Lms200Emulator;
 use crate::faults::DelayLine;
@@ -41,24 +47,71 @@ pub(super) fn arcos_on_pty(sim: &Sim, robot: usize, master: &mut std::fs::File) 
     serve_arcos(sim, robot, master, false);
 }
 
-pub(super) fn serve_arcos_tcp(sim: &Sim, robot: usize, mut stream: TcpStream) {
+pub(super) fn serve_arcos_tcp(sim: &Sim, robot: usize, stream: TcpStream) {
     if sim.faults.link_cut(sim.now_s()) {
         return; // the cable is out: the connection drops at once
     }
+    let peer = stream
+        .peer_addr()
+        .map_or_else(|_| "?".to_string(), |a| a.to_string());
+    if !sim.claim(robot) {
+        eprintln!(
+            "papillon-sim serve: robot {robot}: refused ARCOS client {peer}: another client has \
+             the robot (one client at a time)"
+        );
+        return; // dropping the stream closes the connection
+    }
     let _ = stream.set_nodelay(true);
-    if stream
-        .set_read_timeout(Some(Duration::from_millis(POLL_MS)))
-        .is_ok()
-    {
-        serve_arcos(sim, robot, &mut stream, true);
+    serve_arcos(sim, robot, &mut Tcp(stream), true);
+    sim.release(robot);
+}
+
+/// A TCP stream whose reads wait until a deadline.
+struct Tcp(TcpStream);
+
+impl Read for Tcp {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        self.0.read(buf)
+    }
+}
+
+impl Write for Tcp {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.0.write(buf)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.0.flush()
+    }
+}
+
+/// A link the session loop can wait on until a deadline.
+trait Wait {
+    /// Makes the next read wait at most `wait` (a TCP read timeout); returns false if reads
+    /// do not wait (a non-blocking pty), so the loop sleeps instead.
+    fn wait_at_most(&mut self, wait: Duration) -> bool;
+}
+
+impl Wait for Tcp {
+    fn wait_at_most(&mut self, wait: Duration) -> bool {
+        self.0.set_read_timeout(Some(wait)).is_ok()
+    }
+}
+
+impl Wait for std::fs::File {
+    fn wait_at_most(&mut self, _: Duration) -> bool {
+        false
     }
 }
 
 /// Runs an ARCOS session for robot `robot` over `io` (reads time out or would block when
 /// idle) until EOF; a dropped link stops the robot and disables its motors. A TCP link
 /// (`drops_on_cut`) is closed when a `cut` fault begins; a serial line just goes silent.
-fn serve_arcos(sim: &Sim, robot: usize, io: &mut (impl Read + Write), drops_on_cut: bool) {
-    let mut emu = ArcosEmulator::new(ROBOT_NAME).with_watchdog_ms(sim.watchdog_ms);
+fn serve_arcos(sim: &Sim, robot: usize, io: &mut (impl Read + Write + Wait), drops_on_cut: bool) {
+    let mut emu = ArcosEmulator::new(ROBOT_NAME)
+        .with_watchdog_ms(sim.watchdog_ms)
+        .with_identity(sim.identity)
+        .with_subclass(sim.subclass);
     let link = sim.links.fetch_add(1, Ordering::SeqCst);
     let mut rng = random::seeded(sim.seed ^ (link + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
     arcos_session(sim, robot, io, &mut emu, &mut rng, drops_on_cut);
@@ -68,7 +121,7 @@ fn serve_arcos(sim: &Sim, robot: usize, io: &mut (impl Read + Write), drops_on_c
 fn arcos_session(
     sim: &Sim,
     robot: usize,
-    io: &mut (impl Read + Write),
+    io: &mut (impl Read + Write + Wait),
     emu: &mut ArcosEmulator,
     rng: &mut ProjectRng,
     drops_on_cut: bool,
@@ -77,8 +130,17 @@ fn arcos_session(
     let mut out = Vec::new();
     let mut send = Vec::new();
     let mut line = DelayLine::default();
+    // Over TCP the claim is the caller's, for the whole connection; on a pty it is taken at
+    // the client's first bytes and given back when its session closes.
+    let claims_per_session = !drops_on_cut;
+    let mut holding = !claims_per_session;
+    let mut refused_logged = false;
+    let mut opened = false;
     while !sim.stopped() {
-        let n = match io.read(&mut buf) {
+        // Wait for input, but not past the next status packet.
+        let wait_s = (emu.next_sip_s() - sim.now_s()).clamp(0.0002, POLL_MS as f64 / 1000.0);
+        let waits = io.wait_at_most(Duration::from_secs_f64(wait_s));
+        let mut n = match io.read(&mut buf) {
             Ok(0) => return,
             Ok(n) => n,
             Err(e) if is_idle(&e) => 0,
@@ -87,6 +149,19 @@ fn arcos_session(
                 0
             }
         };
+        if n > 0 && !holding {
+            holding = sim.claim(robot);
+            if !holding {
+                if !refused_logged {
+                    eprintln!(
+                        "papillon-sim serve: robot {robot}: ignoring the serial line: another \
+                         client has the robot (one client at a time)"
+                    );
+                    refused_logged = true;
+                }
+                n = 0;
+            }
+        }
         let now = sim.now_s();
         let cut = sim.faults.link_cut(now);
         if cut && drops_on_cut {
@@ -99,6 +174,17 @@ fn arcos_session(
                 emu.receive(now, &buf[..n], body, &mut out);
             }
             emu.tick(now, &sim.world, body, &mut out);
+        }
+        if let Some(config) = emu.sim_laser_due() {
+            let scan = sim.scan(robot, config);
+            emu.sim_laser_packets(&scan, &sim.bodies()[robot], &mut out);
+        }
+        opened |= emu.link() == Link::Open;
+        if claims_per_session && holding && opened && emu.link() == Link::Idle {
+            sim.release(robot);
+            holding = false;
+            opened = false;
+            refused_logged = false;
         }
         if cut {
             // The firmware runs on (its watchdog halts the robot), but nothing gets through.
@@ -115,9 +201,14 @@ fn arcos_session(
             }
             send.clear();
         }
-        if n == 0 {
-            thread::sleep(Duration::from_millis(POLL_MS));
+        if n == 0 && !waits {
+            // A non-blocking line: sleep until input may have come or a status packet is due.
+            let wait_s = (emu.next_sip_s() - sim.now_s()).clamp(0.0, POLL_MS as f64 / 1000.0);
+            thread::sleep(Duration::from_secs_f64(wait_s));
         }
+    }
+    if claims_per_session && holding {
+        sim.release(robot);
     }
 }
 

@@ -20,7 +20,7 @@
 //!    0.5 m (10 %), 0.6 m (15 %), 0.7 m (20 %), 0.8 m (30 %), 0.9 m (25 %); a closet's door is
 //!    0.5 or 0.6 m. Doors keep jambs of at least 0.2 m.
 //! 3. **Furniture.** Blocks (beds, tables, desks, sofas, shelves, pillars) stand against a wall
-//!    or at least 0.5 m from every wall and every other block, and at least 1 m from a door.
+//!    or at least 0.5 m from every wall and every other block, and at least 1.5 m from a door.
 //!    Shelf rows and table grids leave aisles of 0.5–1.0 m (uniform in 0.1 m steps); the end of
 //!    a shelf row either touches a wall (a dead-end aisle) or leaves 0.8–1.2 m to it.
 //! 4. **Check.** [`Reach`] flood-fills the poses of a P3-DX footprint (0.455 m x 0.381 m,

@@ -9,14 +9,15 @@ use core::time::Duration;
 use crate::control::Time;
 use crate::control::command::MotionCommand;
 use crate::control::follower::{Controller, FollowStatus, MAX_WAYPOINTS};
-use crate::explore::{CandidateStatus, DecisionRequest, ExploreConfig};
+use crate::explore::{CandidateStatus, ExploreConfig};
 use crate::geometry::Point2;
 use crate::grid::{Cell, CellClass};
 use crate::math;
+use crate::planner::Planner;
 
 use super::super::shared::{RobotMark, SharedMap, Workspace};
-use super::super::{MissionEvent, MissionState, ReplanCause};
-use super::{Events, Mission, RETRY_S, secs};
+use super::super::{MissionEvent, ReplanCause};
+use super::{Events, Mission, Phase, RETRY_S, secs};
 
 /// An obstacle this close to another robot's mark is that robot \[m\].
 pub(super) const ROBOT_MATCH_M: f32 = 0.8;
@@ -57,7 +58,7 @@ pub(super) enum Yield {
 impl<const N: usize> Mission<N> {
     /// Which other robot, if any, stands at map point `p`.
     pub(super) fn robot_at(&self, map: &SharedMap<N>, now: Time, p: Point2) -> Option<u8> {
-        map.robots
+        map.robots()
             .iter()
             .filter(|m| m.id != self.id && now.saturating_since(m.time) <= MARK_MAX_AGE)
             .find(|m| m.pose.position().distance(p) <= ROBOT_MATCH_M)
@@ -67,13 +68,14 @@ impl<const N: usize> Mission<N> {
     /// Another robot whose mark lies on the way from here along the last path (or straight
     /// to the targets).
     pub(super) fn robot_on_way(&self, map: &SharedMap<N>, now: Time) -> Option<u8> {
-        let here = self.pose_map.position();
-        let way: &[Point2] = if self.last_path.is_empty() {
-            &self.targets
+        let here = self.senses.pose_map.position();
+        let e = &self.errand;
+        let way: &[Point2] = if e.last_path.is_empty() {
+            &e.targets
         } else {
-            &self.last_path
+            &e.last_path
         };
-        map.robots
+        map.robots()
             .iter()
             .filter(|m| m.id != self.id && now.saturating_since(m.time) <= MARK_MAX_AGE)
             .find(|m| {
@@ -91,7 +93,7 @@ impl<const N: usize> Mission<N> {
 
     /// Waits for robot `other` to step aside, retrying the plan every second.
     pub(super) fn hold_for(&mut self, now: Time, other: u8, events: &mut Events<'_>) {
-        self.yielding = Some(Yield::Holding {
+        self.phase = Phase::Yielding(Yield::Holding {
             other,
             retry_at: now + secs(RETRY_S),
             give_up_at: now + secs(4.0 * self.config.yield_wait_s + 10.0),
@@ -99,7 +101,6 @@ impl<const N: usize> Mission<N> {
         events.push(MissionEvent::Yielding {
             to_robot_ahead: true,
         });
-        self.state = MissionState::Yielding;
     }
 
     /// Another robot blocks the way: the higher id waits, the lower replans at once.
@@ -107,17 +108,16 @@ impl<const N: usize> Mission<N> {
         self.remember_path();
         self.follower.clear();
         self.ahead = None;
-        self.conflict_robot = Some(other);
+        self.errand.conflict = Some(other);
         if self.id > other {
             events.stats.yields += 1;
             events.push(MissionEvent::Yielding {
                 to_robot_ahead: true,
             });
-            self.yielding = Some(Yield::Waiting {
+            self.phase = Phase::Yielding(Yield::Waiting {
                 other,
                 until: now + secs(self.config.yield_wait_s),
             });
-            self.state = MissionState::Yielding;
         } else {
             self.enter_replanning(ReplanCause::Robot);
         }
@@ -131,10 +131,10 @@ impl<const N: usize> Mission<N> {
         let r = self.config.safety.footprint.radius_m + 0.5 * geom.resolution_m;
         let span = math::ceil(r / geom.resolution_m) as i32;
         let weak_free = self.config.sensor.free_log_odds;
-        let here = self.pose_map.position();
+        let here = self.senses.pose_map.position();
         // Never the current body: the other robots must keep seeing it.
         let keep = r + geom.resolution_m;
-        for p in self.trail.iter().copied() {
+        for p in self.senses.trail.iter().copied() {
             if p.distance(here) < r {
                 continue;
             }
@@ -168,7 +168,7 @@ impl<const N: usize> Mission<N> {
         let geom = *map.grid.geometry();
         let r = self.config.safety.footprint.radius_m + BODY_MARGIN_M;
         let span = math::ceil(r / geom.resolution_m) as i32;
-        let here = self.pose_map.position();
+        let here = self.senses.pose_map.position();
         let c = geom.cell_at_unchecked(here);
         let weak_free = self.config.sensor.free_log_odds;
         for row in c.row - span..=c.row + span {
@@ -201,7 +201,7 @@ impl<const N: usize> Mission<N> {
         let geom = *map.grid.geometry();
         let r = self.config.safety.footprint.radius_m;
         let span = math::ceil(r / geom.resolution_m) as i32;
-        let here = self.pose_map.position();
+        let here = self.senses.pose_map.position();
         let occupied = map.grid.bounds().max;
         // What the bumpers found lately, across the bumper's width.
         for &(a, b, until) in &self.contacts {
@@ -224,8 +224,8 @@ impl<const N: usize> Mission<N> {
                 map.grid.set_log_odds(i, occupied, &mut map.trav);
             }
         }
-        for k in 0..map.robots.len() {
-            let m = &map.robots[k];
+        for k in 0..map.robots().len() {
+            let m = &map.robots()[k];
             let p = m.pose.position();
             if m.id == self.id
                 || now.saturating_since(m.time) > MARK_MAX_AGE
@@ -253,29 +253,27 @@ impl<const N: usize> Mission<N> {
     }
 
     /// One period of yielding; `None` when the state changed and the machine should go on.
-    pub(super) fn yield_step(
+    pub(super) fn yield_step<P: Planner<N>>(
         &mut self,
         now: Time,
+        y: Yield,
         map: &mut SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
         events: &mut Events<'_>,
     ) -> Option<MotionCommand> {
-        let Some(y) = self.yielding else {
-            self.enter_replanning(ReplanCause::Robot);
-            return None;
-        };
+        let pose = self.senses.pose_map;
         match y {
             Yield::Waiting { other, until } => {
                 if now < until {
                     return Some(MotionCommand::ZERO);
                 }
                 // Around the other robot, if there is a way.
-                if let Ok(waypoints) = self.plan_to(self.pose_map, &self.targets.clone(), map, ws)
-                    && !self.targets.is_empty()
+                let targets = self.errand.targets.clone();
+                if let Ok(waypoints) = self.plan_to(pose, &targets, map, ws)
+                    && !targets.is_empty()
                     && self.start_path(now, &waypoints)
                 {
-                    self.yielding = None;
-                    self.conflict_robot = None;
+                    self.errand.conflict = None;
                     events.stats.replans += 1;
                     events.push(MissionEvent::Replanned {
                         cause: ReplanCause::Robot,
@@ -287,8 +285,7 @@ impl<const N: usize> Mission<N> {
                 let aside = mark.and_then(|m| self.place_aside(&m, map, ws));
                 match aside {
                     Some(waypoints) if self.start_path(now, &waypoints) => {
-                        self.state = MissionState::Yielding;
-                        self.yielding = Some(Yield::SteppingAside { other, since: now });
+                        self.phase = Phase::Yielding(Yield::SteppingAside { other, since: now });
                         events.push(MissionEvent::Yielding {
                             to_robot_ahead: false,
                         });
@@ -296,12 +293,11 @@ impl<const N: usize> Mission<N> {
                     }
                     _ => {
                         // Nowhere to go: wait some more, the other robot may move.
-                        self.yielding = Some(Yield::Waiting {
+                        self.phase = Phase::Yielding(Yield::Waiting {
                             other,
                             until: now + secs(self.config.yield_wait_s),
                         });
                         if self.count_replan() {
-                            self.yielding = None;
                             self.abandon(map, events);
                             return None;
                         }
@@ -310,18 +306,18 @@ impl<const N: usize> Mission<N> {
                 }
             }
             Yield::SteppingAside { other, since } => {
-                let (cmd, status) = self.follower.update(now, self.pose_map);
+                let (cmd, status) = self.follower.update(now, pose);
                 let timeout = secs(self.config.stuck_timeout_s);
                 if status == FollowStatus::Arrived || now.saturating_since(since) > timeout {
                     self.follower.clear();
-                    self.yielding = Some(Yield::Clearing { other, since: now });
+                    self.phase = Phase::Yielding(Yield::Clearing { other, since: now });
                     return Some(MotionCommand::ZERO);
                 }
                 Some(cmd)
             }
             Yield::Clearing { other, since } => {
                 let passed = map.robot(other).is_none_or(|m| {
-                    let here = self.pose_map.position();
+                    let here = self.senses.pose_map.position();
                     m.pose.position().distance(here) >= ASIDE_DISTANCE_M
                         && distance_to_path(here, m) >= ASIDE_CLEARANCE_M
                 });
@@ -330,8 +326,7 @@ impl<const N: usize> Mission<N> {
                 if (passed && now.saturating_since(since) > secs(self.config.yield_wait_s))
                     || timeout
                 {
-                    self.yielding = None;
-                    self.replans_this_decision = 0;
+                    self.errand.replans = 0;
                     self.enter_replanning(ReplanCause::Robot);
                     return None;
                 }
@@ -343,18 +338,16 @@ impl<const N: usize> Mission<N> {
                 give_up_at,
             } => {
                 if now >= give_up_at {
-                    self.yielding = None;
                     self.abandon(map, events);
                     return None;
                 }
                 if now < retry_at {
                     return Some(MotionCommand::ZERO);
                 }
-                let targets = self.targets.clone();
-                match self.plan_to(self.pose_map, &targets, map, ws) {
+                let targets = self.errand.targets.clone();
+                match self.plan_to(pose, &targets, map, ws) {
                     Ok(waypoints) if self.start_path(now, &waypoints) => {
-                        self.yielding = None;
-                        self.conflict_robot = None;
+                        self.errand.conflict = None;
                         events.stats.replans += 1;
                         events.push(MissionEvent::Replanned {
                             cause: ReplanCause::Robot,
@@ -362,7 +355,7 @@ impl<const N: usize> Mission<N> {
                         None
                     }
                     _ => {
-                        self.yielding = Some(Yield::Holding {
+                        self.phase = Phase::Yielding(Yield::Holding {
                             other,
                             retry_at: now + secs(RETRY_S),
                             give_up_at,
@@ -376,20 +369,13 @@ impl<const N: usize> Mission<N> {
 
     /// A path to the nearest reachable place out of `other`'s way: at least
     /// `ASIDE_CLEARANCE_M` from its remaining path and `ASIDE_DISTANCE_M` from it.
-    pub(super) fn place_aside(
+    pub(super) fn place_aside<P: Planner<N>>(
         &self,
         other: &RobotMark,
         map: &SharedMap<N>,
-        ws: &mut Workspace<N>,
+        ws: &mut Workspace<N, P>,
     ) -> Option<heapless::Vec<Point2, MAX_WAYPOINTS>> {
-        let start = self.start_pose(map, self.pose_map);
-        let req = DecisionRequest {
-            grid: &map.grid,
-            trav: &map.trav,
-            pose: start,
-            battery_steps: self.battery_steps,
-            laser: &self.config.laser,
-        };
+        let req = self.request(map, self.senses.pose_map);
         let config = ExploreConfig {
             targets: 1,
             reserve_steps: 0.0,
@@ -429,7 +415,7 @@ impl<const N: usize> Mission<N> {
 pub(super) fn distance_to_path(p: Point2, other: &RobotMark) -> f32 {
     let mut best = p.distance(other.pose.position());
     let mut a = other.pose.position();
-    for &b in &other.path {
+    for &b in other.path() {
         best = best.min(distance_to_segment(p, a, b));
         a = b;
     }

@@ -1,0 +1,315 @@
+//! The semantic checks of a board file: each problem reported with its JSON path.
+
+use super::*;
+
+impl BoardConfig {
+    /// Checks every semantic constraint and calls `report(path, problem)` once per problem,
+    /// with `path` a JSON path such as `$.mission.population`. Returns the number of problems.
+    pub fn validate(&self, mut report: impl FnMut(&str, &str)) -> usize {
+        let mut count = 0usize;
+        let mut r = |path: &str, problem: &str| {
+            count += 1;
+            report(path, problem);
+        };
+        self.validate_robot(&mut r);
+        self.validate_link(&mut r);
+        self.validate_laser(&mut r);
+        self.validate_grid(&mut r);
+        self.validate_mission(&mut r);
+        self.validate_pid(&mut r);
+        self.validate_safety(&mut r);
+        if !positive(self.persistence.save_every_s) {
+            r(
+                "$.persistence.save_every_s",
+                "must be a positive number of seconds",
+            );
+        }
+        count
+    }
+
+    fn validate_robot(&self, r: &mut impl FnMut(&str, &str)) {
+        let robot = &self.robot;
+        if robot.name.is_empty() {
+            r("$.robot.name", "must not be empty");
+        }
+        if !KNOWN_SUBCLASSES
+            .iter()
+            .any(|k| k.eq_ignore_ascii_case(&robot.subclass))
+        {
+            r(
+                "$.robot.subclass",
+                "unknown P3-DX subclass; expected one of p3dx, p3dx-sh, p3dx-sh-lms1xx, p3dx-sh-lms500",
+            );
+        }
+        if !(positive(robot.radius_m) && robot.radius_m <= 1.0) {
+            r("$.robot.radius_m", "must be in (0, 1] m");
+        }
+        if !(positive(robot.max_speed_mm_s) && robot.max_speed_mm_s <= P3DX_MAX_SPEED_MM_S) {
+            r(
+                "$.robot.max_speed_mm_s",
+                "must be in (0, 2200] mm/s (the P3-DX absolute limit)",
+            );
+        }
+        if !(positive(robot.max_turn_rate_deg_s)
+            && robot.max_turn_rate_deg_s <= P3DX_MAX_TURN_RATE_DEG_S)
+        {
+            r(
+                "$.robot.max_turn_rate_deg_s",
+                "must be in (0, 500] deg/s (the P3-DX absolute limit)",
+            );
+        }
+        for (path, v) in [
+            ("$.robot.accel_mm_s2", robot.accel_mm_s2),
+            ("$.robot.decel_mm_s2", robot.decel_mm_s2),
+            ("$.robot.rot_accel_deg_s2", robot.rot_accel_deg_s2),
+        ] {
+            if !(positive(v) && v <= i16::MAX as f32) {
+                r(path, "must be in (0, 32767] (an ARCOS integer argument)");
+            }
+        }
+    }
+
+    fn validate_link(&self, r: &mut impl FnMut(&str, &str)) {
+        let link = &self.link;
+        match &link.tcp {
+            Some(tcp) => {
+                if !is_host_port(tcp) {
+                    r("$.link.tcp", "must be host:port with a port in 1..=65535");
+                }
+            }
+            None => {
+                if link.port.is_empty() {
+                    r(
+                        "$.link.port",
+                        "must name a serial device when no tcp is given",
+                    );
+                }
+            }
+        }
+        if !ARCOS_BAUD_RATES.contains(&link.baud) {
+            r(
+                "$.link.baud",
+                "must be one of 9600, 19200, 38400, 57600, 115200",
+            );
+        }
+        if !ARCOS_BAUD_RATES.contains(&link.switch_to_baud) {
+            r(
+                "$.link.switch_to_baud",
+                "must be one of 9600, 19200, 38400, 57600, 115200",
+            );
+        }
+    }
+
+    fn validate_laser(&self, r: &mut impl FnMut(&str, &str)) {
+        let laser = &self.laser;
+        match LaserModel::from_name(&laser.model) {
+            None => r("$.laser.model", "must be \"lms1xx\" or \"lms200\""),
+            Some(LaserModel::Lms1xx) => match &laser.address {
+                Some(a) if is_host_port(a) => {}
+                Some(_) => r(
+                    "$.laser.address",
+                    "must be host:port with a port in 1..=65535",
+                ),
+                None => r("$.laser.address", "an lms1xx needs a TCP address host:port"),
+            },
+            Some(LaserModel::Lms200) => {
+                match &laser.port {
+                    Some(p) if !p.is_empty() => {}
+                    _ => r("$.laser.port", "an lms200 needs a serial device"),
+                }
+                if let Some(b) = laser.baud
+                    && !LMS200_BAUD_RATES.contains(&b)
+                {
+                    r("$.laser.baud", "must be one of 9600, 19200, 38400");
+                }
+            }
+        }
+        let count_ok = laser.beam_count >= 2 && laser.beam_count as usize <= MAX_BEAMS;
+        if !count_ok {
+            r("$.laser.beam_count", "must be in 2..=1081 beams");
+        }
+        if !(laser.first_angle_deg.is_finite() && math::abs(laser.first_angle_deg) <= 180.0) {
+            r("$.laser.first_angle_deg", "must be in [-180, 180] deg");
+        }
+        if !positive(laser.step_deg) {
+            r("$.laser.step_deg", "must be a positive angle in degrees");
+        } else if count_ok && (laser.beam_count - 1) as f32 * laser.step_deg > 360.0 {
+            r(
+                "$.laser.step_deg",
+                "beam_count and step_deg span more than 360 deg",
+            );
+        }
+        if !(laser.min_range_m.is_finite() && laser.min_range_m >= 0.0) {
+            r("$.laser.min_range_m", "must be zero or positive [m]");
+        }
+        if !positive(laser.max_range_m) {
+            r("$.laser.max_range_m", "must be a positive range [m]");
+        } else if laser.min_range_m >= laser.max_range_m {
+            r("$.laser.max_range_m", "must be larger than min_range_m");
+        }
+        if !(laser.noise_fraction.is_finite()
+            && laser.noise_fraction >= 0.0
+            && laser.noise_fraction < 1.0)
+        {
+            r("$.laser.noise_fraction", "must be in [0, 1)");
+        }
+        if !positive(laser.rate_hz) {
+            r("$.laser.rate_hz", "must be a positive rate [Hz]");
+        }
+        let m = &laser.mount;
+        for (path, v) in [("$.laser.mount.x_m", m.x_m), ("$.laser.mount.y_m", m.y_m)] {
+            if !(v.is_finite() && math::abs(v) <= 1.0) {
+                r(path, "must be within 1 m of the robot's centre");
+            }
+        }
+        if !(m.theta_deg.is_finite() && math::abs(m.theta_deg) <= 180.0) {
+            r("$.laser.mount.theta_deg", "must be in [-180, 180] deg");
+        }
+    }
+
+    fn validate_grid(&self, r: &mut impl FnMut(&str, &str)) {
+        let g = &self.grid;
+        let mut sizes_ok = true;
+        for (path, v) in [
+            ("$.grid.width_m", g.width_m),
+            ("$.grid.height_m", g.height_m),
+        ] {
+            if !positive(v) {
+                r(path, "must be a positive size [m]");
+                sizes_ok = false;
+            }
+        }
+        if !positive(g.resolution_m) {
+            r("$.grid.resolution_m", "must be a positive cell size [m]");
+            sizes_ok = false;
+        }
+        if sizes_ok {
+            let (cols, rows) = g.size_cells();
+            if cols.saturating_mul(rows) > DEFAULT_CELL_CAPACITY {
+                r(
+                    "$.grid",
+                    "width_m x height_m at resolution_m needs more cells than the grid holds (150000)",
+                );
+            }
+            if positive(self.robot.radius_m) && g.resolution_m > self.robot.radius_m {
+                r(
+                    "$.grid.resolution_m",
+                    "cells larger than the robot's radius cannot represent passages",
+                );
+            }
+        }
+        for (path, v) in [
+            ("$.grid.origin_x_m", g.origin_x_m),
+            ("$.grid.origin_y_m", g.origin_y_m),
+        ] {
+            if !v.is_finite() {
+                r(path, "must be a finite coordinate [m]");
+            }
+        }
+        if sizes_ok
+            && g.origin_x_m.is_finite()
+            && g.origin_y_m.is_finite()
+            && !(g.origin_x_m <= 0.0
+                && g.origin_y_m <= 0.0
+                && g.origin_x_m + g.width_m > 0.0
+                && g.origin_y_m + g.height_m > 0.0)
+        {
+            r(
+                "$.grid",
+                "the start pose (0, 0) must lie inside the grid: origin must be <= 0 and origin + size > 0",
+            );
+        }
+    }
+
+    fn validate_mission(&self, r: &mut impl FnMut(&str, &str)) {
+        let m = &self.mission;
+        if !KNOWN_METHODS.contains(&m.method.as_str()) {
+            r(
+                "$.mission.method",
+                "unknown method; expected one of xboa, boa, mboa, aboa, saboa, ga, pso, gwo, abc, cmaes, nearest-frontier, frontier-utility",
+            );
+        }
+        if !(2..=MAX_POPULATION).contains(&m.population) {
+            r("$.mission.population", "must be in 2..=64");
+        }
+        if m.generations == 0 {
+            r("$.mission.generations", "must be at least 1");
+        }
+        if Strategy::from_name(&m.strategy).is_none() {
+            r("$.mission.strategy", "must be \"short\" or \"long\"");
+        }
+        if m.targets == 0 {
+            r("$.mission.targets", "must be at least 1");
+        }
+        if !positive(m.battery_steps) {
+            r(
+                "$.mission.battery_steps",
+                "must be a positive energy [steps]",
+            );
+        }
+        if !(m.reserve_steps.is_finite() && m.reserve_steps >= 0.0) {
+            r(
+                "$.mission.reserve_steps",
+                "must be zero or positive [steps]",
+            );
+        } else if positive(m.battery_steps) && m.reserve_steps >= m.battery_steps {
+            r("$.mission.reserve_steps", "must be less than battery_steps");
+        }
+        if !(positive(m.coverage_target) && m.coverage_target <= 1.0) {
+            r("$.mission.coverage_target", "must be a fraction in (0, 1]");
+        }
+    }
+
+    fn validate_pid(&self, r: &mut impl FnMut(&str, &str)) {
+        let p = &self.pid;
+        for (path, v) in [
+            ("$.pid.heading_kp", p.heading_kp),
+            ("$.pid.distance_kp", p.distance_kp),
+        ] {
+            if !positive(v) {
+                r(path, "must be a positive gain");
+            }
+        }
+        for (path, v) in [
+            ("$.pid.heading_ki", p.heading_ki),
+            ("$.pid.heading_kd", p.heading_kd),
+            ("$.pid.distance_ki", p.distance_ki),
+            ("$.pid.distance_kd", p.distance_kd),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                r(path, "must be zero or a positive gain");
+            }
+        }
+    }
+
+    fn validate_safety(&self, r: &mut impl FnMut(&str, &str)) {
+        let s = &self.safety;
+        if !positive(s.obstacle_stop_m) {
+            r(
+                "$.safety.obstacle_stop_m",
+                "must be a positive distance [m]",
+            );
+        } else if positive(self.robot.radius_m)
+            && self.laser.min_range_m.is_finite()
+            && s.obstacle_stop_m < self.laser.min_range_m - self.robot.radius_m
+        {
+            r(
+                "$.safety.obstacle_stop_m",
+                "is inside the laser's blind zone, so it can never trigger",
+            );
+        }
+        if !(positive(s.stale_timeout_s) && s.stale_timeout_s < ARCOS_WATCHDOG_S) {
+            r(
+                "$.safety.stale_timeout_s",
+                "must be in (0, 2) s (below the ARCOS firmware watchdog)",
+            );
+        }
+        if !(s.back_off_m.is_finite() && s.back_off_m >= 0.0 && s.back_off_m <= 1.0) {
+            r("$.safety.back_off_m", "must be in [0, 1] m");
+        }
+    }
+}
+
+fn positive(v: f32) -> bool {
+    v.is_finite() && v > 0.0
+}

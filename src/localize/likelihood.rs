@@ -1,0 +1,268 @@
+//! The smoothed likelihood field a scan is scored against: a local window of the occupancy
+//! grid, where each cell holds how likely a laser return is to land there.
+//!
+//! Olson (*Real-time correlative scan matching*, ICRA 2009, §III) scores a pose by looking up
+//! each projected return in a rasterised, blurred copy of the map: blurring by the sensor's
+//! uncertainty turns "is this cell a wall" into "how close is this cell to a wall", so a return
+//! a few centimetres off still scores, and the score falls smoothly with the offset. Here the
+//! value of a cell is
+//! `max over cells c' within 2σ of  occ(c') · exp(-d(c, c')² / 2σ²)`, with
+//! `occ = clamp(log-odds / max log-odds, 0, 1)` (Free and Unknown are 0). The Gaussian is a
+//! product of an east and a north factor, so the max-convolution is separable: one pass along
+//! the rows, one along the columns, each with a short line buffer.
+//!
+//! The same field, read with bilinear interpolation between cell centres
+//! ([`LikelihoodField::sample`]), is the continuous map function Hector's Gauss-Newton step
+//! differentiates (Kohlbrecher et al., SSRR 2011, §IV.A).
+//!
+//! Only the window around the scan is built (sized to the capacity `T` cells), at every match:
+//! the shared grid changes with every scan of every robot, and a window of 100 x 100 cells costs
+//! tens of microseconds.
+
+use crate::geometry::Point2;
+use crate::grid::OccupancyGrid;
+use crate::math;
+
+/// Longest row or column of a window \[cells\] (the line buffer of the separable pass).
+pub const MAX_LINE: usize = 512;
+
+/// Kernel half-width limit \[cells\].
+const MAX_KERNEL: usize = 8;
+
+/// A local, blurred copy of the grid's occupied cells.
+#[derive(bytemuck::Zeroable)]
+pub struct LikelihoodField<const T: usize> {
+    /// Grid column and row of the window's cell (0, 0).
+    col0: i32,
+    row0: i32,
+    width: usize,
+    height: usize,
+    resolution_m: f32,
+    /// Map-frame position of the centre of the window's cell (0, 0) \[m\].
+    first_center: Point2,
+    values: [f32; T],
+    line: [f32; MAX_LINE],
+}
+
+impl<const T: usize> core::fmt::Debug for LikelihoodField<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("LikelihoodField")
+            .field("col0", &self.col0)
+            .field("row0", &self.row0)
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<const T: usize> Default for LikelihoodField<T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const T: usize> LikelihoodField<T> {
+    /// An empty field (build it with [`Self::build`]).
+    pub const fn new() -> Self {
+        Self {
+            col0: 0,
+            row0: 0,
+            width: 0,
+            height: 0,
+            resolution_m: 1.0,
+            first_center: Point2::new(0.0, 0.0),
+            values: [0.0; T],
+            line: [0.0; MAX_LINE],
+        }
+    }
+
+    /// Columns of the window.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Rows of the window.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Cell side \[m\].
+    pub fn resolution_m(&self) -> f32 {
+        self.resolution_m
+    }
+
+    /// The values, row-major, row 0 south.
+    pub fn values(&self) -> &[f32] {
+        &self.values[..self.width * self.height]
+    }
+
+    /// Builds the field over the grid cells covering `lo..=hi` (map frame \[m\]), blurred by
+    /// `sigma_m`. Cells outside the grid count as unknown (0). Returns `false`, leaving the
+    /// field empty, when the window needs more than `T` cells or a line longer than
+    /// [`MAX_LINE`].
+    pub fn build<const N: usize>(
+        &mut self,
+        grid: &OccupancyGrid<N>,
+        lo: Point2,
+        hi: Point2,
+        sigma_m: f32,
+    ) -> bool {
+        let geom = *grid.geometry();
+        let a = geom.cell_at_unchecked(lo);
+        let b = geom.cell_at_unchecked(hi);
+        let width = (b.col - a.col + 1).max(0) as usize;
+        let height = (b.row - a.row + 1).max(0) as usize;
+        self.width = 0;
+        self.height = 0;
+        if width == 0 || height == 0 || width * height > T || width.max(height) > MAX_LINE {
+            return false;
+        }
+        self.col0 = a.col;
+        self.row0 = a.row;
+        self.width = width;
+        self.height = height;
+        self.resolution_m = geom.resolution_m;
+        self.first_center = geom.cell_center(a);
+
+        // Occupancy strength of every window cell.
+        let scale = 1.0 / grid.bounds().max;
+        for r in 0..height {
+            let row = a.row + r as i32;
+            let out = &mut self.values[r * width..(r + 1) * width];
+            if row < 0 || row as usize >= geom.height {
+                out.fill(0.0);
+                continue;
+            }
+            for (c, v) in out.iter_mut().enumerate() {
+                let col = a.col + c as i32;
+                *v = if col < 0 || col as usize >= geom.width {
+                    0.0
+                } else {
+                    let l = grid.log_odds_at(row as usize * geom.width + col as usize);
+                    (l * scale).clamp(0.0, 1.0)
+                };
+            }
+        }
+
+        // The separable max-convolution with a Gaussian of σ, cut at 2σ.
+        let mut kernel = [0.0f32; MAX_KERNEL + 1];
+        let reach =
+            (math::ceil(2.0 * sigma_m / geom.resolution_m).max(0.0) as usize).min(MAX_KERNEL);
+        for (k, w) in kernel.iter_mut().enumerate().take(reach + 1) {
+            let d = k as f32 * geom.resolution_m;
+            *w = math::exp(-d * d / (2.0 * sigma_m * sigma_m));
+        }
+        if reach == 0 {
+            return true;
+        }
+        for r in 0..height {
+            let row = &mut self.values[r * width..(r + 1) * width];
+            self.line[..width].copy_from_slice(row);
+            max_filter(&self.line[..width], row, 1, &kernel[..=reach]);
+        }
+        for c in 0..width {
+            for r in 0..height {
+                self.line[r] = self.values[r * width + c];
+            }
+            max_filter(
+                &self.line[..height],
+                &mut self.values[c..],
+                width,
+                &kernel[..=reach],
+            );
+        }
+        true
+    }
+
+    /// Window coordinates of a map point, in cells, with cell centres at whole numbers.
+    #[inline]
+    pub fn to_window(&self, p: Point2) -> (f32, f32) {
+        let inv = 1.0 / self.resolution_m;
+        (
+            (p.x - self.first_center.x) * inv,
+            (p.y - self.first_center.y) * inv,
+        )
+    }
+
+    /// The bilinearly interpolated value at a map point and its gradient \[1/m\]; zero outside
+    /// the window.
+    #[inline]
+    pub fn sample(&self, p: Point2) -> (f32, f32, f32) {
+        let (u, v) = self.to_window(p);
+        let (fu, fv) = (math::floor(u), math::floor(v));
+        let (iu, iv) = (fu as i32, fv as i32);
+        if iu < 0 || iv < 0 || iu as usize + 1 >= self.width || iv as usize + 1 >= self.height {
+            return (0.0, 0.0, 0.0);
+        }
+        let (du, dv) = (u - fu, v - fv);
+        let i = iv as usize * self.width + iu as usize;
+        let (m00, m10) = (self.values[i], self.values[i + 1]);
+        let (m01, m11) = (self.values[i + self.width], self.values[i + self.width + 1]);
+        let value = (1.0 - dv) * ((1.0 - du) * m00 + du * m10) + dv * ((1.0 - du) * m01 + du * m11);
+        let inv = 1.0 / self.resolution_m;
+        let gx = ((1.0 - dv) * (m10 - m00) + dv * (m11 - m01)) * inv;
+        let gy = ((1.0 - du) * (m01 - m00) + du * (m11 - m10)) * inv;
+        (value, gx, gy)
+    }
+}
+
+/// `out[i·stride] = max_k src[i + k] · kernel[|k|]` for `|k| <= reach`, splatting each
+/// non-zero source cell onto its neighbours (most of a window is free or unknown, so this costs
+/// in proportion to the walls, not to the window).
+fn max_filter(src: &[f32], out: &mut [f32], stride: usize, kernel: &[f32]) {
+    let reach = kernel.len() - 1;
+    let n = src.len();
+    for i in 0..n {
+        out[i * stride] = 0.0;
+    }
+    for (j, &s) in src.iter().enumerate() {
+        if s <= 0.0 {
+            continue;
+        }
+        let lo = j.saturating_sub(reach);
+        let hi = (j + reach).min(n - 1);
+        for i in lo..=hi {
+            let v = s * kernel[i.abs_diff(j)];
+            let o = &mut out[i * stride];
+            if v > *o {
+                *o = v;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{CellClass, GridGeometry, LogOddsBounds};
+
+    #[test]
+    fn a_single_wall_cell_blurs_into_a_peak_with_a_smooth_slope() {
+        let geom = GridGeometry::new(20, 20, 0.1, Point2::new(0.0, 0.0)).unwrap();
+        let mut grid = OccupancyGrid::<400>::new(geom, LogOddsBounds::default()).unwrap();
+        grid.set_class(10 * 20 + 10, CellClass::Occupied, &mut ());
+        let mut f = LikelihoodField::<400>::new();
+        assert!(f.build(&grid, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
+        let centre = Point2::new(1.05, 1.05);
+        let (v, _, _) = f.sample(centre);
+        assert!((v - 1.0).abs() < 1e-6);
+        // One cell away: exp(-0.5).
+        let (v1, gx1, _) = f.sample(Point2::new(1.15, 1.05));
+        assert!((v1 - (-0.5f32).exp()).abs() < 1e-4, "{v1}");
+        // Halfway between: interpolated, and the slope points back to the wall.
+        let (vh, gxh, _) = f.sample(Point2::new(1.10, 1.05));
+        assert!(vh < 1.0 && vh > v1);
+        assert!(gxh < 0.0 && gx1 < 0.0);
+        // Three cells away: beyond 2σ.
+        assert_eq!(f.sample(Point2::new(1.35, 1.05)).0, 0.0);
+    }
+
+    #[test]
+    fn a_window_larger_than_the_capacity_is_refused() {
+        let geom = GridGeometry::new(20, 20, 0.1, Point2::new(0.0, 0.0)).unwrap();
+        let grid = OccupancyGrid::<400>::new(geom, LogOddsBounds::default()).unwrap();
+        let mut f = LikelihoodField::<100>::new();
+        assert!(!f.build(&grid, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
+        assert_eq!(f.width(), 0);
+    }
+}

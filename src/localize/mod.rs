@@ -1,0 +1,386 @@
+//! Localisation: aligning a laser scan to the occupancy grid before it is integrated, so the
+//! map stays true while the odometry drifts.
+//!
+//! A match ([`ScanMatcher::match_scan`]) starts from the odometry prediction and runs in four
+//! parts, one file each:
+//! 1. [`likelihood`]: a blurred local copy of the grid's occupied cells around the scan
+//!    (Olson, *Real-time correlative scan matching*, ICRA 2009);
+//! 2. [`correlative`]: Olson's exhaustive search of a small pose window around the prediction,
+//!    which finds the right basin whatever the local shape of the cost;
+//! 3. [`gauss_newton`]: Hector SLAM's Gauss-Newton refinement on the bilinearly interpolated
+//!    map (Kohlbrecher et al., *A flexible and scalable SLAM system with full 3D motion
+//!    estimation*, SSRR 2011), which gives a sub-cell pose and the fit's information matrix;
+//! 4. [`constraint`]: the eigen-analysis of that matrix; the correction is kept only along
+//!    directions the scan constrains, and the odometry prediction along the others (a
+//!    featureless corridor).
+//!
+//! A match knows when not to trust itself ([`Distrust`]): too few returns, a scan that falls
+//! mostly on cells the map does not know yet, a window larger than its memory, or a poor fit.
+//! Then the prediction is returned unchanged. [`MatchQuality`] reports what the decision was
+//! based on.
+//!
+//! [`tracker`] applies matches to the mission's map-from-odometry transform, every N-th scan,
+//! blended with the prediction by their variances.
+//!
+//! `no_std`, allocation-free (the working memory is [`ScanMatcher`], sized by its const
+//! generic), sans-IO and deterministic: the same grid, scan and prediction give the same pose.
+
+pub mod constraint;
+pub mod correlative;
+pub mod gauss_newton;
+pub mod likelihood;
+pub mod tracker;
+
+#[cfg(test)]
+mod tests;
+
+use crate::geometry::{Point2, Pose2, normalize_angle};
+use crate::grid::OccupancyGrid;
+use crate::math;
+use crate::sensor::{LaserConfig, MAX_BEAMS, Scan};
+
+use constraint::Constraint;
+use correlative::SearchWindow;
+use likelihood::LikelihoodField;
+
+pub use tracker::{LocalizeConfig, Tracker};
+
+/// Cells of the likelihood window a mission's matcher holds: 120 x 120, enough for a 4 m laser
+/// on a 10 cm grid with the search margins (57.6 KB).
+pub const WINDOW_CELLS: usize = 120 * 120;
+
+/// Settings of a match.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatchConfig {
+    /// Translation searched around the prediction, each way \[m\].
+    pub search_xy_m: f32,
+    /// Rotation searched around the prediction, each way \[rad\].
+    pub search_theta_rad: f32,
+    /// Heading step of the search \[rad\].
+    pub theta_step_rad: f32,
+    /// Blur of the likelihood field \[m\] (about the laser's range noise).
+    pub sigma_m: f32,
+    /// Returns used at most (the scan is thinned evenly to this many).
+    pub max_points: usize,
+    /// Fewer usable returns than this: no match.
+    pub min_points: usize,
+    /// Fewer returns than this fraction on known cells or near known walls (at the
+    /// prediction): no match.
+    pub min_known_fraction: f32,
+    /// Mean likelihood of the returns below this after the fit: no match.
+    pub min_score: f32,
+    /// A direction is constrained when its information per return is at least this \[1/m²\]
+    /// ...
+    pub min_information: f32,
+    /// ... and at least this fraction of the strongest direction's.
+    pub min_information_ratio: f32,
+    /// Each return is scored this far beyond its measured range \[m\]. The inverse sensor
+    /// model marks the cell holding a return occupied and the cells before it free, so the
+    /// occupied band the map keeps lies behind the surface the laser saw (on a 10 cm grid with
+    /// the thesis's 5 % noise, about half a cell); scoring returns where the map put them
+    /// removes the pull toward the walls this would cause.
+    pub surface_depth_m: f32,
+    /// Returns farther than this count less, as `(weight_range_m / range)²`: the range noise
+    /// grows with the range \[m\].
+    pub weight_range_m: f32,
+    /// Length that turns a rotation into a distance for the eigen-analysis \[m\].
+    pub length_scale_m: f32,
+    /// Gauss-Newton steps at most.
+    pub iterations: u32,
+    /// Motion prior: mean likelihood taken off at the edge of the search window.
+    pub prior_at_edge: f32,
+}
+
+impl Default for MatchConfig {
+    /// ±0.3 m and ±0.1 rad (5.7°) at 0.01 rad, σ 0.1 m, at most 270 returns, at least 30,
+    /// half of them on known cells, mean likelihood 0.25, information 0.5/m² and 3 % of the
+    /// strongest, returns beyond 1 m weighted by 1/r², L = 1 m, 10 steps, prior 0.02.
+    fn default() -> Self {
+        Self {
+            search_xy_m: 0.3,
+            search_theta_rad: 0.1,
+            theta_step_rad: 0.01,
+            sigma_m: 0.1,
+            max_points: 270,
+            min_points: 30,
+            min_known_fraction: 0.5,
+            min_score: 0.25,
+            min_information: 0.5,
+            min_information_ratio: 0.03,
+            surface_depth_m: 0.05,
+            weight_range_m: 1.0,
+            length_scale_m: 1.0,
+            iterations: 10,
+            prior_at_edge: 0.02,
+        }
+    }
+}
+
+/// Why a match was not trusted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Distrust {
+    /// Fewer usable returns than [`MatchConfig::min_points`].
+    TooFewReturns,
+    /// Most returns fall on cells the map does not know.
+    MostlyUnknown,
+    /// The window around the scan needs more cells than the matcher holds.
+    WindowTooLarge,
+    /// The best fit explains too little of the scan.
+    PoorFit,
+    /// No direction is constrained.
+    Degenerate,
+}
+
+/// What a match was based on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatchQuality {
+    /// Returns used.
+    pub points: u16,
+    /// Fraction of them on known cells or near known walls at the prediction (only those
+    /// take part in the fit).
+    pub known_fraction: f32,
+    /// Mean likelihood of the returns at the result, 0..=1.
+    pub score: f32,
+    /// Eigenvalues of the information per unit weight of returns, ascending \[1/m²\] (rotation scaled by
+    /// [`MatchConfig::length_scale_m`]).
+    pub eigenvalues: [f32; 3],
+    /// Directions constrained (0..=3): 3 is a full fix, 2 a corridor.
+    pub constrained: u8,
+    /// Correction applied (result minus prediction) \[m, m, rad\].
+    pub correction: [f32; 3],
+    /// Why the match was refused, if it was.
+    pub distrust: Option<Distrust>,
+}
+
+impl MatchQuality {
+    /// Whether any of the correction was applied.
+    pub fn trusted(&self) -> bool {
+        self.distrust.is_none()
+    }
+}
+
+/// A match's result.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MatchResult {
+    /// The corrected robot pose (the prediction when not trusted) \[m, rad\].
+    pub pose: Pose2,
+    /// What it was based on.
+    pub quality: MatchQuality,
+}
+
+/// The working memory of a scan matcher: the likelihood window of `T` cells and the scan's
+/// returns.
+#[derive(bytemuck::Zeroable)]
+pub struct ScanMatcher<const T: usize> {
+    field: LikelihoodField<T>,
+    /// The returns in use, robot frame \[m\]: the first `len`.
+    points: [Point2; MAX_BEAMS],
+    /// Their weights: the first `len`.
+    weights: [f32; MAX_BEAMS],
+    len: usize,
+    scratch: [(u32, f32); MAX_BEAMS],
+}
+
+impl<const T: usize> core::fmt::Debug for ScanMatcher<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("ScanMatcher")
+            .field("capacity", &T)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<const T: usize> Default for ScanMatcher<T> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const T: usize> ScanMatcher<T> {
+    /// Empty working memory.
+    pub const fn new() -> Self {
+        Self {
+            field: LikelihoodField::new(),
+            points: [Point2::new(0.0, 0.0); MAX_BEAMS],
+            weights: [0.0; MAX_BEAMS],
+            len: 0,
+            scratch: [(0, 0.0); MAX_BEAMS],
+        }
+    }
+
+    /// Aligns `scan`, taken by `laser` at about `predicted` (map frame, from odometry), to
+    /// `grid`. Returns the corrected pose, or `predicted` when the match is not trusted.
+    /// Allocation-free.
+    pub fn match_scan<const N: usize>(
+        &mut self,
+        grid: &OccupancyGrid<N>,
+        scan: &Scan,
+        laser: &LaserConfig,
+        predicted: Pose2,
+        config: &MatchConfig,
+    ) -> MatchResult {
+        let mut quality = MatchQuality {
+            points: 0,
+            known_fraction: 0.0,
+            score: 0.0,
+            eigenvalues: [0.0; 3],
+            constrained: 0,
+            correction: [0.0; 3],
+            distrust: None,
+        };
+        let refuse = |mut q: MatchQuality, why| {
+            q.distrust = Some(why);
+            MatchResult {
+                pose: predicted,
+                quality: q,
+            }
+        };
+
+        // The returns in the robot frame, thinned evenly.
+        let usable = |r: Option<f32>| {
+            r.filter(|r| r.is_finite() && *r >= laser.min_range_m && *r < laser.max_range_m)
+        };
+        let total = scan
+            .beams()
+            .iter()
+            .filter(|b| usable(b.range_m).is_some())
+            .count();
+        let stride = total.div_ceil(config.max_points.max(1)).max(1);
+        self.len = 0;
+        let near = config.weight_range_m.max(1e-3);
+        let mut reach = 0.0f32;
+        for b in scan
+            .beams()
+            .iter()
+            .filter(|b| usable(b.range_m).is_some())
+            .step_by(stride)
+        {
+            let r = usable(b.range_m).unwrap_or(0.0);
+            let along = r + config.surface_depth_m;
+            let p = laser.mount.transform_point(Point2::new(
+                along * math::cos(b.angle_rad),
+                along * math::sin(b.angle_rad),
+            ));
+            reach = reach.max(math::hypot(p.x, p.y));
+            // At most MAX_BEAMS points from a scan of at most MAX_BEAMS beams.
+            if self.len < MAX_BEAMS {
+                let w = near / r.max(near);
+                self.points[self.len] = p;
+                self.weights[self.len] = w * w;
+                self.len += 1;
+            }
+        }
+        quality.points = self.len as u16;
+        if self.len < config.min_points.max(1) {
+            return refuse(quality, Distrust::TooFewReturns);
+        }
+
+        // The scan's extent at the prediction.
+        let geom = grid.geometry();
+        let (mut lo, mut hi) = (
+            Point2::new(f32::INFINITY, f32::INFINITY),
+            Point2::new(f32::NEG_INFINITY, f32::NEG_INFINITY),
+        );
+        for &p in &self.points[..self.len] {
+            let q = predicted.transform_point(p);
+            lo = Point2::new(lo.x.min(q.x), lo.y.min(q.y));
+            hi = Point2::new(hi.x.max(q.x), hi.y.max(q.y));
+        }
+
+        // The window: the scan at the prediction, grown by the search and the blur.
+        let res = geom.resolution_m;
+        let cells = math::ceil(config.search_xy_m / res).max(0.0) as i32;
+        let margin = cells as f32 * res
+            + reach * math::sin(config.search_theta_rad.min(1.5))
+            + 2.0 * config.sigma_m
+            + 2.0 * res;
+        lo = Point2::new(lo.x - margin, lo.y - margin);
+        hi = Point2::new(hi.x + margin, hi.y + margin);
+        if !self.field.build(grid, lo, hi, config.sigma_m) {
+            return refuse(quality, Distrust::WindowTooLarge);
+        }
+
+        // Only returns that land on what the map knows, or near a wall it knows, take part: a
+        // return beyond the end of a wall seen so far would otherwise pull the scan back onto
+        // the known part, a bias in the direction the robot turns or drives.
+        let total = self.len;
+        let mut kept = 0;
+        for i in 0..total {
+            let q = predicted.transform_point(self.points[i]);
+            let known = grid
+                .class_of(geom.cell_at_unchecked(q))
+                .is_some_and(|c| c.is_known());
+            if known || self.field.sample(q).0 > 0.0 {
+                self.points[kept] = self.points[i];
+                self.weights[kept] = self.weights[i];
+                kept += 1;
+            }
+        }
+        self.len = kept;
+        quality.known_fraction = kept as f32 / total as f32;
+        if quality.known_fraction < config.min_known_fraction || kept < config.min_points.max(1) {
+            return refuse(quality, Distrust::MostlyUnknown);
+        }
+
+        // Olson's search, then Hector's refinement.
+        let steps = if config.theta_step_rad > 0.0 {
+            math::floor(config.search_theta_rad / config.theta_step_rad) as i32
+        } else {
+            0
+        };
+        let window = SearchWindow {
+            cells,
+            steps,
+            step_rad: config.theta_step_rad,
+            prior_at_edge: config.prior_at_edge,
+        };
+        let coarse = correlative::search(
+            &self.field,
+            &self.points[..self.len],
+            &self.weights[..self.len],
+            predicted,
+            &window,
+            &mut self.scratch,
+        );
+        let fine = gauss_newton::refine(
+            &self.field,
+            &self.points[..self.len],
+            &self.weights[..self.len],
+            coarse.pose,
+            config.iterations,
+            config.length_scale_m,
+        );
+
+        let constraint = Constraint::analyse(
+            &fine.information,
+            config.min_information,
+            config.min_information_ratio,
+        );
+        quality.eigenvalues = constraint.eigenvalues;
+        quality.constrained = constraint.constrained_count();
+        quality.score = fine.mean_value;
+        if quality.score < config.min_score {
+            return refuse(quality, Distrust::PoorFit);
+        }
+        if quality.constrained == 0 {
+            return refuse(quality, Distrust::Degenerate);
+        }
+
+        // Keep the correction along the constrained directions only.
+        let l = config.length_scale_m;
+        let delta = [
+            fine.pose.x - predicted.x,
+            fine.pose.y - predicted.y,
+            normalize_angle(fine.pose.theta - predicted.theta) * l,
+        ];
+        let kept = constraint.project(delta);
+        quality.correction = [kept[0], kept[1], kept[2] / l];
+        MatchResult {
+            pose: Pose2::new(
+                predicted.x + kept[0],
+                predicted.y + kept[1],
+                predicted.theta + kept[2] / l,
+            ),
+            quality,
+        }
+    }
+}

@@ -1,0 +1,282 @@
+//! The matcher on synthetic worlds drawn from wall segments: a furnished room (every direction
+//! constrained) and a long featureless corridor (nothing along its axis).
+
+use super::*;
+use crate::grid::{CellClass, GridGeometry, LogOddsBounds};
+use crate::random::{gaussian, seeded};
+use crate::sensor::Beam;
+
+const CELLS: usize = 420 * 60;
+
+type Segment = (Point2, Point2);
+
+fn seg(ax: f32, ay: f32, bx: f32, by: f32) -> Segment {
+    (Point2::new(ax, ay), Point2::new(bx, by))
+}
+
+/// An 8 m x 6 m room with a pillar, a short wall and a cupboard; walls run through cell
+/// centres, so the drawn map has no half-cell bias.
+fn room() -> ([Segment; 12], GridGeometry) {
+    let walls = [
+        seg(0.5, 0.5, 8.5, 0.5),
+        seg(8.5, 0.5, 8.5, 6.5),
+        seg(8.5, 6.5, 0.5, 6.5),
+        seg(0.5, 6.5, 0.5, 0.5),
+        // Pillar.
+        seg(6.0, 4.0, 6.4, 4.0),
+        seg(6.4, 4.0, 6.4, 4.4),
+        seg(6.4, 4.4, 6.0, 4.4),
+        seg(6.0, 4.4, 6.0, 4.0),
+        // A short wall from the south wall.
+        seg(3.0, 0.5, 3.0, 2.0),
+        // A cupboard in the north-west corner.
+        seg(0.5, 5.5, 1.7, 5.5),
+        seg(1.7, 5.5, 1.7, 6.5),
+        seg(2.5, 6.5, 2.5, 6.0),
+    ];
+    (
+        walls,
+        GridGeometry::new(90, 70, 0.1, Point2::new(-0.05, -0.05)).unwrap(),
+    )
+}
+
+/// A corridor 40 m long and 2 m wide, along x.
+fn corridor() -> ([Segment; 2], GridGeometry) {
+    (
+        [seg(1.0, 1.0, 41.0, 1.0), seg(1.0, 3.0, 41.0, 3.0)],
+        GridGeometry::new(420, 40, 0.1, Point2::new(-0.05, -0.05)).unwrap(),
+    )
+}
+
+/// The map: cells a wall passes through Occupied, cells between `lo` and `hi` Free, the rest
+/// Unknown.
+fn draw(walls: &[Segment], geom: GridGeometry, lo: Point2, hi: Point2) -> OccupancyGrid<CELLS> {
+    let mut grid = OccupancyGrid::<CELLS>::new(geom, LogOddsBounds::default()).unwrap();
+    for i in 0..geom.cell_count() {
+        let c = geom.cell_center(geom.cell(i));
+        if c.x > lo.x && c.x < hi.x && c.y > lo.y && c.y < hi.y {
+            grid.set_class(i, CellClass::Free, &mut ());
+        }
+    }
+    for (a, b) in walls {
+        let n = (a.distance(*b) / 0.01) as usize + 1;
+        for k in 0..=n {
+            let t = k as f32 / n as f32;
+            let p = Point2::new(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t);
+            if let Some(i) = geom.cell_at(p).and_then(|c| geom.index(c)) {
+                grid.set_class(i, CellClass::Occupied, &mut ());
+            }
+        }
+    }
+    grid
+}
+
+/// The scan `laser` takes at `pose` among `walls`, with range noise of `noise` (fraction)
+/// drawn from `seed`.
+fn scan_at(walls: &[Segment], pose: Pose2, laser: &LaserConfig, noise: f32, seed: u64) -> Scan {
+    let mut rng = seeded(seed);
+    let at = pose.compose(laser.mount);
+    let mut scan = Scan::new();
+    for i in 0..laser.beam_count as usize {
+        let angle = laser.beam_angle(i);
+        let (dx, dy) = (math::cos(at.theta + angle), math::sin(at.theta + angle));
+        let mut best = f32::INFINITY;
+        for (a, b) in walls {
+            let (ex, ey) = (b.x - a.x, b.y - a.y);
+            let den = dx * ey - dy * ex;
+            if den.abs() < 1e-9 {
+                continue;
+            }
+            let (wx, wy) = (a.x - at.x, a.y - at.y);
+            let t = (wx * ey - wy * ex) / den;
+            let u = (wx * dy - wy * dx) / den;
+            if t > 0.0 && (0.0..=1.0).contains(&u) {
+                best = best.min(t);
+            }
+        }
+        let range = (best <= laser.max_range_m)
+            .then(|| best * (1.0 + noise * gaussian(&mut rng)))
+            .filter(|r| *r < laser.max_range_m);
+        scan.push(Beam {
+            angle_rad: angle,
+            range_m: range,
+        })
+        .unwrap();
+    }
+    scan
+}
+
+fn matcher() -> Box<ScanMatcher<WINDOW_CELLS>> {
+    Box::new(ScanMatcher::new())
+}
+
+/// The drawn maps put each wall in the middle of its cells, not behind the surface as the
+/// inverse sensor model does: returns are scored where they were measured.
+fn config() -> MatchConfig {
+    MatchConfig {
+        surface_depth_m: 0.0,
+        ..MatchConfig::default()
+    }
+}
+
+#[test]
+fn recovers_a_known_offset_in_a_furnished_room() {
+    let (walls, geom) = room();
+    let grid = draw(&walls, geom, Point2::new(0.5, 0.5), Point2::new(8.5, 6.5));
+    let laser = LaserConfig::lms1xx();
+    let mut m = matcher();
+    let cases = [
+        (Pose2::new(4.0, 3.0, 0.3), (0.15, -0.10, 0.05)),
+        (Pose2::new(2.2, 2.5, -2.0), (-0.22, 0.12, -0.08)),
+        (Pose2::new(5.0, 5.0, 1.4), (0.05, 0.25, 0.02)),
+        (Pose2::new(7.3, 2.0, 3.0), (-0.1, -0.1, -0.06)),
+    ];
+    for (k, (truth, (dx, dy, dth))) in cases.into_iter().enumerate() {
+        for noise in [0.0, 0.01] {
+            let scan = scan_at(&walls, truth, &laser, noise, k as u64);
+            let predicted = Pose2::new(truth.x + dx, truth.y + dy, truth.theta + dth);
+            let r = m.match_scan(&grid, &scan, &laser, predicted, &config());
+            let q = r.quality;
+            assert!(q.trusted(), "case {k}, noise {noise}: {q:?}");
+            assert_eq!(q.constrained, 3, "case {k}: {q:?}");
+            let err = r.pose.position().distance(truth.position());
+            let err_th = normalize_angle(r.pose.theta - truth.theta).abs();
+            assert!(err < 0.03, "case {k}, noise {noise}: {err} m, {q:?}");
+            assert!(err_th < 0.01, "case {k}, noise {noise}: {err_th} rad");
+        }
+    }
+}
+
+#[test]
+fn in_a_featureless_corridor_it_corrects_across_and_keeps_odometry_along() {
+    let (walls, geom) = corridor();
+    let grid = draw(&walls, geom, Point2::new(1.0, 1.0), Point2::new(41.0, 3.0));
+    let laser = LaserConfig::lms1xx();
+    let mut m = matcher();
+    for (k, x) in [10.0f32, 20.0, 30.5].into_iter().enumerate() {
+        let truth = Pose2::new(x, 2.0, 0.02);
+        let scan = scan_at(&walls, truth, &laser, 0.01, k as u64);
+        // Odometry is 20 cm ahead along the corridor, 8 cm off across it, 2° off.
+        let predicted = Pose2::new(x + 0.2, 1.92, 0.02 + 0.035);
+        let r = m.match_scan(&grid, &scan, &laser, predicted, &config());
+        let q = r.quality;
+        assert!(q.trusted(), "{q:?}");
+        assert!(
+            q.constrained < 3,
+            "a corridor pins down at most 2 directions: {q:?}"
+        );
+        // Along: the odometry stays.
+        assert!((r.pose.x - predicted.x).abs() < 0.01, "{r:?}");
+        // Across and in heading: corrected.
+        assert!((r.pose.y - truth.y).abs() < 0.03, "{r:?}");
+        assert!(
+            normalize_angle(r.pose.theta - truth.theta).abs() < 0.01,
+            "{r:?}"
+        );
+    }
+}
+
+#[test]
+fn too_few_returns_or_an_unknown_map_keep_the_prediction() {
+    let (walls, geom) = room();
+    let grid = draw(&walls, geom, Point2::new(0.5, 0.5), Point2::new(8.5, 6.5));
+    let laser = LaserConfig::lms1xx();
+    let mut m = matcher();
+    let predicted = Pose2::new(4.1, 3.0, 0.0);
+    // Ten returns.
+    let mut few = scan_at(&walls, Pose2::new(4.0, 3.0, 0.0), &laser, 0.0, 1);
+    for (i, b) in few.beams_mut().iter_mut().enumerate() {
+        if i % 60 != 0 {
+            b.range_m = None;
+        }
+    }
+    let r = m.match_scan(&grid, &few, &laser, predicted, &config());
+    assert_eq!(r.quality.distrust, Some(Distrust::TooFewReturns));
+    assert_eq!(r.pose, predicted);
+    // A map that knows nothing.
+    let empty = OccupancyGrid::<CELLS>::new(geom, LogOddsBounds::default()).unwrap();
+    let scan = scan_at(&walls, Pose2::new(4.0, 3.0, 0.0), &laser, 0.0, 1);
+    let r = m.match_scan(&empty, &scan, &laser, predicted, &config());
+    assert_eq!(r.quality.distrust, Some(Distrust::MostlyUnknown));
+    assert_eq!(r.pose, predicted);
+    // A scan of another place entirely: the walls do not fit.
+    let (cw, _) = corridor();
+    let elsewhere = scan_at(&cw, Pose2::new(20.0, 2.0, 0.0), &laser, 0.0, 1);
+    let r = m.match_scan(&grid, &elsewhere, &laser, predicted, &config());
+    assert!(!r.quality.trusted(), "{:?}", r.quality);
+    assert_eq!(r.pose, predicted);
+}
+
+#[test]
+fn a_match_is_deterministic() {
+    let (walls, geom) = room();
+    let grid = draw(&walls, geom, Point2::new(0.5, 0.5), Point2::new(8.5, 6.5));
+    let laser = LaserConfig::thesis();
+    let scan = scan_at(&walls, Pose2::new(4.0, 3.0, 0.3), &laser, 0.05, 3);
+    let predicted = Pose2::new(4.1, 2.9, 0.33);
+    let a = matcher().match_scan(&grid, &scan, &laser, predicted, &config());
+    let b = matcher().match_scan(&grid, &scan, &laser, predicted, &config());
+    assert_eq!(a, b);
+}
+
+#[test]
+fn the_tracker_moves_the_odometry_frame_by_the_correction_it_trusts() {
+    use crate::control::odometry::MapFromOdom;
+    let (walls, geom) = room();
+    let grid = draw(&walls, geom, Point2::new(0.5, 0.5), Point2::new(8.5, 6.5));
+    let laser = LaserConfig::lms1xx();
+    let truth = Pose2::new(4.0, 3.0, 0.3);
+    let scan = scan_at(&walls, truth, &laser, 0.0, 1);
+    // The odometry believes the robot is 12 cm east and 0.04 rad left of the truth.
+    let pose_odom = Pose2::new(1.0, 0.5, 0.1);
+    let mut transform = MapFromOdom::from_start(Pose2::new(4.12, 3.0, 0.34), pose_odom);
+    let mut tracker = Tracker::new();
+    let mut m = matcher();
+    let off = LocalizeConfig::default();
+    assert_eq!(
+        tracker.on_scan(
+            &off,
+            &grid,
+            &mut m,
+            &scan,
+            &laser,
+            pose_odom,
+            &mut transform
+        ),
+        None
+    );
+    let on = LocalizeConfig {
+        enabled: true,
+        every_n_scans: 2,
+        matcher: config(),
+        ..LocalizeConfig::default()
+    };
+    // Standing still, the prediction is as good as a match: the pose stays.
+    let still = tracker
+        .on_scan(&on, &grid, &mut m, &scan, &laser, pose_odom, &mut transform)
+        .unwrap();
+    assert!(
+        still
+            .position()
+            .distance(Pose2::new(4.12, 3.0, 0.34).position())
+            < 1e-4
+    );
+    // After 20 m and 3 rad of odometry (two scans, the first not matched), the prediction is
+    // uncertain and the match wins.
+    let away = Pose2::new(-19.0, 0.5, 3.1);
+    let before = transform;
+    assert_eq!(
+        tracker.on_scan(&on, &grid, &mut m, &scan, &laser, away, &mut transform),
+        None
+    );
+    assert_eq!(transform, before);
+    let corrected = tracker
+        .on_scan(&on, &grid, &mut m, &scan, &laser, pose_odom, &mut transform)
+        .unwrap();
+    let err = corrected.position().distance(truth.position());
+    assert!(err < 0.03, "{err} m, {:?}", tracker.last());
+    assert!(normalize_angle(corrected.theta - truth.theta).abs() < 0.01);
+    let mapped = transform.map_pose(pose_odom);
+    assert!(mapped.position().distance(corrected.position()) < 1e-4);
+    assert_eq!((tracker.matches(), tracker.trusted()), (2, 2));
+}

@@ -1,0 +1,395 @@
+//! Deciding where to go: the configured selector (or a pending go-to goal), the errand that
+//! a decision starts, and giving an errand up.
+
+use crate::control::Time;
+use crate::control::follower::{Controller, MAX_WAYPOINTS};
+use crate::explore::{
+    CandidateStatus, DecideError, Decision, DecisionRequest, ExploreConfig, FrontierUtility,
+    MAX_TARGETS, NearestFrontier, Optimized, Outcome, TargetSelector,
+};
+use crate::geometry::{Point2, Pose2};
+use crate::grid::Cell;
+use crate::math;
+use crate::planner::Planner;
+use crate::units;
+
+use super::super::shared::{MAX_SHARED_WAYPOINTS, SharedMap, Workspace};
+use super::super::{DoneReason, MissionEvent, ReplanCause, SelectorKind};
+use super::following::{first_blocked, polyline_length};
+use super::{Events, Mission, Phase, RETRY_S, secs};
+
+/// Search for a passable start cell up to this far from the robot \[m\].
+const START_SNAP_M: f32 = 0.6;
+/// A robot that moved this far since the first replan counted against its errand has made
+/// progress: its replans count afresh \[m\].
+const REPLAN_PROGRESS_M: f32 = 1.0;
+
+/// The decision being driven: the targets still to reach and what driving to them has cost.
+#[derive(Clone, Debug)]
+pub(super) struct Errand {
+    /// Targets still to reach, in order.
+    pub(super) targets: heapless::Vec<Point2, MAX_TARGETS>,
+    /// The targets came from [`Mission::go_to`].
+    pub(super) from_goal: bool,
+    /// Replans counted against this errand, without progress.
+    pub(super) replans: u32,
+    /// Where the robot stood at the first of them.
+    pub(super) replans_from: Point2,
+    /// Why the path was last planned again.
+    pub(super) replan_cause: ReplanCause,
+    /// A robot involved in the conflict being resolved.
+    pub(super) conflict: Option<u8>,
+    /// The remaining waypoints of the last path given up (for telling whether a robot is in
+    /// the way, and for publishing while the robot holds).
+    pub(super) last_path: heapless::Vec<Point2, MAX_SHARED_WAYPOINTS>,
+}
+
+impl Errand {
+    pub(super) fn new() -> Self {
+        Self {
+            targets: heapless::Vec::new(),
+            from_goal: false,
+            replans: 0,
+            replans_from: Point2::new(0.0, 0.0),
+            replan_cause: ReplanCause::ObstacleAhead,
+            conflict: None,
+            last_path: heapless::Vec::new(),
+        }
+    }
+}
+
+/// Targets given by [`Mission::go_to`], waiting for the next decision.
+#[derive(Clone, Debug, Default)]
+pub(super) struct GoalRequest {
+    targets: Option<heapless::Vec<Point2, MAX_TARGETS>>,
+    failures: u32,
+    retry_at: Time,
+}
+
+impl GoalRequest {
+    /// A fresh goal (at most [`MAX_TARGETS`] targets, checked by the caller).
+    pub(super) fn set(&mut self, targets: &[Point2]) {
+        let mut goal = heapless::Vec::new();
+        let _ = goal.extend_from_slice(targets);
+        self.targets = Some(goal);
+        self.failures = 0;
+        self.retry_at = Time::ZERO;
+    }
+
+    pub(super) fn is_pending(&self) -> bool {
+        self.targets.is_some()
+    }
+}
+
+impl<const N: usize> Mission<N> {
+    /// A decision (or the pending go-to goal). Returns whether the robot now has a path (or
+    /// the mission ended); `false`: try again next period.
+    pub(super) fn decide<R: rand_core::Rng, P: Planner<N>>(
+        &mut self,
+        now: Time,
+        map: &mut SharedMap<N>,
+        ws: &mut Workspace<N, P>,
+        rng: &mut R,
+        events: &mut Events<'_>,
+    ) -> bool {
+        self.errand.conflict = None;
+        // Blacklist entries lapse once the map around them changed.
+        self.blacklist.forget_changed(&map.grid);
+        if let Some(goal) = self.goal.targets.take() {
+            return self.decide_goal(now, goal, map, ws, events);
+        }
+        // A decision computed ahead, if its path is still clear.
+        if let Some(mut d) = self.ahead.take() {
+            let here = self.senses.pose_map.position();
+            if let Some(first) = d.waypoints.first_mut() {
+                *first = here;
+            }
+            if first_blocked(map, here, &d.waypoints, self.clear_radius()).is_none() {
+                events.stats.decisions_ahead_used += 1;
+                return self.adopt(now, &d, events);
+            }
+        }
+        self.errand.from_goal = false;
+        let outcome = self.run_selector(self.senses.pose_map, map, ws, rng);
+        match outcome {
+            Ok(Outcome::Go(d)) => {
+                let last = d.targets.last().copied();
+                let listed = self.config.selector != SelectorKind::FrontierUtility
+                    && last.is_some_and(|t| self.blacklist.contains(t));
+                if listed {
+                    return self.failed(events);
+                }
+                events.stats.fitness_evals += u64::from(d.evaluations);
+                self.adopt(now, &d, events)
+            }
+            Ok(Outcome::Done) => {
+                self.finish(DoneReason::NothingReachable, events);
+                true
+            }
+            Err(DecideError::NoFeasibleTarget { .. }) if self.battery_low() => {
+                self.finish(DoneReason::BatteryExhausted, events);
+                true
+            }
+            Err(DecideError::AllBlacklisted { .. }) => {
+                if self.failed_in_row + 1 >= self.config.max_failed_decisions {
+                    // Every frontier left is one the robot failed to reach.
+                    self.finish(DoneReason::NothingReachable, events);
+                    return true;
+                }
+                self.failed(events)
+            }
+            Err(_) => self.failed(events),
+        }
+    }
+
+    /// The pending go-to goal as the next errand, once its retry time has come.
+    fn decide_goal<P: Planner<N>>(
+        &mut self,
+        now: Time,
+        goal: heapless::Vec<Point2, MAX_TARGETS>,
+        map: &mut SharedMap<N>,
+        ws: &mut Workspace<N, P>,
+        events: &mut Events<'_>,
+    ) -> bool {
+        if now < self.goal.retry_at {
+            self.goal.targets = Some(goal);
+            return false;
+        }
+        match self.plan_to(self.senses.pose_map, &goal, map, ws) {
+            Ok(waypoints) => {
+                let length = polyline_length(self.senses.pose_map.position(), &waypoints);
+                let decision = Decision {
+                    targets: goal,
+                    waypoints,
+                    path_length_m: length,
+                    predicted_gain_cells: 0,
+                    energy_steps: units::steps(length, 0.0),
+                    evaluations: 0,
+                    history: heapless::Vec::new(),
+                };
+                let ok = self.adopt(now, &decision, events);
+                self.errand.from_goal = true;
+                ok
+            }
+            Err(_) => {
+                // Another robot in the way: wait for it, with the goal as targets.
+                self.errand.targets.clear();
+                let _ = self.errand.targets.extend_from_slice(&goal);
+                if let Some(other) = self.robot_on_way(map, now) {
+                    self.errand.from_goal = true;
+                    self.errand.replans = 0;
+                    self.hold_for(now, other, events);
+                    return true;
+                }
+                self.errand.targets.clear();
+                // Retry a little later; after too many failures, explore instead.
+                events.stats.failed_decisions += 1;
+                self.goal.failures += 1;
+                if self.goal.failures < self.config.max_failed_decisions {
+                    self.goal.targets = Some(goal);
+                    self.goal.retry_at = now + secs(RETRY_S);
+                }
+                false
+            }
+        }
+    }
+
+    /// Too little energy above the reserve to insist on a decision.
+    fn battery_low(&self) -> bool {
+        self.senses.battery_steps - self.config.explore.reserve_steps
+            < self.config.low_battery_steps
+    }
+
+    /// Counts a failed decision; after too many in a row the mission ends.
+    fn failed(&mut self, events: &mut Events<'_>) -> bool {
+        events.stats.failed_decisions += 1;
+        self.failed_in_row += 1;
+        if self.failed_in_row >= self.config.max_failed_decisions {
+            let reason = if self.battery_low() {
+                DoneReason::BatteryExhausted
+            } else {
+                DoneReason::NothingReachable
+            };
+            self.finish(reason, events);
+            return true;
+        }
+        self.phase = Phase::Deciding;
+        false
+    }
+
+    /// Starts driving decision `d`: its targets become the errand.
+    fn adopt(&mut self, now: Time, d: &Decision, events: &mut Events<'_>) -> bool {
+        if !self.start_path(now, &d.waypoints) {
+            return self.failed(events);
+        }
+        self.errand.targets.clear();
+        let _ = self.errand.targets.extend_from_slice(&d.targets);
+        self.last_history.clone_from(&d.history);
+        self.errand.replans = 0;
+        self.failed_in_row = 0;
+        events.stats.decisions += 1;
+        let here = self.senses.pose_map.position();
+        if here.distance(self.abandoned_in_row.1) >= REPLAN_PROGRESS_M {
+            self.abandoned_in_row.0 = 0;
+        }
+        events.push(MissionEvent::Decided {
+            targets: d.targets.clone(),
+            path_length_m: d.path_length_m,
+            predicted_gain_cells: d.predicted_gain_cells,
+            energy_steps: d.energy_steps,
+            evaluations: d.evaluations,
+        });
+        true
+    }
+
+    /// Gives up the errand: blacklists its last target and decides again (a go-to goal is
+    /// tried again later instead).
+    pub(super) fn abandon(&mut self, map: &SharedMap<N>, events: &mut Events<'_>) {
+        let targets = &self.errand.targets;
+        if self.errand.from_goal && !targets.is_empty() {
+            self.goal.targets = Some(targets.clone());
+            self.goal.failures += 1;
+            if self.goal.failures >= self.config.max_failed_decisions {
+                self.goal.targets = None;
+            }
+        } else if let Some(&t) = targets.last() {
+            self.blacklist.push_forgetting_oldest(&map.grid, t);
+            events.stats.abandoned_targets += 1;
+        }
+        self.errand.targets.clear();
+        self.follower.clear();
+        self.ahead = None;
+        self.phase = Phase::Deciding;
+        let here = self.senses.pose_map.position();
+        let (count, from) = &mut self.abandoned_in_row;
+        if *count == 0 || here.distance(*from) >= REPLAN_PROGRESS_M {
+            *count = 0;
+            *from = here;
+        }
+        *count += 1;
+        if *count >= self.config.max_failed_decisions {
+            // Every errand of the last ones was dropped where it started: nothing the robot
+            // chooses is reachable from here.
+            let _ = self.finish(DoneReason::NothingReachable, events);
+        }
+    }
+
+    /// Counts one more replan against the errand; `true` when that is more than
+    /// [`MissionConfig::max_replans_per_decision`](super::super::MissionConfig) and the
+    /// errand must be dropped. Replans count only while the robot gets nowhere: one that
+    /// moved on since the first counted replan starts a fresh count.
+    pub(super) fn count_replan(&mut self) -> bool {
+        let here = self.senses.pose_map.position();
+        let e = &mut self.errand;
+        if e.replans == 0 || here.distance(e.replans_from) >= REPLAN_PROGRESS_M {
+            e.replans = 0;
+            e.replans_from = here;
+        }
+        e.replans += 1;
+        e.replans > self.config.max_replans_per_decision
+    }
+
+    /// The decision request from `pose`, with the start moved onto the nearest passable cell
+    /// if the robot's own cell is inflated.
+    pub(super) fn start_pose(&self, map: &SharedMap<N>, pose: Pose2) -> Pose2 {
+        let geom = *map.trav.geometry();
+        let c = geom.cell_at_unchecked(pose.position());
+        if map.trav.is_passable(c) {
+            return pose;
+        }
+        let span = math::ceil(START_SNAP_M / geom.resolution_m) as i32;
+        let mut best: Option<(f32, Cell)> = None;
+        for row in c.row - span..=c.row + span {
+            for col in c.col - span..=c.col + span {
+                let cell = Cell::new(col, row);
+                if !map.trav.is_passable(cell) {
+                    continue;
+                }
+                let d = geom.cell_center(cell).distance(pose.position());
+                if d <= START_SNAP_M && best.is_none_or(|(b, _)| d < b) {
+                    best = Some((d, cell));
+                }
+            }
+        }
+        match best {
+            Some((_, cell)) => {
+                let p = geom.cell_center(cell);
+                Pose2::new(p.x, p.y, pose.theta)
+            }
+            None => pose,
+        }
+    }
+
+    /// The decision request from `pose` on the current map.
+    pub(super) fn request<'a>(
+        &'a self,
+        map: &'a SharedMap<N>,
+        pose: Pose2,
+    ) -> DecisionRequest<'a, N> {
+        DecisionRequest {
+            grid: &map.grid,
+            trav: &map.trav,
+            pose: self.start_pose(map, pose),
+            battery_steps: self.senses.battery_steps,
+            laser: &self.config.laser,
+        }
+    }
+
+    /// Runs the configured selector from `pose`, avoiding the blacklisted places.
+    pub(super) fn run_selector<R: rand_core::Rng, P: Planner<N>>(
+        &self,
+        pose: Pose2,
+        map: &SharedMap<N>,
+        ws: &mut Workspace<N, P>,
+        rng: &mut R,
+    ) -> Result<Outcome, DecideError> {
+        let req = self.request(map, pose);
+        let config = self.config.explore;
+        let (mut objective, frontier) = ws.parts();
+        match self.config.selector {
+            SelectorKind::Optimized(method) => {
+                let mut s = Optimized::new(method, config, &mut objective);
+                s.blacklist.clone_from(&self.blacklist);
+                s.decide(&req, rng)
+            }
+            SelectorKind::NearestFrontier => {
+                let mut s = NearestFrontier::new(config, &mut objective, frontier);
+                s.blacklist.clone_from(&self.blacklist);
+                s.decide(&req, rng)
+            }
+            SelectorKind::FrontierUtility => {
+                let mut s = FrontierUtility::new(config, &mut objective, frontier);
+                s.blacklist.clone_from(&self.blacklist);
+                s.decide(&req, rng)
+            }
+        }
+    }
+
+    /// Plans a path from `pose` through `targets` on the current map.
+    pub(super) fn plan_to<P: Planner<N>>(
+        &self,
+        pose: Pose2,
+        targets: &[Point2],
+        map: &SharedMap<N>,
+        ws: &mut Workspace<N, P>,
+    ) -> Result<heapless::Vec<Point2, MAX_WAYPOINTS>, CandidateStatus> {
+        let req = self.request(map, pose);
+        let config = ExploreConfig {
+            targets: targets.len().clamp(1, MAX_TARGETS),
+            // A replan must only fit the battery, not keep the reserve a new decision keeps.
+            reserve_steps: 0.0,
+            ..self.config.explore
+        };
+        let (mut objective, _) = ws.parts();
+        objective
+            .prepare_plan(&req, &config)
+            .map_err(|_| CandidateStatus::Unreachable)?;
+        let eval = objective.plan_targets(&req, targets);
+        if eval.status != CandidateStatus::Feasible {
+            return Err(eval.status);
+        }
+        let mut out = heapless::Vec::new();
+        let _ = out.extend_from_slice(objective.waypoints());
+        Ok(out)
+    }
+}

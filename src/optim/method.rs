@@ -1,0 +1,229 @@
+//! The methods by name, and [`AnyOptimizer`]: any of them behind one type, chosen at run time
+//! without allocation.
+
+use core::fmt;
+use core::str::FromStr;
+
+use rand_core::Rng;
+
+use super::*;
+
+/// The methods, selectable at run time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Butterfly optimization with crossover ([`xboa`]).
+    Xboa,
+    /// Butterfly optimization ([`boa`]).
+    Boa,
+    /// Modified butterfly optimization ([`mboa`]).
+    Mboa,
+    /// Butterfly optimization with a non-linear sensory modality ([`aboa`]).
+    Aboa,
+    /// Self-adaptive butterfly optimization ([`saboa`]).
+    Saboa,
+    /// Real-coded genetic algorithm ([`ga`]).
+    Ga,
+    /// Particle swarm optimization, ring topology ([`pso`]).
+    Pso,
+    /// Grey wolf optimizer ([`gwo`]).
+    Gwo,
+    /// Artificial bee colony ([`abc`]).
+    Abc,
+    /// Covariance matrix adaptation evolution strategy ([`cmaes`]).
+    CmaEs,
+    /// Uniform random search, the baseline ([`random_search`]); not one of the ten compared
+    /// methods, so not in [`Method::ALL`].
+    Random,
+}
+
+impl Method {
+    /// The ten methods the thesis compares.
+    pub const ALL: [Method; 10] = [
+        Method::Xboa,
+        Method::Boa,
+        Method::Mboa,
+        Method::Aboa,
+        Method::Saboa,
+        Method::Ga,
+        Method::Pso,
+        Method::Gwo,
+        Method::Abc,
+        Method::CmaEs,
+    ];
+
+    /// Command-line name: `xboa boa mboa aboa saboa ga pso gwo abc cmaes` (and `random`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Xboa => "xboa",
+            Method::Boa => "boa",
+            Method::Mboa => "mboa",
+            Method::Aboa => "aboa",
+            Method::Saboa => "saboa",
+            Method::Ga => "ga",
+            Method::Pso => "pso",
+            Method::Gwo => "gwo",
+            Method::Abc => "abc",
+            Method::CmaEs => "cmaes",
+            Method::Random => "random",
+        }
+    }
+
+    /// The method with the thesis's default hyper-parameters for `population` individuals
+    /// (xBOA and BOA interpolate between their pop-5 and pop-20 tunings, see their modules),
+    /// `max_generations` being the horizon `T` of its schedules.
+    pub fn build(self, population: usize, max_generations: u32) -> AnyOptimizer {
+        let t = max_generations;
+        match self {
+            Method::Xboa => AnyOptimizer::Xboa(xboa::Xboa::new(
+                xboa::XboaParams::for_population(population),
+                t,
+            )),
+            Method::Boa => {
+                AnyOptimizer::Boa(boa::Boa::new(boa::BoaParams::for_population(population), t))
+            }
+            Method::Mboa => AnyOptimizer::Mboa(mboa::Mboa::new(mboa::MboaParams::default(), t)),
+            Method::Aboa => AnyOptimizer::Aboa(aboa::Aboa::new(aboa::AboaParams::default(), t)),
+            Method::Saboa => {
+                AnyOptimizer::Saboa(saboa::Saboa::new(saboa::SaboaParams::default(), t))
+            }
+            Method::Ga => AnyOptimizer::Ga(ga::Ga::new(ga::GaParams::default(), t)),
+            Method::Pso => AnyOptimizer::Pso(pso::Pso::new(pso::PsoParams::default(), t)),
+            Method::Gwo => AnyOptimizer::Gwo(gwo::Gwo::new(t)),
+            Method::Abc => AnyOptimizer::Abc(abc::Abc::new(abc::AbcParams::default(), t)),
+            Method::CmaEs => AnyOptimizer::CmaEs(cmaes::CmaEs::new(t)),
+            Method::Random => AnyOptimizer::Random(random_search::RandomSearch::new(t)),
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A method name that is not one of `xboa boa mboa aboa saboa ga pso gwo abc cmaes random`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UnknownMethod;
+
+impl fmt::Display for UnknownMethod {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(
+            "unknown method, expected one of: xboa boa mboa aboa saboa ga pso gwo abc cmaes random",
+        )
+    }
+}
+
+impl core::error::Error for UnknownMethod {}
+
+impl FromStr for Method {
+    type Err = UnknownMethod;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Method::ALL
+            .iter()
+            .chain(core::iter::once(&Method::Random))
+            .copied()
+            .find(|m| m.name() == s)
+            .ok_or(UnknownMethod)
+    }
+}
+
+/// Any method behind one type, chosen at run time without allocation.
+#[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)]
+pub enum AnyOptimizer {
+    /// xBOA.
+    Xboa(xboa::Xboa),
+    /// BOA.
+    Boa(boa::Boa),
+    /// mBOA.
+    Mboa(mboa::Mboa),
+    /// ABOA.
+    Aboa(aboa::Aboa),
+    /// SABOA.
+    Saboa(saboa::Saboa),
+    /// GA.
+    Ga(ga::Ga),
+    /// PSO.
+    Pso(pso::Pso),
+    /// GWO.
+    Gwo(gwo::Gwo),
+    /// ABC.
+    Abc(abc::Abc),
+    /// CMA-ES.
+    CmaEs(cmaes::CmaEs),
+    /// Random search.
+    Random(random_search::RandomSearch),
+}
+
+macro_rules! dispatch {
+    ($self:expr, $o:ident => $body:expr) => {
+        match $self {
+            AnyOptimizer::Xboa($o) => $body,
+            AnyOptimizer::Boa($o) => $body,
+            AnyOptimizer::Mboa($o) => $body,
+            AnyOptimizer::Aboa($o) => $body,
+            AnyOptimizer::Saboa($o) => $body,
+            AnyOptimizer::Ga($o) => $body,
+            AnyOptimizer::Pso($o) => $body,
+            AnyOptimizer::Gwo($o) => $body,
+            AnyOptimizer::Abc($o) => $body,
+            AnyOptimizer::CmaEs($o) => $body,
+            AnyOptimizer::Random($o) => $body,
+        }
+    };
+}
+
+impl AnyOptimizer {
+    /// Which method this is.
+    pub fn method(&self) -> Method {
+        match self {
+            AnyOptimizer::Xboa(_) => Method::Xboa,
+            AnyOptimizer::Boa(_) => Method::Boa,
+            AnyOptimizer::Mboa(_) => Method::Mboa,
+            AnyOptimizer::Aboa(_) => Method::Aboa,
+            AnyOptimizer::Saboa(_) => Method::Saboa,
+            AnyOptimizer::Ga(_) => Method::Ga,
+            AnyOptimizer::Pso(_) => Method::Pso,
+            AnyOptimizer::Gwo(_) => Method::Gwo,
+            AnyOptimizer::Abc(_) => Method::Abc,
+            AnyOptimizer::CmaEs(_) => Method::CmaEs,
+            AnyOptimizer::Random(_) => Method::Random,
+        }
+    }
+}
+
+impl Optimizer for AnyOptimizer {
+    fn start<P: Problem + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        initial: &Population,
+    ) -> Result<(), OptimError> {
+        dispatch!(self, o => o.start(problem, initial))
+    }
+    fn step<P: Problem + ?Sized, R: Rng>(
+        &mut self,
+        problem: &mut P,
+        rng: &mut R,
+    ) -> Result<(), OptimError> {
+        dispatch!(self, o => o.step(problem, rng))
+    }
+    fn best_genome(&self) -> &[f32] {
+        dispatch!(self, o => o.best_genome())
+    }
+    fn best_fitness(&self) -> f32 {
+        dispatch!(self, o => o.best_fitness())
+    }
+    fn evaluations(&self) -> u32 {
+        dispatch!(self, o => o.evaluations())
+    }
+    fn generation(&self) -> u32 {
+        dispatch!(self, o => o.generation())
+    }
+    fn history(&self) -> &[f32] {
+        dispatch!(self, o => o.history())
+    }
+    fn population(&self) -> &Population {
+        dispatch!(self, o => o.population())
+    }
+}
