@@ -925,8 +925,8 @@ mod tests {
             speed_mm_s: 0,
             turn_rate_deg_s: 30,
         };
-        // Nothing in the scan; the map remembers a wall corner 0.28 m behind the robot.
-        let behind = [Point2::new(-0.28, 0.0)];
+        // Nothing in the scan; the map remembers a wall corner 0.26 m behind the robot.
+        let behind = [Point2::new(-0.26, 0.0)];
         assert!(moving(b.tick(spin).0));
         let inputs = SafetyInputs {
             pose_odom: b.pose_odom,

@@ -363,11 +363,9 @@ impl<const N: usize> Mission<N> {
         let mut lifted = self.lift_own_body(map);
         self.stamp_others(map, now, &mut lifted);
         let mut proposed = self.run(now, map, ws, rng, &mut events);
-        for &(i, value) in lifted.iter().rev() {
-            map.grid.set_log_odds(i, value, &mut map.trav);
-        }
-        // Slow through narrow places; and what the map knows around the body, for turns and
-        // back-offs the laser cannot see.
+        // Slow through narrow places; and what the map knows around the body (its own body
+        // still lifted, the robots near it stamped), for turns and back-offs the laser cannot
+        // see.
         if let Some(cap) = footprint::narrow_speed_cap(&map.trav, self.senses.pose_map) {
             proposed.speed_mm_s = proposed.speed_mm_s.clamp(-cap, cap);
         }
@@ -379,6 +377,9 @@ impl<const N: usize> Mission<N> {
             fp.radius_m.max(fp.front_m).max(fp.rear_m) + self.config.safety.turn_margin_m,
             &mut remembered,
         );
+        for &(i, value) in lifted.iter().rev() {
+            map.grid.set_log_odds(i, value, &mut map.trav);
+        }
 
         let s = &self.senses;
         let inputs = SafetyInputs {
