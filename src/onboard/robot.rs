@@ -630,7 +630,7 @@ impl ArcosClient {
             match packet {
                 ServerPacket::Status(mut status) => {
                     self.stats.status_packets += 1;
-                    self.to_arcos_sh_units(&mut status);
+                    self.convert_to_arcos_sh_units(&mut status);
                     return Ok(Some(RobotEvent::Status {
                         at: Instant::now(),
                         status: Box::new(status),
@@ -652,7 +652,7 @@ impl ArcosClient {
     }
 
     /// Rewrites a status packet's positions, headings and wheel velocities in P3-DX-SH units.
-    fn to_arcos_sh_units(&mut self, status: &mut StatusPacket) {
+    fn convert_to_arcos_sh_units(&mut self, status: &mut StatusPacket) {
         let factors = self.units.factors();
         (status.x_pos, status.y_pos) = self.units.position_mm(status.x_pos, status.y_pos);
         status.th_pos = factors.heading_units(status.th_pos);
