@@ -27,9 +27,9 @@ pub mod explore;
 pub mod frontier;
 pub mod geometry;
 pub mod grid;
-pub mod localize;
 #[cfg(feature = "std")]
 mod heap;
+pub mod localize;
 #[cfg(feature = "std")]
 pub mod mapfile;
 pub mod math;
