@@ -43,8 +43,9 @@ pub const KNOWN_METHODS: [&str; 12] = [
 ];
 
 /// Robot subclasses (ARCOS SYNC2/CONFIG subtype) a P3-DX board may expect, compared without
-/// regard to case.
-pub const KNOWN_SUBCLASSES: [&str; 4] = ["p3dx", "p3dx-sh", "p3dx-sh-lms1xx", "p3dx-sh-lms500"];
+/// regard to case: those with conversion factors in
+/// [`ConversionFactors`](crate::control::odometry::ConversionFactors).
+pub use crate::control::odometry::KNOWN_SUBCLASSES;
 
 /// Serial speeds the ARCOS HOSTBAUD command can select \[baud\], indexed by HOSTBAUD code.
 pub const ARCOS_BAUD_RATES: [u32; 5] = [9600, 19200, 38400, 57600, 115200];

@@ -112,3 +112,54 @@ fn probe_drive_runs_a_square_and_reports_the_odometry() {
     assert!((driven - 2.0).abs() < 0.2, "{summary}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The corners (x mm, y mm, heading deg) and the distance driven \[m\] a `probe --drive`
+/// printed.
+fn square_of(text: &str) -> (Vec<(f32, f32, f32)>, f32) {
+    let corners: Vec<_> = text
+        .lines()
+        .filter(|l| l.starts_with("square side"))
+        .map(|l| pose_after(l, "odometry "))
+        .collect();
+    assert_eq!(corners.len(), 4, "{text}");
+    let summary = text
+        .lines()
+        .find(|l| l.starts_with("square: driven"))
+        .unwrap_or_else(|| panic!("no summary: {text}"));
+    let driven: f32 = summary.split_whitespace().nth(2).unwrap().parse().unwrap();
+    (corners, driven)
+}
+
+#[test]
+fn probe_drive_reports_the_same_square_on_a_p3dx_and_a_p3dx_sh() {
+    // A `p3dx` counts positions in 0.485 mm units, a `p3dx-sh` in mm: the same square must
+    // come out of both.
+    let sh = Sim::start("lab", None, &["--subclass", "p3dx-sh"]);
+    let old = Sim::start("lab", None, &["--subclass", "p3dx"]);
+    let dir_sh = temp_dir("probe-drive-sh");
+    let dir_old = temp_dir("probe-drive-p3dx");
+    let run_sh = papillon(&["probe", "--tcp", &sh.arcos_tcp(), "--drive"], &dir_sh);
+    let run_old = papillon(&["probe", "--tcp", &old.arcos_tcp(), "--drive"], &dir_old);
+    let text_sh = stdout_of(&wait_bounded(run_sh, Duration::from_secs(60)));
+    let text_old = stdout_of(&wait_bounded(run_old, Duration::from_secs(60)));
+    assert!(text_sh.contains(r#"subclass "p3dx-sh""#), "{text_sh}");
+    assert!(text_old.contains(r#"subclass "p3dx""#), "{text_old}");
+    let (corners_sh, driven_sh) = square_of(&text_sh);
+    let (corners_old, driven_old) = square_of(&text_old);
+    // 2 m driven on both (the unconverted p3dx read 4.1 m), within 5 % of each other.
+    assert!((driven_sh - 2.0).abs() < 0.2, "{text_sh}");
+    assert!(
+        (driven_old - driven_sh).abs() <= 0.05 * driven_sh,
+        "p3dx {driven_old} m, p3dx-sh {driven_sh} m\n{text_old}"
+    );
+    // Every corner within 5 % of the perimeter (100 mm) of the other run's.
+    for (a, b) in corners_old.iter().zip(&corners_sh) {
+        let apart_mm = (a.0 - b.0).hypot(a.1 - b.1);
+        assert!(
+            apart_mm <= 0.05 * 2000.0,
+            "p3dx corner {a:?}, p3dx-sh corner {b:?}\n{text_old}\n{text_sh}"
+        );
+    }
+    std::fs::remove_dir_all(&dir_sh).unwrap();
+    std::fs::remove_dir_all(&dir_old).unwrap();
+}

@@ -18,6 +18,13 @@
 //! YPOS are read as signed 15-bit values (0x7FFB is -5 mm), so a robot that backed up a
 //! little from its reset point starts at a small negative coordinate, not 32 m away.
 //!
+//! Robots of the `p3dx` subclass (old AROS/P2OS firmware) count XPOS, YPOS and MOVE in units
+//! of 0.485 mm, not millimetres (DistConvFactor, protocols.md §1.9 and §5). [`ConversionFactors`]
+//! is the one table of the factors per subclass, and [`SipUnitConverter`] turns a robot's
+//! status readings into the ARCOS P3-DX-SH units the trackers here expect: each position delta
+//! is unwrapped in robot units, the unwrapped total is multiplied by DistConvFactor and wrapped
+//! again as a 15-bit millimetre counter, so nothing downstream needs to know the subclass.
+//!
 //! [`MapFromOdom`] is the rigid transform that places `odom` in `map`; it is fixed when the
 //! mission starts, from the known start pose in the map.
 
@@ -25,7 +32,7 @@ use core::f32::consts::TAU;
 
 use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::math;
-use crate::units::{ARCOS_ANGLE_UNITS_PER_TURN, arcos_angle_to_rad};
+use crate::units::{ARCOS_ANGLE_UNITS_PER_TURN, arcos_angle_to_rad, rad_to_arcos_angle};
 
 /// Modulus of the XPOS/YPOS counters.
 pub const ARCOS_POSITION_MODULUS: i32 = 0x8000;
@@ -57,6 +64,144 @@ fn heading_delta_units(old: i16, new: i16) -> i32 {
         d - ANGLE_UNITS_PER_TURN_I
     } else {
         d
+    }
+}
+
+/// Robot subclasses (ARCOS SYNC2/CONFIG subtype) with known conversion factors, compared
+/// without regard to case.
+pub const KNOWN_SUBCLASSES: [&str; 4] = ["p3dx", "p3dx-sh", "p3dx-sh-lms1xx", "p3dx-sh-lms500"];
+
+/// How a robot's wire units convert to millimetres and radians (the DistConvFactor,
+/// VelConvFactor and AngleConvFactor of its subclass).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConversionFactors {
+    /// Millimetres per position unit (XPOS, YPOS, MOVE): DistConvFactor.
+    pub mm_per_distance_unit: f32,
+    /// Millimetres per second per velocity unit (VEL, wheel velocities): VelConvFactor.
+    pub mm_s_per_velocity_unit: f32,
+    /// Radians per heading unit (THPOS, CONTROL): AngleConvFactor.
+    pub rad_per_angle_unit: f32,
+}
+
+/// Factors of ARCOS on a P3-DX-SH: millimetres, mm/s and 2π/4096 rad (the parameter files'
+/// AngleConvFactor 0.001534 is this value rounded).
+const ARCOS_SH: ConversionFactors = ConversionFactors {
+    mm_per_distance_unit: 1.0,
+    mm_s_per_velocity_unit: 1.0,
+    rad_per_angle_unit: TAU / ARCOS_ANGLE_UNITS_PER_TURN,
+};
+
+/// Factors per subclass, from the vendor's public parameter files (protocols.md §1.9, §5).
+const SUBCLASS_FACTORS: [(&str, ConversionFactors); 4] = [
+    (
+        "p3dx",
+        ConversionFactors {
+            mm_per_distance_unit: 0.485,
+            ..ARCOS_SH
+        },
+    ),
+    ("p3dx-sh", ARCOS_SH),
+    ("p3dx-sh-lms1xx", ARCOS_SH),
+    ("p3dx-sh-lms500", ARCOS_SH),
+];
+
+impl ConversionFactors {
+    /// The units the rest of the crate speaks (ARCOS on a P3-DX-SH): converting with them
+    /// changes nothing.
+    pub const ARCOS_SH: Self = ARCOS_SH;
+
+    /// The factors of `subclass` (case-insensitive), `None` for a subclass not in
+    /// [`KNOWN_SUBCLASSES`].
+    pub fn for_subclass(subclass: &str) -> Option<Self> {
+        SUBCLASS_FACTORS
+            .iter()
+            .find(|(name, _)| name.eq_ignore_ascii_case(subclass))
+            .map(|&(_, f)| f)
+    }
+
+    /// The MOVE argument, in robot units, for `distance_mm`; `None` when it does not fit the
+    /// command's signed 16-bit argument.
+    pub fn move_argument(&self, distance_mm: i32) -> Option<i16> {
+        to_i16(distance_mm as f32 / self.mm_per_distance_unit)
+    }
+
+    /// The VEL argument, in robot units, for `speed_mm_s`; `None` when it does not fit.
+    pub fn vel_argument(&self, speed_mm_s: i16) -> Option<i16> {
+        to_i16(f32::from(speed_mm_s) / self.mm_s_per_velocity_unit)
+    }
+
+    /// A robot velocity reading \[velocity units\] in mm/s, saturated to `i16`.
+    pub fn velocity_mm_s(&self, raw: i16) -> i16 {
+        let v = math::round(f32::from(raw) * self.mm_s_per_velocity_unit);
+        v.clamp(f32::from(i16::MIN), f32::from(i16::MAX)) as i16
+    }
+
+    /// A robot heading \[angle units\] in ARCOS units of 2π/4096, in [-2048, 2048).
+    pub fn heading_units(&self, raw: i16) -> i16 {
+        let units = math::round(rad_to_arcos_angle(f32::from(raw) * self.rad_per_angle_unit));
+        let units = (units as i32).rem_euclid(ANGLE_UNITS_PER_TURN_I);
+        let units = if units >= ANGLE_UNITS_PER_TURN_I / 2 {
+            units - ANGLE_UNITS_PER_TURN_I
+        } else {
+            units
+        };
+        units as i16
+    }
+}
+
+fn to_i16(v: f32) -> Option<i16> {
+    let v = math::round(v);
+    (v.is_finite() && v >= f32::from(i16::MIN) && v <= f32::from(i16::MAX)).then_some(v as i16)
+}
+
+/// Turns XPOS/YPOS counters in a robot's position units into 15-bit millimetre counters.
+///
+/// Each reading's delta is unwrapped in robot units (as [`unwrap_delta_15bit`]) and summed;
+/// the output is the rounded total × DistConvFactor modulo 0x8000, so rounding never
+/// accumulates. With DistConvFactor 1.0 the output is the input.
+#[derive(Clone, Debug)]
+pub struct SipUnitConverter {
+    factors: ConversionFactors,
+    last_raw: Option<(u16, u16)>,
+    x_units: i64,
+    y_units: i64,
+}
+
+impl SipUnitConverter {
+    /// A converter for a robot with `factors` that has seen no reading yet.
+    pub const fn new(factors: ConversionFactors) -> Self {
+        Self {
+            factors,
+            last_raw: None,
+            x_units: 0,
+            y_units: 0,
+        }
+    }
+
+    /// The factors applied.
+    pub fn factors(&self) -> ConversionFactors {
+        self.factors
+    }
+
+    /// XPOS and YPOS in robot units to XPOS and YPOS in millimetres (15-bit counters).
+    pub fn position_mm(&mut self, x_raw: u16, y_raw: u16) -> (u16, u16) {
+        match self.last_raw {
+            None => {
+                self.x_units = i64::from(signed_15bit(x_raw));
+                self.y_units = i64::from(signed_15bit(y_raw));
+            }
+            Some((x0, y0)) => {
+                self.x_units += i64::from(unwrap_delta_15bit(x0, x_raw));
+                self.y_units += i64::from(unwrap_delta_15bit(y0, y_raw));
+            }
+        }
+        self.last_raw = Some((x_raw, y_raw));
+        let f = f64::from(self.factors.mm_per_distance_unit);
+        let mm = |units: i64| {
+            (libm::round(units as f64 * f) as i64).rem_euclid(i64::from(ARCOS_POSITION_MODULUS))
+                as u16
+        };
+        (mm(self.x_units), mm(self.y_units))
     }
 }
 
@@ -373,6 +518,93 @@ mod tests {
         assert!((p.x - x as f32 * 0.001).abs() < 1e-3 && (p.y - y as f32 * 0.001).abs() < 1e-3);
         let expected_m = 3300.0 * math::hypot(37.0, 11.0) * 0.001;
         assert!((odo.distance_travelled_m() - expected_m).abs() < 3300.0 * 0.5e-3);
+    }
+
+    #[test]
+    fn every_known_subclass_has_factors_and_others_have_none() {
+        for name in KNOWN_SUBCLASSES {
+            assert!(ConversionFactors::for_subclass(name).is_some(), "{name}");
+        }
+        let p3dx = ConversionFactors::for_subclass("P3DX").unwrap();
+        assert_eq!(p3dx.mm_per_distance_unit, 0.485);
+        assert_eq!(p3dx.mm_s_per_velocity_unit, 1.0);
+        assert!((p3dx.rad_per_angle_unit - 0.001534).abs() < 1e-6);
+        for name in ["p3dx-sh", "p3dx-sh-lms1xx", "p3dx-sh-lms500"] {
+            assert_eq!(
+                ConversionFactors::for_subclass(name),
+                Some(ConversionFactors::ARCOS_SH)
+            );
+        }
+        assert_eq!(ConversionFactors::ARCOS_SH.mm_per_distance_unit, 1.0);
+        assert_eq!(ConversionFactors::for_subclass("p3at-sh"), None);
+        assert_eq!(ConversionFactors::for_subclass(""), None);
+    }
+
+    #[test]
+    fn move_and_vel_arguments_are_in_robot_units() {
+        let p3dx = ConversionFactors::for_subclass("p3dx").unwrap();
+        assert_eq!(p3dx.move_argument(485), Some(1000));
+        assert_eq!(p3dx.move_argument(-970), Some(-2000));
+        // 16 m is 32990 units: beyond the argument's range.
+        assert_eq!(p3dx.move_argument(16_000), None);
+        assert_eq!(p3dx.vel_argument(300), Some(300));
+        let sh = ConversionFactors::ARCOS_SH;
+        assert_eq!(sh.move_argument(16_000), Some(16_000));
+        assert_eq!(sh.move_argument(40_000), None);
+    }
+
+    #[test]
+    fn arcos_sh_readings_pass_unchanged() {
+        let sh = ConversionFactors::ARCOS_SH;
+        let mut conv = SipUnitConverter::new(sh);
+        for (x, y) in [(0x7FF0, 5), (0x0010, 0x7FFB), (1234, 0x4000), (0x3FFF, 0)] {
+            assert_eq!(conv.position_mm(x, y), (x, y));
+        }
+        for th in [-2048, -1024, -1, 0, 1, 1024, 2047] {
+            assert_eq!(sh.heading_units(th), th);
+        }
+        assert_eq!(sh.velocity_mm_s(-321), -321);
+    }
+
+    #[test]
+    fn p3dx_positions_become_millimetres_before_the_odometry() {
+        // A 3 m by 20 m drive reported in 0.485 mm units: the robot's counters wrap every
+        // 15.9 m, the millimetre counters every 32.8 m; the odometry sees millimetres.
+        let p3dx = ConversionFactors::for_subclass("p3dx").unwrap();
+        let mut conv = SipUnitConverter::new(p3dx);
+        let mut odo = ArcosOdometry::new();
+        let (mut x_mm, mut y_mm) = (0.0f64, 0.0f64);
+        for _ in 0..1000 {
+            x_mm += 3.0;
+            y_mm -= 20.0;
+            let units = |mm: f64| (libm::round(mm / 0.485) as i64).rem_euclid(0x8000) as u16;
+            let (x, y) = conv.position_mm(units(x_mm), units(y_mm));
+            odo.update(x, y, 0);
+        }
+        let (x, y) = odo.position_odom_mm();
+        assert!((x - 3000).abs() <= 1 && (y + 20_000).abs() <= 1, "{x} {y}");
+        let expected_m = 1000.0 * math::hypot(3.0, 20.0) * 0.001;
+        assert!(
+            (odo.distance_travelled_m() - expected_m).abs() < 0.5,
+            "{}",
+            odo.distance_travelled_m()
+        );
+        // Without the factor the same counters would read as 6.2 m by 41 m.
+        let mut raw_odo = ArcosOdometry::new();
+        let mut conv = SipUnitConverter::new(ConversionFactors::ARCOS_SH);
+        let units = |mm: f64| (libm::round(mm / 0.485) as i64).rem_euclid(0x8000) as u16;
+        let (x, y) = conv.position_mm(units(0.0), units(0.0));
+        raw_odo.update(x, y, 0);
+        let (x, y) = conv.position_mm(units(100.0), units(0.0));
+        raw_odo.update(x, y, 0);
+        assert_eq!(raw_odo.position_odom_mm().0, 206);
+    }
+
+    #[test]
+    fn a_first_p3dx_reading_just_below_zero_stays_near_the_origin() {
+        let mut conv = SipUnitConverter::new(ConversionFactors::for_subclass("p3dx").unwrap());
+        // 0x7FFC is -4 units = -1.94 mm: -2 mm as a 15-bit counter.
+        assert_eq!(conv.position_mm(0x7FFC, 200), (0x7FFE, 97));
     }
 
     #[test]

@@ -7,6 +7,14 @@
 //! switch the serial speed up with HOSTBAUD when CONFIG's AutoBaud is 2, then ENABLE the motors
 //! and apply the board's speed and acceleration limits.
 //!
+//! Units: the subclass names the robot's conversion factors
+//! ([`ConversionFactors::for_subclass`]; a robot whose subclass has none is refused). The
+//! session hands on status packets in the units of ARCOS on a P3-DX-SH whatever the robot: XPOS
+//! and YPOS as millimetre counters (converted by a [`SipUnitConverter`]), wheel velocities in
+//! mm/s, THPOS and CONTROL in 2π/4096 rad; and it writes the millimetres of a MOVE and the
+//! mm/s of a VEL in the robot's units. On a `p3dx` (DistConvFactor 0.485) a MOVE of 485 mm
+//! leaves as MOVE 1000.
+//!
 //! Safety rules this session enforces:
 //! - keep-alive: PULSE when nothing else was sent for 500 ms (a quarter of the firmware
 //!   watchdog if that is shorter), so the firmware watchdog (2 s by default) only fires when
@@ -34,6 +42,7 @@ use super::codec::{ArcosCodec, CodecStats};
 use super::link::RobotLink;
 use crate::config::{ARCOS_BAUD_RATES, BoardConfig, KNOWN_SUBCLASSES};
 use crate::control::command::Velocity;
+use crate::control::odometry::{ConversionFactors, SipUnitConverter};
 use crate::wire::arcos::{
     Command, ConfigPacket, Name, ServerPacket, StatusPacket, SyncReply, config, encoder,
 };
@@ -204,12 +213,21 @@ pub enum SessionError {
         /// The class it reported.
         got: String,
     },
-    /// The robot's subclass is not the one the board expects.
+    /// The robot's subclass is not the one the board expects, or (when `expected` is not one
+    /// known subclass) not a subclass whose conversion factors are known.
     WrongSubclass {
         /// The subclass it reported.
         got: String,
-        /// The board's subclass.
+        /// The board's subclass, or the known subclasses (`p3dx, p3dx-sh, …`) when the robot's
+        /// subclass has no known conversion factors.
         expected: String,
+    },
+    /// A MOVE or VEL argument does not fit the command in the robot's units.
+    OutOfRange {
+        /// The command (`MOVE`, `VEL`).
+        command: &'static str,
+        /// The argument asked for \[mm or mm/s\].
+        value: i32,
     },
     /// No CONFIG packet arrived.
     NoConfig,
@@ -240,9 +258,22 @@ impl fmt::Display for SessionError {
             SessionError::WrongClass { got } => {
                 write!(f, "robot class is {got:?}, expected \"Pioneer\"")
             }
-            SessionError::WrongSubclass { got, expected } => write!(
+            SessionError::WrongSubclass { got, expected } => {
+                if ConversionFactors::for_subclass(expected).is_some() {
+                    write!(
+                        f,
+                        "robot subclass is {got:?} but the board expects {expected:?}"
+                    )
+                } else {
+                    write!(
+                        f,
+                        "robot subclass {got:?} is not a P3-DX subclass whose conversion factors are known (known: {expected})"
+                    )
+                }
+            }
+            SessionError::OutOfRange { command, value } => write!(
                 f,
-                "robot subclass is {got:?} but the board expects {expected:?}"
+                "{command} {value} does not fit the command's 16-bit argument in the robot's units"
             ),
             SessionError::NoConfig => write!(f, "the robot sent no CONFIG packet"),
             SessionError::MicrocontrollerReset { id } => {
@@ -329,6 +360,8 @@ pub struct ArcosClient {
     keepalive_on: bool,
     fault: Option<Fault>,
     stats: SessionStats,
+    /// The robot's units to the P3-DX-SH's (identity until CONFIG names the subclass).
+    units: SipUnitConverter,
 }
 
 impl ArcosClient {
@@ -353,6 +386,7 @@ impl ArcosClient {
             keepalive_on: false,
             fault: None,
             stats: SessionStats::default(),
+            units: SipUnitConverter::new(ConversionFactors::ARCOS_SH),
         };
         client.handshake().await?;
         client.check_identity(&client.identity.class, &client.identity.subclass)?;
@@ -361,6 +395,10 @@ impl ArcosClient {
         client.send(&Command::Config(Some(1))).await?;
         let config = client.await_config().await?;
         client.check_identity(&config.robot_type, &config.subtype)?;
+        // check_identity refused a subclass without factors.
+        if let Some(factors) = ConversionFactors::for_subclass(&config.subtype) {
+            client.units = SipUnitConverter::new(factors);
+        }
         // A robot whose FLASH watchdog is shorter than four keep-alive periods gets PULSEs
         // four times per watchdog period: a short watchdog (so that a cut serial line stops
         // the robot quickly) is never tripped by a live program.
@@ -439,24 +477,21 @@ impl ArcosClient {
                 got: class.to_string(),
             });
         }
-        let ok = match &self.options.expected_subclass {
-            Some(expected) => subclass.eq_ignore_ascii_case(expected),
-            None => KNOWN_SUBCLASSES
-                .iter()
-                .any(|k| k.eq_ignore_ascii_case(subclass)),
-        };
-        if ok {
-            Ok(())
-        } else {
-            Err(SessionError::WrongSubclass {
+        if let Some(expected) = &self.options.expected_subclass
+            && !subclass.eq_ignore_ascii_case(expected)
+        {
+            return Err(SessionError::WrongSubclass {
                 got: subclass.to_string(),
-                expected: self
-                    .options
-                    .expected_subclass
-                    .clone()
-                    .unwrap_or_else(|| KNOWN_SUBCLASSES.join("|")),
-            })
+                expected: expected.clone(),
+            });
         }
+        if ConversionFactors::for_subclass(subclass).is_none() {
+            return Err(SessionError::WrongSubclass {
+                got: subclass.to_string(),
+                expected: KNOWN_SUBCLASSES.join(", "),
+            });
+        }
+        Ok(())
     }
 
     async fn await_config(&mut self) -> Result<ConfigPacket, SessionError> {
@@ -520,6 +555,11 @@ impl ArcosClient {
     /// The robot's SYNC2 identity.
     pub fn identity(&self) -> &RobotIdentity {
         &self.identity
+    }
+
+    /// The conversion factors of the robot's subclass.
+    pub fn factors(&self) -> ConversionFactors {
+        self.units.factors()
     }
 
     /// The CONFIG packet read at connection.
@@ -588,8 +628,9 @@ impl ArcosClient {
                 return Ok(None);
             };
             match packet {
-                ServerPacket::Status(status) => {
+                ServerPacket::Status(mut status) => {
                     self.stats.status_packets += 1;
+                    self.convert_to_arcos_sh_units(&mut status);
                     return Ok(Some(RobotEvent::Status {
                         at: Instant::now(),
                         status: Box::new(status),
@@ -608,6 +649,36 @@ impl ArcosClient {
                 }
             }
         }
+    }
+
+    /// Rewrites a status packet's positions, headings and wheel velocities in P3-DX-SH units.
+    fn convert_to_arcos_sh_units(&mut self, status: &mut StatusPacket) {
+        let factors = self.units.factors();
+        (status.x_pos, status.y_pos) = self.units.position_mm(status.x_pos, status.y_pos);
+        status.th_pos = factors.heading_units(status.th_pos);
+        status.control = factors.heading_units(status.control);
+        status.left_vel_mm_s = factors.velocity_mm_s(status.left_vel_mm_s);
+        status.right_vel_mm_s = factors.velocity_mm_s(status.right_vel_mm_s);
+    }
+
+    /// A command as the robot reads it: MOVE's millimetres and VEL's mm/s in its units.
+    fn in_robot_units(&self, command: &Command) -> Result<Command, SessionError> {
+        let factors = self.units.factors();
+        Ok(match *command {
+            Command::Move(mm) => Command::Move(factors.move_argument(i32::from(mm)).ok_or(
+                SessionError::OutOfRange {
+                    command: "MOVE",
+                    value: i32::from(mm),
+                },
+            )?),
+            Command::Vel(mm_s) => {
+                Command::Vel(factors.vel_argument(mm_s).ok_or(SessionError::OutOfRange {
+                    command: "VEL",
+                    value: i32::from(mm_s),
+                })?)
+            }
+            ref other => other.clone(),
+        })
     }
 
     /// The next decoded packet before `deadline`, keeping the link alive meanwhile.
@@ -650,8 +721,10 @@ impl ArcosClient {
         }
     }
 
-    /// Writes one command, keeping the minimum spacing between commands.
+    /// Writes one command, keeping the minimum spacing between commands. A MOVE \[mm\] and a
+    /// VEL \[mm/s\] are written in the robot's units (see the module documentation).
     pub async fn send(&mut self, command: &Command) -> Result<(), SessionError> {
+        let command = &self.in_robot_units(command)?;
         let earliest = self.last_sent + self.options.command_spacing;
         if Instant::now() < earliest && self.stats.commands_sent > 0 {
             tokio::time::sleep_until(earliest).await;

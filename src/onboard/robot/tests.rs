@@ -371,3 +371,64 @@ fn garbage_never_panics_the_session_codec() {
         codec.decode(&bytes, &mut out);
     }
 }
+
+#[tokio::test(start_paused = true)]
+async fn an_unknown_subclass_is_refused_naming_it_and_the_known_ones() {
+    let script = FakeRobotScript {
+        subclass: "p3at-sh".into(),
+        ..FakeRobotScript::default()
+    };
+    let (link, _) = spawn_robot(script, None);
+    let opts = SessionOptions {
+        expected_subclass: None,
+        ..SessionOptions::default()
+    };
+    let err = match ArcosClient::connect(link, opts).await {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("a p3at-sh was accepted"),
+    };
+    assert!(err.contains("\"p3at-sh\""), "{err}");
+    for known in crate::config::KNOWN_SUBCLASSES {
+        assert!(err.contains(known), "{err}");
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_p3dx_reports_millimetres_and_gets_moves_in_its_units() {
+    let script = FakeRobotScript {
+        subclass: "p3dx".into(),
+        ..FakeRobotScript::default()
+    };
+    let (link, log) = spawn_robot(script, None);
+    let mut client = ArcosClient::connect(link, options("p3dx")).await.unwrap();
+    assert_eq!(client.factors().mm_per_distance_unit, 0.485);
+    // The fake robot's XPOS grows by one unit (0.485 mm) per status packet.
+    let mut xs = Vec::new();
+    while xs.len() < 41 {
+        let deadline = Instant::now() + Duration::from_secs(1);
+        if let Some(RobotEvent::Status { status, .. }) = client.next_event(deadline).await.unwrap()
+        {
+            xs.push(i32::from(status.x_pos));
+        }
+    }
+    let advanced_mm = xs[40] - xs[0];
+    assert!((advanced_mm - 19).abs() <= 1, "{xs:?}");
+    client.send(&Command::Move(485)).await.unwrap();
+    client.send(&Command::Vel(300)).await.unwrap();
+    assert!(matches!(
+        client.send(&Command::Move(20_000)).await,
+        Err(SessionError::OutOfRange {
+            command: "MOVE",
+            value: 20_000
+        })
+    ));
+    let _ = client
+        .next_event(Instant::now() + Duration::from_millis(50))
+        .await
+        .unwrap();
+    let sent = numbers(&log);
+    assert!(
+        sent.ends_with(&[(8, Some(1000)), (11, Some(300))]),
+        "{sent:?}"
+    );
+}
