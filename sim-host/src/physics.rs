@@ -9,9 +9,14 @@
 //! `left = v - ω·track/2`, `right = v + ω·track/2`; the default track (0.357 m) is the one
 //! implied by ARIA's `DiffConvFactor` 0.0056 for the P3-DX.
 //!
-//! Collisions: the robot is a disc ([`BodyConfig::radius_m`], 0.25 m) tested against blocked
-//! cells (each an axis-aligned square) and against other discs (robots, people). A step that
-//! would push the disc deeper into an obstacle is cut at the contact point (bisection), both
+//! Collisions: against walls, the robot's body is its outline ([`BodyConfig::body`]): a
+//! rectangle with rounded ends, as the P3-DX's (0.381 m wide, 0.455 m long, axle 0.21 m behind
+//! the front), modelled as a capsule (the rectangle's width as its diameter) and tested as four
+//! discs along its axis, so that a door the body fits through straight lets it through and a
+//! turn in place against a wall does not; between robots and against people, each robot is the
+//! disc of [`BodyConfig::radius_m`] (0.25 m). Blocked cells are axis-aligned squares. A step
+//! (translation and rotation) that would push the body deeper into an obstacle is cut at the
+//! contact point (bisection), both
 //! velocities drop to zero, and the stall flag and a bumper flag are set (front when the robot
 //! was moving forward, rear when backward). Moves that do not go deeper are allowed, so a robot
 //! can always back away, even if a door closed on it. The flags clear at the next free
@@ -104,11 +109,48 @@ impl Default for SlipConfig {
     }
 }
 
+/// The robot's outline for wall contacts: a capsule along the robot's heading, relative to
+/// the centre of rotation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyOutline {
+    /// Width \[m\] (the capsule's diameter).
+    pub width_m: f32,
+    /// From the centre of rotation to the front edge \[m\] (at least half the width).
+    pub front_m: f32,
+    /// From the centre of rotation to the rear edge \[m\] (at least half the width).
+    pub rear_m: f32,
+}
+
+impl BodyOutline {
+    /// The P3-DX body: 0.381 m wide, 0.21 m ahead of the axle and 0.245 m behind it (its
+    /// datasheet, as [`papillon::control::safety::RobotFootprint::p3dx`]).
+    pub const fn p3dx() -> Self {
+        Self {
+            width_m: 0.381,
+            front_m: 0.210,
+            rear_m: 0.245,
+        }
+    }
+
+    /// The centres (in the robot frame, along x) and the radius of the four discs that make
+    /// up the capsule: evenly spaced from the rear cap's centre to the front cap's. Between
+    /// two discs the union dips below the capsule's side by less than half a millimetre.
+    fn discs(&self) -> ([f32; 4], f32) {
+        let r = 0.5 * self.width_m;
+        let front = (self.front_m - r).max(0.0);
+        let rear = -(self.rear_m - r).max(0.0);
+        let step = (front - rear) / 3.0;
+        ([rear, rear + step, rear + 2.0 * step, front], r)
+    }
+}
+
 /// Physical parameters of the simulated robot.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BodyConfig {
-    /// Radius of the robot's disc \[m\].
+    /// Radius of the robot's disc as other robots and people meet it \[m\].
     pub radius_m: f32,
+    /// The outline that meets walls.
+    pub body: BodyOutline,
     /// Distance between the wheels \[m\].
     pub track_m: f32,
     /// Largest translational speed \[mm/s\].
@@ -138,11 +180,13 @@ pub struct BodyConfig {
 }
 
 impl Default for BodyConfig {
-    /// A P3-DX: radius 0.25 m, track 0.357 m, 1200 mm/s and 300 deg/s at most, 300 mm/s² and
-    /// 100 deg/s² (ARCOS defaults), 10 ms steps, 128 ticks/mm, 13.0 V battery.
+    /// A P3-DX: its body outline, a 0.25 m disc for other robots, track 0.357 m, 1200 mm/s
+    /// and 300 deg/s at most, 300 mm/s² and 100 deg/s² (ARCOS defaults), 10 ms steps, 128
+    /// ticks/mm, 13.0 V battery.
     fn default() -> Self {
         Self {
             radius_m: 0.25,
+            body: BodyOutline::p3dx(),
             track_m: 0.357,
             max_speed_mm_s: 1200.0,
             max_turn_deg_s: 300.0,
@@ -158,6 +202,29 @@ impl Default for BodyConfig {
             slip: SlipConfig::default(),
         }
     }
+}
+
+/// How deep a body of outline `body` at `pose` reaches into the world's walls, or a disc of
+/// `radius_m` at its centre into the `discs` \[m\].
+pub fn body_penetration(
+    world: &World,
+    discs: &[Disc],
+    pose: Pose2,
+    body: &BodyOutline,
+    radius_m: f32,
+) -> f32 {
+    let (xs, r) = body.discs();
+    let (sin, cos) = (math::sin(pose.theta), math::cos(pose.theta));
+    let mut depth = f32::NEG_INFINITY;
+    for x in xs {
+        let c = Point2::new(pose.x + x * cos, pose.y + x * sin);
+        depth = depth.max(world.wall_penetration(c, r));
+    }
+    let p = pose.position();
+    for d in discs {
+        depth = depth.max(radius_m + d.radius_m - p.distance(d.center));
+    }
+    depth
 }
 
 /// How deep a disc at `p` of `radius_m` reaches into the world and the `discs` \[m\].
@@ -475,16 +542,20 @@ impl RobotBody {
             from.x + d_true * math::cos(mid),
             from.y + d_true * math::sin(mid),
         );
-        let depth_from = penetration(world, discs, from.position(), c.radius_m).max(0.0);
-        let depth_to = penetration(world, discs, to, c.radius_m);
+        let pose_at = |m: f32| {
+            let p = lerp(from.position(), to, m);
+            Pose2::new(p.x, p.y, from.theta + dth_true * m)
+        };
+        let depth_of = |pose: Pose2| body_penetration(world, discs, pose, &c.body, c.radius_m);
+        let depth_from = depth_of(from).max(0.0);
+        let depth_to = depth_of(pose_at(1.0));
         let mut fraction = 1.0f32;
         if depth_to > depth_from {
             // Cut the step at the contact point.
             let (mut lo, mut hi) = (0.0f32, 1.0f32);
             for _ in 0..10 {
                 let m = 0.5 * (lo + hi);
-                let p = lerp(from.position(), to, m);
-                if penetration(world, discs, p, c.radius_m) > depth_from {
+                if depth_of(pose_at(m)) > depth_from {
                     hi = m;
                 } else {
                     lo = m;
@@ -536,12 +607,14 @@ impl RobotBody {
             from.x + along * math::cos(from.theta),
             from.y + along * math::sin(from.theta),
         );
-        let r = self.config.radius_m;
-        if penetration(world, discs, to, r) > penetration(world, discs, from.position(), r).max(0.0)
+        let to = Pose2::new(to.x, to.y, from.theta + turn);
+        let (body, r) = (&self.config.body, self.config.radius_m);
+        if body_penetration(world, discs, to, body, r)
+            > body_penetration(world, discs, from, body, r).max(0.0)
         {
             return;
         }
-        self.true_pose = Pose2::new(to.x, to.y, from.theta + turn);
+        self.true_pose = to;
     }
 }
 
@@ -668,15 +741,17 @@ mod tests {
     #[test]
     fn walls_stop_the_robot_and_set_the_front_bumper() {
         let w = builtin::empty(0.1).unwrap();
-        // Facing the east wall (inner face at x = 23.5 m).
+        // Facing the east wall (inner face at x = 23.5 m): the front edge, 0.21 m ahead of the
+        // axle, stops at the face.
         let mut b = RobotBody::new(no_slip(), Pose2::new(22.0, 5.0, 0.0), 3);
         b.command(500.0, 0.0);
         run(&mut b, &w, 10.0);
         let x = b.true_pose().x;
-        assert!(x <= 23.25 + 1e-3 && x > 23.2, "stopped at {x}");
+        assert!(x <= 23.29 + 1e-3 && x > 23.24, "stopped at {x}");
         assert!(b.stalled() && b.front_bumper() && !b.rear_bumper());
         assert_eq!(b.arcos_stall_bumpers(), 0xFF01);
-        assert!(w.wall_penetration(b.true_pose().position(), 0.25) <= 0.0);
+        let body = BodyOutline::p3dx();
+        assert!(body_penetration(&w, &[], b.true_pose(), &body, 0.25) <= 0.0);
         // Backing off frees it and sets nothing.
         b.command(-200.0, 0.0);
         run(&mut b, &w, 2.0);
@@ -691,7 +766,41 @@ mod tests {
         b.command(-300.0, 0.0);
         run(&mut b, &w, 5.0);
         assert!(b.stalled() && b.rear_bumper() && !b.front_bumper());
-        assert!(b.true_pose().x >= 0.75 - 1e-3);
+        // The rear edge, 0.245 m behind the axle, stops at the west wall's face (x = 0.5 m).
+        assert!(b.true_pose().x >= 0.745 - 1e-3);
+    }
+
+    #[test]
+    fn the_body_passes_a_half_metre_door_straight_but_not_a_narrower_one_than_itself() {
+        // 0.381 m wide: through 0.5 m and (barely) 0.4 m, not through 0.3 m.
+        for (door_m, passes) in [(0.5, true), (0.4, true), (0.3, false)] {
+            let mut w = builtin::empty(0.1).unwrap();
+            // A wall across x = 10 m with a door centred on y = 5 m.
+            w.fill_rect(10.0, 0.5, 10.1, 5.0 - door_m / 2.0, true);
+            w.fill_rect(10.0, 5.0 + door_m / 2.0, 10.1, 23.5, true);
+            let mut b = RobotBody::new(no_slip(), Pose2::new(8.0, 5.0, 0.0), 3);
+            b.command(200.0, 0.0);
+            run(&mut b, &w, 20.0);
+            let x = b.true_pose().x;
+            assert_eq!(x > 11.0, passes, "door {door_m} m: stopped at {x}");
+            assert_eq!(b.stalled(), !passes);
+        }
+    }
+
+    #[test]
+    fn turning_in_place_against_a_wall_is_stopped() {
+        let w = builtin::empty(0.1).unwrap();
+        // The rear 0.2 m from the west wall's face: the rear corners hit it when turning.
+        let mut b = RobotBody::new(no_slip(), Pose2::new(0.5 + 0.2 + 0.05, 5.0, 0.0), 3);
+        b.command(0.0, 30.0);
+        run(&mut b, &w, 3.0);
+        // Free of the wall, a turn in place goes round.
+        let mut free = RobotBody::new(no_slip(), Pose2::new(5.0, 5.0, 0.0), 3);
+        free.command(0.0, 30.0);
+        run(&mut free, &w, 3.0);
+        assert!(free.true_pose().theta.abs() > 0.5);
+        assert!(!free.stalled());
+        let _ = b;
     }
 
     #[test]

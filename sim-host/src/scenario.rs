@@ -9,7 +9,7 @@
 use std::fmt;
 
 use papillon::geometry::Pose2;
-use papillon::mission::{MissionConfig, SelectorKind};
+use papillon::mission::{MissionConfig, SelectorKind, footprint};
 use papillon::optim::Method;
 
 use crate::physics::SlipConfig;
@@ -247,6 +247,13 @@ impl Setup {
             mission.battery_steps = b;
         }
         let mut world = World::load(&spec.map, spec.resolution_m).map_err(|e| e.to_string())?;
+        // The planning layer follows the body at the world's own cell size.
+        mission.traversability = footprint::planning_layer(
+            &mission.safety,
+            footprint::DEFAULT_CLEARANCE_M,
+            world.geometry().resolution_m,
+            mission.traversability.unknown_policy,
+        );
         if let Some(pose) = spec.start {
             if !(pose.x.is_finite() && pose.y.is_finite() && pose.theta.is_finite()) {
                 return Err("--start: expected finite numbers".into());

@@ -215,6 +215,7 @@ mod chain_tests {
                 scan_time: Some(self.now),
                 laser: &self.laser,
                 flags: self.flags,
+                remembered: &[],
             };
             let (cmd, event) = self.monitor.filter(self.now, proposed, &inputs);
             if let Some(v) = cmd.velocity() {

@@ -51,9 +51,23 @@ pub struct RobotFootprint {
 }
 
 impl RobotFootprint {
-    /// P3-DX: 425 mm wide, 210 mm to the front, 301 mm to the rear, 250 mm turning radius
-    /// (ARIA's p3dx parameters, protocols.md §1.9).
+    /// P3-DX body: 381 mm wide, 455 mm long (210 mm ahead of the wheel axle, 245 mm behind
+    /// it), 267 mm swing radius (Adept MobileRobots, Pioneer 3-DX datasheet). ARIA's `p3dx`
+    /// parameter file gives a larger outline that includes the optional bumper rings (425 mm
+    /// wide, 511 mm long, 250 mm radius: [`Self::p3dx_with_bumpers`]); a board names the one
+    /// its robot has.
     pub const fn p3dx() -> Self {
+        Self {
+            width_m: 0.381,
+            front_m: 0.210,
+            rear_m: 0.245,
+            radius_m: 0.267,
+        }
+    }
+
+    /// P3-DX with bumper rings, ARIA's `p3dx` parameters: 425 mm wide, 210 mm to the front,
+    /// 301 mm to the rear, 250 mm radius (protocols.md §1.9).
+    pub const fn p3dx_with_bumpers() -> Self {
         Self {
             width_m: 0.425,
             front_m: 0.210,
@@ -74,12 +88,19 @@ impl Default for RobotFootprint {
 pub struct SafetyConfig {
     /// The robot's outline.
     pub footprint: RobotFootprint,
-    /// Added on each side of the robot's width for the driving corridor \[m\]. Default 0.05.
+    /// Added on each side of the robot's width for the driving corridor at a standstill
+    /// \[m\]. Default 0.02, so that a P3-DX (0.381 m) creeping through a 0.5 m door is not
+    /// stopped by its frame; the margin grows with speed ([`Self::side_margin_s`]).
     pub side_margin_m: f32,
+    /// Added to the side margin per m/s of speed \[s\]: the lateral error path tracking may
+    /// build up in that much time at a heading error of about a radian's tenth. Default 0.1
+    /// (0.06 m in all at the exploration speed of 0.4 m/s).
+    pub side_margin_s: f32,
     /// Clearance always kept ahead of (or behind) the robot's edge, on top of the braking
     /// distance \[m\]. Default 0.10.
     pub min_clearance_m: f32,
-    /// Added to the turning radius when turning in place \[m\]. Default 0.05.
+    /// Added to the turning radius when turning in place \[m\]. Default 0.03 (laser noise at
+    /// close range is about 1.5 cm).
     pub turn_margin_m: f32,
     /// The control period, for the distance covered before the next check \[s\]. Default 0.1.
     pub control_period_s: f32,
@@ -100,9 +121,10 @@ impl Default for SafetyConfig {
     fn default() -> Self {
         Self {
             footprint: RobotFootprint::p3dx(),
-            side_margin_m: 0.05,
+            side_margin_m: 0.02,
+            side_margin_s: 0.1,
             min_clearance_m: 0.10,
-            turn_margin_m: 0.05,
+            turn_margin_m: 0.03,
             control_period_s: 0.1,
             max_input_age: Duration::from_millis(500),
             backoff_distance_m: 0.15,
@@ -178,6 +200,10 @@ pub struct SafetyInputs<'a> {
     pub laser: &'a LaserConfig,
     /// The robot's flags from its latest SIP.
     pub flags: RobotFlags,
+    /// Obstacles the map remembers around the robot, in the base frame \[m\]: what the laser
+    /// cannot see (behind a 180° laser, inside its blind zone) but a turn or a back-off would
+    /// run into. Empty when the caller has no map.
+    pub remembered: &'a [Point2],
 }
 
 /// Why the monitor is holding the robot until a fresh plan.
@@ -452,10 +478,15 @@ impl SafetyMonitor {
             }
             SafetyState::Monitoring => self.limits.clamp(proposed),
         };
-        if let Some((distance_m, point_base_m)) = inputs
+        let seen = inputs
             .scan
-            .and_then(|s| self.obstacle_in_path(command, s, inputs.laser))
-        {
+            .and_then(|s| self.obstacle_in_path(command, s, inputs.laser));
+        let remembered = self.nearest_in_path(command, inputs.remembered.iter().copied());
+        let nearest = match (seen, remembered) {
+            (Some(a), Some(b)) => Some(if b.0 < a.0 { b } else { a }),
+            (a, b) => a.or(b),
+        };
+        if let Some((distance_m, point_base_m)) = nearest {
             let cause = match self.state {
                 SafetyState::BackingOff { .. } => HoldCause::Contact,
                 _ => HoldCause::Obstacle,
@@ -483,6 +514,14 @@ impl SafetyMonitor {
         )
     }
 
+    /// Half the width of the corridor watched ahead at `speed_m_s` \[m\]: half the body plus
+    /// the side margin for that speed.
+    pub fn corridor_half_width_m(&self, speed_m_s: f32) -> f32 {
+        0.5 * self.config.footprint.width_m
+            + self.config.side_margin_m
+            + self.config.side_margin_s * math::abs(speed_m_s)
+    }
+
     /// Distance needed ahead of the robot's edge at `speed_m_s` \[m\].
     pub fn stopping_distance_m(&self, speed_m_s: f32) -> f32 {
         let v = math::abs(speed_m_s);
@@ -503,7 +542,7 @@ impl SafetyMonitor {
             return None;
         }
         let fp = self.config.footprint;
-        let half_width = 0.5 * fp.width_m + self.config.side_margin_m;
+        let half_width = self.corridor_half_width_m(mm_to_m(f32::from(speed_mm_s)));
         let stop_m = self.stopping_distance_m(mm_to_m(f32::from(speed_mm_s)));
         let turn_limit = fp.radius_m + self.config.turn_margin_m;
         // A return counts only within this distance of the robot's centre (the box ahead or
@@ -518,15 +557,36 @@ impl SafetyMonitor {
         };
         let mount_m = math::hypot(laser.mount.x, laser.mount.y);
         let reach_m = (within_m + mount_m) * 1.001 + 0.001;
-        let mut nearest: Option<(f32, Point2)> = None;
-        for beam in scan.beams() {
-            let Some(r) = beam.range_m else { continue };
-            if !(r.is_finite() && r >= self.config.min_valid_range_m && r <= reach_m) {
-                continue;
+        let min_m = self.config.min_valid_range_m;
+        let points = scan.beams().iter().filter_map(|beam| {
+            let r = beam.range_m?;
+            if !(r.is_finite() && r >= min_m && r <= reach_m) {
+                return None;
             }
             let in_laser =
                 Point2::new(r * math::cos(beam.angle_rad), r * math::sin(beam.angle_rad));
-            let p = laser.mount.transform_point(in_laser);
+            Some(laser.mount.transform_point(in_laser))
+        });
+        self.nearest_in_path(v, points)
+    }
+
+    /// The nearest of `points` (base frame \[m\]) that `v` would run into: its clearance \[m\]
+    /// and the point.
+    fn nearest_in_path(
+        &self,
+        v: Velocity,
+        points: impl Iterator<Item = Point2>,
+    ) -> Option<(f32, Point2)> {
+        let speed_mm_s = v.speed_mm_s();
+        if speed_mm_s == 0 && v.turn_rate_deg_s() == 0 {
+            return None;
+        }
+        let fp = self.config.footprint;
+        let half_width = self.corridor_half_width_m(mm_to_m(f32::from(speed_mm_s)));
+        let stop_m = self.stopping_distance_m(mm_to_m(f32::from(speed_mm_s)));
+        let turn_limit = fp.radius_m + self.config.turn_margin_m;
+        let mut nearest: Option<(f32, Point2)> = None;
+        for p in points {
             let clearance = if speed_mm_s > 0 {
                 (p.x > 0.0 && math::abs(p.y) <= half_width && p.x - fp.front_m < stop_m)
                     .then_some(p.x - fp.front_m)
@@ -566,8 +626,11 @@ mod tests {
             laser: &LaserConfig,
         ) -> Option<(f32, Point2)> {
             let fp = m.config.footprint;
-            let half_width = 0.5 * fp.width_m + m.config.side_margin_m;
-            let stop_m = m.stopping_distance_m(mm_to_m(f32::from(v.speed_mm_s())));
+            let speed_m_s = mm_to_m(f32::from(v.speed_mm_s()));
+            let half_width = 0.5 * fp.width_m
+                + m.config.side_margin_m
+                + m.config.side_margin_s * math::abs(speed_m_s);
+            let stop_m = m.stopping_distance_m(speed_m_s);
             let turn_limit = fp.radius_m + m.config.turn_margin_m;
             let mut nearest: Option<(f32, Point2)> = None;
             for beam in scan.beams() {
@@ -664,8 +727,14 @@ mod tests {
     }
 
     impl Bench {
+        /// A monitor of the P3-DX with bumper rings (425 mm wide, 301 mm to the rear, 0.25 m
+        /// radius), whose geometry the distances below are worked out for.
         fn new() -> Self {
-            let mut monitor = SafetyMonitor::new(SafetyConfig::default(), Limits::default());
+            let config = SafetyConfig {
+                footprint: RobotFootprint::p3dx_with_bumpers(),
+                ..SafetyConfig::default()
+            };
+            let mut monitor = SafetyMonitor::new(config, Limits::default());
             monitor.acknowledge_replan().unwrap();
             Self {
                 monitor,
@@ -695,6 +764,7 @@ mod tests {
                 scan_time: self.scan_time,
                 laser: &self.laser,
                 flags: self.flags,
+                remembered: &[],
             };
             self.monitor.filter(self.now, proposed, &inputs)
         }
@@ -738,6 +808,7 @@ mod tests {
             scan_time: Some(Time::ZERO),
             laser: &laser,
             flags: RobotFlags::nominal(),
+            remembered: &[],
         };
         let (cmd, _) = m.filter(Time::ZERO, forward(200), &inputs);
         assert_eq!(cmd, RobotCommand::Stop);
@@ -845,6 +916,45 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn remembered_obstacles_stop_a_turn_the_laser_cannot_see() {
+        let mut b = Bench::new();
+        let spin = MotionCommand {
+            speed_mm_s: 0,
+            turn_rate_deg_s: 30,
+        };
+        // Nothing in the scan; the map remembers a wall corner 0.26 m behind the robot.
+        let behind = [Point2::new(-0.26, 0.0)];
+        assert!(moving(b.tick(spin).0));
+        let inputs = SafetyInputs {
+            pose_odom: b.pose_odom,
+            odometry_time: b.odometry_time,
+            scan: Some(&b.scan),
+            scan_time: b.scan_time,
+            laser: &b.laser,
+            flags: b.flags,
+            remembered: &behind,
+        };
+        let (cmd, ev) = b.monitor.filter(b.now, spin, &inputs);
+        assert_eq!(cmd, RobotCommand::Stop);
+        assert!(matches!(ev, Some(SafetyEvent::ObstacleAhead { .. })));
+    }
+
+    #[test]
+    fn a_creeping_p3dx_fits_a_half_metre_door() {
+        // The body (0.381 m) centred 2 cm off the middle of a 0.5 m door, frame faces 0.23 m
+        // and 0.27 m to the sides, 0.3 m ahead: at 100 mm/s the corridor (0.19 + 0.02 + 0.01
+        // m each side) passes between them; at 400 mm/s it does not.
+        let mut monitor = SafetyMonitor::new(SafetyConfig::default(), Limits::default());
+        monitor.acknowledge_replan().unwrap();
+        let frame = [Point2::new(0.5, 0.23), Point2::new(0.5, -0.27)];
+        let limits = Limits::default();
+        let slow = monitor.nearest_in_path(limits.clamp(forward(100)), frame.iter().copied());
+        assert_eq!(slow, None);
+        let fast = monitor.nearest_in_path(limits.clamp(forward(400)), frame.iter().copied());
+        assert!(fast.is_some());
     }
 
     #[test]

@@ -25,7 +25,7 @@ use crate::sensor::{Scan, integrate_scan};
 use super::shared::{SharedMap, Workspace};
 use super::{
     DoneReason, FaultReason, MAX_EVENTS, MissionConfig, MissionError, MissionEvent, MissionState,
-    MissionStats, ReplanCause, StepOutput,
+    MissionStats, ReplanCause, StepOutput, footprint,
 };
 
 mod deciding;
@@ -108,6 +108,10 @@ pub struct Mission<const N: usize> {
     goal: GoalRequest,
     /// Decisions in a row that failed.
     failed_in_row: u32,
+    /// Errands dropped in a row while the robot got nowhere (less than 1 m from where the
+    /// first of them was dropped), and that place: a robot that cannot get anywhere, whatever
+    /// it chooses, ends the mission instead of choosing again for ever.
+    abandoned_in_row: (u32, Point2),
     /// Places this robot failed to reach.
     blacklist: Blacklist,
     /// A decision computed ahead, from the end of the current path.
@@ -171,6 +175,7 @@ impl<const N: usize> Mission<N> {
             errand: Errand::new(),
             goal: GoalRequest::default(),
             failed_in_row: 0,
+            abandoned_in_row: (0, start_map.position()),
             blacklist: Blacklist::default(),
             ahead: None,
             last_history: heapless::Vec::new(),
@@ -357,7 +362,21 @@ impl<const N: usize> Mission<N> {
         // for the decisions of this period, then the cells are put back.
         let mut lifted = self.lift_own_body(map);
         self.stamp_others(map, now, &mut lifted);
-        let proposed = self.run(now, map, ws, rng, &mut events);
+        let mut proposed = self.run(now, map, ws, rng, &mut events);
+        // Slow through narrow places; and what the map knows around the body (its own body
+        // still lifted, the robots near it stamped), for turns and back-offs the laser cannot
+        // see.
+        if let Some(cap) = footprint::narrow_speed_cap(&map.trav, self.senses.pose_map) {
+            proposed.speed_mm_s = proposed.speed_mm_s.clamp(-cap, cap);
+        }
+        let mut remembered = heapless::Vec::new();
+        let fp = self.config.safety.footprint;
+        footprint::remembered_obstacles(
+            &map.grid,
+            self.senses.pose_map,
+            fp.radius_m.max(fp.front_m).max(fp.rear_m) + self.config.safety.turn_margin_m,
+            &mut remembered,
+        );
         for &(i, value) in lifted.iter().rev() {
             map.grid.set_log_odds(i, value, &mut map.trav);
         }
@@ -370,6 +389,7 @@ impl<const N: usize> Mission<N> {
             scan_time: s.scan_time,
             laser: &self.config.laser,
             flags: s.flags,
+            remembered: &remembered,
         };
         let (command, safety) = self.monitor.filter(now, proposed, &inputs);
         if let Some(event) = safety {

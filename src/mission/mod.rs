@@ -90,6 +90,7 @@
 //! and with xBOA the decisions taken from the predicted end pose lead to longer missions. It
 //! is therefore off by default.
 
+pub mod footprint;
 mod machine;
 mod shared;
 
@@ -108,16 +109,20 @@ use crate::explore::{DecideError, ExploreConfig, MAX_TARGETS};
 use crate::geometry::Point2;
 use crate::grid::{GridError, LogOddsBounds};
 use crate::optim::Method;
-use crate::planner::{TraversabilityConfig, TraversabilityError};
+use crate::planner::{TraversabilityConfig, TraversabilityError, UnknownPolicy};
 use crate::sensor::{IntegrationError, LaserConfig, SensorModel};
 
 /// Most events one step reports.
 pub const MAX_EVENTS: usize = 8;
 
-/// Obstacle inflation the mission plans with by default \[m\]: the P3-DX's turning radius
+/// Obstacle inflation of the thesis set-up's disc planning \[m\]: the P3-DX's turning radius
 /// (0.25 m) plus the safety monitor's turning margin (0.05 m) plus a margin for path
-/// tracking, so that a planned path never leads where the monitor forbids turning in place.
+/// tracking. The default plans with the body's footprint instead ([`footprint`]).
 pub const DEFAULT_PLANNING_RADIUS_M: f32 = 0.38;
+
+/// Cell size the default configuration's planning layer is sized for \[m\]; a mission on
+/// another resolution derives its layer with [`footprint::planning_layer`].
+pub const DEFAULT_RESOLUTION_M: f32 = 0.1;
 
 /// Which target selector decides.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -189,10 +194,14 @@ impl Default for MissionConfig {
             laser: LaserConfig::thesis(),
             sensor: SensorModel::default(),
             grid_bounds: LogOddsBounds::default(),
-            traversability: TraversabilityConfig {
-                robot_radius_m: DEFAULT_PLANNING_RADIUS_M,
-                ..TraversabilityConfig::default()
-            },
+            traversability: footprint::planning_layer(
+                &SafetyConfig::default(),
+                footprint::DEFAULT_CLEARANCE_M,
+                DEFAULT_RESOLUTION_M,
+                UnknownPolicy::Traversable {
+                    cost_factor: crate::planner::traversability::DEFAULT_UNKNOWN_COST_FACTOR,
+                },
+            ),
             follower: FollowerConfig::default(),
             safety: SafetyConfig::default(),
             limits: Limits::p3dx_exploration(),

@@ -1,14 +1,16 @@
-//! Counts of blocked cells in any axis-aligned box in O(1): a summed-area table (Crow,
-//! "Summed-Area Tables for Texture Mapping", SIGGRAPH 1984) over the traversability layer.
+//! Counts of blocked cells (and cells in a wall band) in any axis-aligned box in O(1): a
+//! summed-area table (Crow, "Summed-Area Tables for Texture Mapping", SIGGRAPH 1984) over the
+//! traversability layer.
 //!
 //! The segment between two cell centres only touches cells inside the two cells' bounding box,
-//! so a box without blocked cells proves a line of sight without walking it. Waypoint pruning
+//! so a box without such cells proves a line of sight, clear of every wall band, without
+//! walking it. Waypoint pruning
 //! ([`super::waypoints::prune_to_waypoints_with_boxes`]) tests the line of sight from its
 //! anchor to every following cell of a path; in open space this turns each test into four
 //! look-ups, and the result is the same as walking every segment.
 
 use super::Traversability;
-use super::traversability::CODE_BLOCKED;
+use super::traversability::{CODE_BLOCKED, band_of_code};
 use crate::grid::Cell;
 
 /// Largest table \[entries\]: `(width + 1) * (height + 1)` of the grid.
@@ -76,7 +78,7 @@ impl BlockedBoxes {
             this[0] = 0;
             let mut row_sum = 0u32;
             for ((sum, &under), &code) in this[1..].iter_mut().zip(&below[1..]).zip(row) {
-                row_sum += (code == CODE_BLOCKED) as u32;
+                row_sum += (code == CODE_BLOCKED || band_of_code(code) != 0) as u32;
                 *sum = under + row_sum;
             }
         }

@@ -23,7 +23,7 @@
 use core::cell::UnsafeCell;
 
 use super::search::{DIAGONAL, SearchMemory, StepCosts, Zero};
-use super::traversability::CODE_BLOCKED;
+use super::traversability::{CODE_BLOCKED, CODE_COUNT};
 use super::{PlanError, PlannedPath, Planner, Traversability, path_length_m};
 use crate::grid::{Cell, GridGeometry};
 
@@ -37,7 +37,7 @@ struct Sweep<const N: usize> {
     masks: [u8; N],
     cells: usize,
     width: usize,
-    unknown_factor: f32,
+    factors: [f32; CODE_COUNT],
     uniform: bool,
     /// Cells settled so far.
     reached: u32,
@@ -62,7 +62,7 @@ impl<const N: usize> Sweep<N> {
             width: self.width,
             masks: &self.masks[..n],
             codes: &self.codes[..n],
-            unknown_factor: self.unknown_factor,
+            factors: self.factors,
             uniform: self.uniform,
         };
         let (closed, found) = self
@@ -123,7 +123,7 @@ impl<const N: usize> DistanceField<N> {
                 masks: [0; N],
                 cells: 0,
                 width: 0,
-                unknown_factor: 1.0,
+                factors: [1.0; CODE_COUNT],
                 uniform: true,
                 reached: 0,
                 done: true,
@@ -194,14 +194,13 @@ impl<const N: usize> DistanceField<N> {
         sweep.masks[..n].copy_from_slice(trav.move_masks());
         sweep.cells = n;
         sweep.width = trav.geometry().width;
-        sweep.unknown_factor = trav.unknown_factor();
+        sweep.factors = trav.step_factors();
         sweep.uniform = trav.uniform_costs();
         sweep.done = false;
-        // The longest step: a diagonal into a cell of the largest cost factor (Unknown's,
-        // at least 1; 1 when Unknown cells are blocked).
+        // The longest step: a diagonal into a cell of the largest cost factor (at least 1).
         sweep
             .memory
-            .start_sweep(s, sweep.width, n, DIAGONAL * sweep.unknown_factor);
+            .start_sweep(s, sweep.width, n, DIAGONAL * trav.max_factor());
         self.geometry = *trav.geometry();
         self.source = source;
         Ok(())
@@ -339,6 +338,7 @@ mod tests {
             unknown_policy: UnknownPolicy::Traversable {
                 cost_factor: 1.0 + random::unit_f32(rng),
             },
+            bands: crate::planner::WallBands::NONE,
         };
         let mut trav = Traversability::<CAP>::new(g, config).unwrap();
         for i in 0..CAP {

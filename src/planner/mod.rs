@@ -26,7 +26,7 @@ pub use astar::AStar;
 pub use blocked_boxes::BlockedBoxes;
 pub use distance_field::DistanceField;
 pub use traversability::{
-    Traversability, TraversabilityConfig, TraversabilityError, UnknownPolicy,
+    Traversability, TraversabilityConfig, TraversabilityError, UnknownPolicy, WallBands,
 };
 pub use waypoints::{has_line_of_sight, prune_to_waypoints, prune_to_waypoints_with_boxes};
 

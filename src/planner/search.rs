@@ -6,7 +6,7 @@
 //! 1969). Nothing is cleared between queries: a cell's entries are valid only if its stamp
 //! carries the current generation.
 
-use super::traversability::{MOVES, Traversability};
+use super::traversability::{CODE_COUNT, MOVES, Traversability};
 
 /// Diagonal step \[cells\].
 pub(crate) const DIAGONAL: f32 = core::f32::consts::SQRT_2;
@@ -123,7 +123,7 @@ impl Heuristic for Zero {
 }
 
 /// What a search reads of the grid: its width, each cell's legal moves and step code, and the
-/// Unknown cost factor (a view of a [`Traversability`] layer, or of a copy of it).
+/// cost factor of each code (a view of a [`Traversability`] layer, or of a copy of it).
 #[derive(Clone, Copy)]
 pub(crate) struct StepCosts<'a> {
     pub(crate) width: usize,
@@ -131,7 +131,8 @@ pub(crate) struct StepCosts<'a> {
     pub(crate) masks: &'a [u8],
     /// Step codes, flat-index order.
     pub(crate) codes: &'a [u8],
-    pub(crate) unknown_factor: f32,
+    /// Cost factor by step code.
+    pub(crate) factors: [f32; CODE_COUNT],
     /// Every legal step costs its plain length.
     pub(crate) uniform: bool,
 }
@@ -142,7 +143,7 @@ impl<'a> StepCosts<'a> {
             width: trav.geometry().width,
             masks: trav.move_masks(),
             codes: trav.codes(),
-            unknown_factor: trav.unknown_factor(),
+            factors: trav.step_factors(),
             uniform: trav.uniform_costs(),
         }
     }
@@ -330,8 +331,9 @@ impl<const N: usize> SearchMemory<N> {
         let w = costs.width;
         let masks = costs.masks;
         let codes = costs.codes;
-        // Cost factor by step code: blocked (never entered), Free, Unknown.
-        let factors = [0.0, 1.0, costs.unknown_factor];
+        // Cost factor by step code: blocked (never entered), Free, Unknown, and both in each
+        // wall band.
+        let factors = costs.factors;
         let offsets = MOVES.map(|(dc, dr)| (dc as isize + dr as isize * w as isize) as usize);
         let steps = MOVES.map(|(dc, dr)| if dc != 0 && dr != 0 { DIAGONAL } else { 1.0 });
         let mut closed = 0u32;

@@ -85,6 +85,7 @@ fn random_grid(
     let config = TraversabilityConfig {
         robot_radius_m: radius,
         unknown_policy: policy,
+        bands: WallBands::NONE,
     };
     let mut trav = Traversability::<CAP>::new(g, config).unwrap();
     for i in 0..g.cell_count() {
@@ -296,6 +297,7 @@ fn unknown_cells_cost_their_factor() {
     let config = TraversabilityConfig {
         robot_radius_m: 0.0,
         unknown_policy: UnknownPolicy::Traversable { cost_factor: 3.0 },
+        bands: WallBands::NONE,
     };
     let mut t = Traversability::<21>::new(g, config).unwrap();
     for i in 0..21 {
@@ -314,6 +316,7 @@ fn unknown_cells_cost_their_factor() {
     t.set_config(TraversabilityConfig {
         robot_radius_m: 0.0,
         unknown_policy: UnknownPolicy::Traversable { cost_factor: 1.0 },
+        bands: WallBands::NONE,
     })
     .unwrap();
     let p = astar
@@ -550,4 +553,136 @@ fn the_bucket_queue_finds_the_radix_heap_costs_bit_for_bit() {
         checked_cells > 10_000,
         "only {checked_cells} cells compared"
     );
+}
+
+/// The planning layer of a P3-DX (0.381 m wide, 0.267 m swing radius) with 5 cm of clearance
+/// at 0.1 m cells (`mission::footprint`): blocked within 0.29 m of a wall's cell centre, no
+/// turning within 0.367 m, near-wall cost within 0.517 m.
+fn p3dx_bands() -> TraversabilityConfig {
+    TraversabilityConfig {
+        robot_radius_m: 0.1905 + 0.05 + 0.05,
+        unknown_policy: UnknownPolicy::Traversable { cost_factor: 1.0 },
+        bands: WallBands {
+            no_turn_radius_m: 0.267 + 0.05 + 0.05,
+            no_turn_cost_factor: 2.0,
+            near_radius_m: 0.267 + 0.05 + 0.05 + 0.15,
+            near_cost_factor: 1.3,
+        },
+    }
+}
+
+/// A 4 m x 3 m room of Free cells at 0.1 m, split by a wall along row 15 with one opening of
+/// `door_cells` cells starting at column 18.
+fn wall_with_door(door_cells: i32) -> (OccupancyGrid<CAP>, Traversability<CAP>) {
+    let g = GridGeometry::new(32, 24, 0.1, Point2::new(0.0, 0.0)).unwrap();
+    let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
+    let mut trav = Traversability::<CAP>::new(g, p3dx_bands()).unwrap();
+    for i in 0..g.cell_count() {
+        let c = g.cell(i);
+        let in_wall = c.row == 15 && !(18..18 + door_cells).contains(&c.col);
+        let class = if in_wall {
+            CellClass::Occupied
+        } else {
+            CellClass::Free
+        };
+        grid.set_class(i, class, &mut trav);
+    }
+    (grid, trav)
+}
+
+#[test]
+fn a_p3dx_passes_a_half_metre_door_and_never_a_forty_centimetre_one() {
+    let mut astar = AStar::<CAP>::new();
+    let mut path = [Cell::default(); CAP];
+    let (a, b) = (Cell::new(8, 5), Cell::new(24, 21));
+    let (_, trav) = wall_with_door(5);
+    let p = astar.find_path(&trav, a, b, &mut path).expect("0.5 m door");
+    assert_valid_path(&trav, &path[..p.len]);
+    // Through the door's middle column, where the robot fits straight but cannot turn.
+    let door = Cell::new(20, 15);
+    assert!(path[..p.len].contains(&door));
+    assert!(trav.is_passable(door) && !trav.can_turn(door));
+    assert_eq!(trav.wall_band(Cell::new(8, 5)), Some(0));
+    let (_, trav) = wall_with_door(4);
+    assert!(matches!(
+        astar.find_path(&trav, a, b, &mut path),
+        Err(PlanError::NoPath { .. })
+    ));
+}
+
+#[test]
+fn paths_keep_away_from_walls_where_there_is_room() {
+    // Along a wall, the cheapest path runs outside the near-wall band.
+    let g = GridGeometry::new(32, 24, 0.1, Point2::new(0.0, 0.0)).unwrap();
+    let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
+    let mut trav = Traversability::<CAP>::new(g, p3dx_bands()).unwrap();
+    for i in 0..g.cell_count() {
+        let c = g.cell(i);
+        let class = if c.row == 0 {
+            CellClass::Occupied
+        } else {
+            CellClass::Free
+        };
+        grid.set_class(i, class, &mut trav);
+    }
+    let mut astar = AStar::<CAP>::new();
+    let mut path = [Cell::default(); CAP];
+    // From 0.3 m off the wall to 0.3 m off it, 2.5 m further: the path moves out first.
+    let p = astar
+        .find_path(&trav, Cell::new(3, 3), Cell::new(28, 3), &mut path)
+        .unwrap();
+    let far = path[..p.len]
+        .iter()
+        .filter(|c| trav.wall_band(**c) == Some(0));
+    assert!(
+        far.count() * 2 > p.len,
+        "most of the path is clear of the band"
+    );
+}
+
+#[test]
+fn waypoints_through_a_door_turn_outside_the_no_turn_band() {
+    let mut astar = AStar::<CAP>::new();
+    let mut path = [Cell::default(); CAP];
+    let mut out = [Point2::default(); CAP];
+    let (_, trav) = wall_with_door(5);
+    let (a, b) = (Cell::new(4, 4), Cell::new(28, 20));
+    let p = astar.find_path(&trav, a, b, &mut path).unwrap();
+    let n = prune_to_waypoints(&trav, &path[..p.len], &mut out).unwrap();
+    let g = *trav.geometry();
+    for (k, w) in out[..n].iter().enumerate() {
+        let c = g.cell_at(*w).unwrap();
+        assert!(
+            trav.can_turn(c),
+            "waypoint {k} at {c:?} is in the no-turn band"
+        );
+    }
+    // Every leg stays within the bands its stretch of path went through: no leg cuts a
+    // corner of the door frame.
+    for w in out[..n].windows(2) {
+        let (c0, c1) = (g.cell_at(w[0]).unwrap(), g.cell_at(w[1]).unwrap());
+        assert!(has_line_of_sight(&trav, c0, c1));
+    }
+}
+
+#[test]
+fn banded_layer_updated_incrementally_equals_a_rebuild() {
+    let g = GridGeometry::new(32, 24, 0.1, Point2::new(0.0, 0.0)).unwrap();
+    let mut rng = random::seeded(5);
+    let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
+    let mut t = Traversability::<CAP>::new(g, p3dx_bands()).unwrap();
+    for step in 0..6000 {
+        let i = random::below(&mut rng, g.cell_count());
+        let class = match random::below(&mut rng, 3) {
+            0 => CellClass::Occupied,
+            1 => CellClass::Free,
+            _ => CellClass::Unknown,
+        };
+        grid.set_class(i, class, &mut t);
+        if step % 1000 == 999 {
+            let mut fresh = Traversability::<CAP>::new(g, p3dx_bands()).unwrap();
+            fresh.rebuild_from(&grid).unwrap();
+            assert!(t.same_state(&fresh), "step {step}");
+        }
+    }
 }

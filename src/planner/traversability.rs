@@ -12,6 +12,14 @@
 //! inflated while its count is non-zero. The layer is a [`CellObserver`], so passing it to the
 //! grid's updates keeps it current; no query rescans the grid.
 //!
+//! Around the blocked band the layer keeps two cost bands, the idea of a costmap's inflation
+//! layer (Lu, Hershberger & Smart, "Layered costmaps for context-sensitive navigation", IROS
+//! 2014): cells closer than [`WallBands::no_turn_radius_m`] to an Occupied cell are where the
+//! robot's swing circle does not fit, so it may cross them but not turn in place there (a
+//! door it fits through straight), and cells closer than [`WallBands::near_radius_m`] cost a
+//! little more, so that paths keep away from walls where there is room. Each band is one more
+//! count per cell under a wider stencil, kept current the same way.
+//!
 //! For the searches, the layer also keeps a move mask per cell: one bit per legal step out of
 //! the cell (in bounds, into a passable cell, and for a diagonal both orthogonal neighbours
 //! passable: no corner cutting). A search then expands a cell from one byte instead of testing
@@ -37,6 +45,23 @@ pub(crate) const CODE_BLOCKED: u8 = 0;
 pub(crate) const CODE_FREE: u8 = 1;
 /// Per-cell step code: Unknown, traversable at the configured factor.
 pub(crate) const CODE_UNKNOWN: u8 = 2;
+/// Step codes of passable cells: `CODE_FREE` or `CODE_UNKNOWN` plus twice the wall band (0:
+/// clear of walls, [`BAND_NEAR`], [`BAND_NO_TURN`]).
+pub(crate) const CODE_COUNT: usize = 7;
+/// Wall band: within [`WallBands::near_radius_m`] of an Occupied cell.
+pub(crate) const BAND_NEAR: u8 = 1;
+/// Wall band: within [`WallBands::no_turn_radius_m`] of an Occupied cell.
+pub(crate) const BAND_NO_TURN: u8 = 2;
+
+/// The wall band of a passable step code (0 for blocked codes too).
+#[inline]
+pub(crate) const fn band_of_code(code: u8) -> u8 {
+    if code == CODE_BLOCKED {
+        0
+    } else {
+        (code - 1) / 2
+    }
+}
 
 /// The eight steps out of a cell as (column, row) offsets, in the order of the move-mask bits
 /// (bit `k` of a mask is step `MOVES[k]`): west, east, south, south-west, south-east, north,
@@ -69,6 +94,32 @@ pub enum UnknownPolicy {
     Blocked,
 }
 
+/// The cost bands beside the blocked band (see the module documentation). A radius no larger
+/// than the robot radius leaves its band empty; [`WallBands::NONE`] has none.
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Zeroable)]
+pub struct WallBands {
+    /// Cells whose centre lies closer than this to an Occupied cell's centre are where the
+    /// robot cannot turn in place (its swing radius plus a margin) \[m\].
+    pub no_turn_radius_m: f32,
+    /// Cost factor of entering a no-turn cell (at least 1; multiplies the Unknown factor).
+    pub no_turn_cost_factor: f32,
+    /// Cells closer than this to an Occupied cell (and outside the no-turn band) cost
+    /// [`Self::near_cost_factor`] \[m\].
+    pub near_radius_m: f32,
+    /// Cost factor of entering a near-wall cell (at least 1).
+    pub near_cost_factor: f32,
+}
+
+impl WallBands {
+    /// No bands: every passable cell costs its Free or Unknown factor.
+    pub const NONE: Self = Self {
+        no_turn_radius_m: 0.0,
+        no_turn_cost_factor: 1.0,
+        near_radius_m: 0.0,
+        near_cost_factor: 1.0,
+    };
+}
+
 /// Configuration of a [`Traversability`] layer.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TraversabilityConfig {
@@ -77,16 +128,19 @@ pub struct TraversabilityConfig {
     pub robot_radius_m: f32,
     /// Treatment of Unknown cells.
     pub unknown_policy: UnknownPolicy,
+    /// Cost bands near walls.
+    pub bands: WallBands,
 }
 
 impl Default for TraversabilityConfig {
-    /// P3-DX radius, Unknown traversable at factor 1.
+    /// P3-DX radius, Unknown traversable at factor 1, no wall bands.
     fn default() -> Self {
         Self {
             robot_radius_m: P3DX_RADIUS_M,
             unknown_policy: UnknownPolicy::Traversable {
                 cost_factor: DEFAULT_UNKNOWN_COST_FACTOR,
             },
+            bands: WallBands::NONE,
         }
     }
 }
@@ -113,7 +167,7 @@ pub enum TraversabilityError {
         /// [`MAX_STENCIL`].
         capacity: usize,
     },
-    /// The Unknown cost factor is below 1 or not finite.
+    /// The Unknown cost factor, or a wall band's, is below 1 or not finite.
     BadCostFactor(f32),
 }
 
@@ -143,7 +197,7 @@ impl core::fmt::Display for TraversabilityError {
             TraversabilityError::BadCostFactor(c) => {
                 write!(
                     f,
-                    "unknown-cell cost factor must be finite and at least 1, got {c}"
+                    "a cost factor (Unknown cells, wall bands) must be finite and at least 1, got {c}"
                 )
             }
         }
@@ -165,12 +219,24 @@ pub struct Traversability<const N: usize> {
     robot_radius_m: f32,
     unknown_blocked: bool,
     unknown_cost_factor: f32,
+    bands: WallBands,
+    /// Offsets of the widest band's disc, those within the robot radius first, then those of
+    /// the no-turn band, then the near band's.
     stencil: [[i16; 2]; MAX_STENCIL],
+    /// Offsets within the robot radius.
     stencil_len: usize,
+    /// Offsets within the no-turn radius (or the robot radius, if larger).
+    stencil_turn_len: usize,
+    /// Offsets within the near radius (or either smaller one, if larger).
+    stencil_near_len: usize,
     /// Cell classes (CLASS_*).
     class: [u8; N],
     /// Occupied cells within the inflation radius (the cell itself included).
     near: [u16; N],
+    /// Occupied cells within the no-turn stencil.
+    near_turn: [u16; N],
+    /// Occupied cells within the near-band stencil.
+    near_band: [u16; N],
     /// Step code (CODE_*), derived from `class` and `near`.
     code: [u8; N],
     /// Legal steps out of each cell (bit `k`: step [`MOVES`]`[k]`), derived from `code`; zero
@@ -203,10 +269,15 @@ impl<const N: usize> Traversability<N> {
             robot_radius_m: 0.0,
             unknown_blocked: false,
             unknown_cost_factor: 1.0,
+            bands: WallBands::NONE,
             stencil: [[0; 2]; MAX_STENCIL],
             stencil_len: 0,
+            stencil_turn_len: 0,
+            stencil_near_len: 0,
             class: [CLASS_UNKNOWN; N],
             near: [0; N],
+            near_turn: [0; N],
+            near_band: [0; N],
             code: [CODE_BLOCKED; N],
             moves: [0; N],
         };
@@ -281,6 +352,8 @@ impl<const N: usize> Traversability<N> {
             let b = blocked(geometry.cell(i));
             self.class[i] = if b { CLASS_OCCUPIED } else { CLASS_FREE };
             self.near[i] = b as u16;
+            self.near_turn[i] = b as u16;
+            self.near_band[i] = b as u16;
             self.code[i] = if b { CODE_BLOCKED } else { CODE_FREE };
         }
         self.refresh_all_moves();
@@ -296,6 +369,7 @@ impl<const N: usize> Traversability<N> {
         TraversabilityConfig {
             robot_radius_m: 0.0,
             unknown_policy: UnknownPolicy::Blocked,
+            bands: WallBands::NONE,
         }
     }
 
@@ -324,6 +398,8 @@ impl<const N: usize> Traversability<N> {
     fn recompute_from_classes(&mut self) {
         let n = self.geometry.cell_count();
         self.near[..n].fill(0);
+        self.near_turn[..n].fill(0);
+        self.near_band[..n].fill(0);
         for i in 0..n {
             if self.class[i] == CLASS_OCCUPIED {
                 self.stamp_disc(i, 1);
@@ -365,34 +441,66 @@ impl<const N: usize> Traversability<N> {
                 (false, cost_factor)
             }
         };
-        // Disc of offsets whose centre distance is below the radius; (0, 0) always.
-        let r_cells = r / geometry.resolution_m;
-        let reach = crate::math::ceil(r_cells) as i32;
-        let r2 = r_cells * r_cells;
+        let bands = config.bands;
+        for f in [bands.no_turn_cost_factor, bands.near_cost_factor] {
+            if !(f.is_finite() && f >= 1.0) {
+                return Err(TraversabilityError::BadCostFactor(f));
+            }
+        }
+        for b in [bands.no_turn_radius_m, bands.near_radius_m] {
+            if !(b.is_finite() && b >= 0.0) {
+                return Err(TraversabilityError::BadRadius(b));
+            }
+        }
+        // Discs of offsets whose centre distance is below each radius ((0, 0) always within
+        // the robot radius), the inner ones first.
+        let res = geometry.resolution_m;
+        let r_turn = bands.no_turn_radius_m.max(r);
+        let r_near = bands.near_radius_m.max(r_turn);
+        let radii2 = [r, r_turn, r_near].map(|m| {
+            let c = m / res;
+            c * c
+        });
+        let reach = crate::math::ceil(r_near / res) as i32;
         let mut stencil = [[0i16; 2]; MAX_STENCIL];
+        let mut lens = [0usize; 3];
         let mut len = 0usize;
-        for dr in -reach..=reach {
-            for dc in -reach..=reach {
-                let d2 = (dc * dc + dr * dr) as f32;
-                if (dc == 0 && dr == 0) || d2 < r2 {
-                    if len == MAX_STENCIL {
-                        let side = (2 * reach + 1) as usize;
-                        return Err(TraversabilityError::InflationTooLarge {
-                            needed: side * side,
-                            capacity: MAX_STENCIL,
-                        });
+        for (band, &limit2) in radii2.iter().enumerate() {
+            let inner2 = if band == 0 { -1.0 } else { radii2[band - 1] };
+            for dr in -reach..=reach {
+                for dc in -reach..=reach {
+                    let d2 = (dc * dc + dr * dr) as f32;
+                    let centre = dc == 0 && dr == 0;
+                    let inside = centre || d2 < limit2;
+                    let inner = if band == 0 {
+                        false
+                    } else {
+                        centre || d2 < inner2
+                    };
+                    if inside && !inner {
+                        if len == MAX_STENCIL {
+                            let side = (2 * reach + 1) as usize;
+                            return Err(TraversabilityError::InflationTooLarge {
+                                needed: side * side,
+                                capacity: MAX_STENCIL,
+                            });
+                        }
+                        stencil[len] = [dc as i16, dr as i16];
+                        len += 1;
                     }
-                    stencil[len] = [dc as i16, dr as i16];
-                    len += 1;
                 }
             }
+            lens[band] = len;
         }
         self.geometry = geometry;
         self.robot_radius_m = r;
         self.unknown_blocked = unknown_blocked;
         self.unknown_cost_factor = factor;
+        self.bands = bands;
         self.stencil = stencil;
-        self.stencil_len = len;
+        self.stencil_len = lens[0];
+        self.stencil_turn_len = lens[1];
+        self.stencil_near_len = lens[2];
         Ok(())
     }
 
@@ -400,6 +508,8 @@ impl<const N: usize> Traversability<N> {
         let n = self.geometry.cell_count();
         self.class[..n].fill(CLASS_UNKNOWN);
         self.near[..n].fill(0);
+        self.near_turn[..n].fill(0);
+        self.near_band[..n].fill(0);
         let c = self.unknown_code();
         self.code[..n].fill(c);
         self.refresh_all_moves();
@@ -419,21 +529,41 @@ impl<const N: usize> Traversability<N> {
         if self.near[i] > 0 {
             return CODE_BLOCKED;
         }
-        match self.class[i] {
+        let base = match self.class[i] {
             CLASS_FREE => CODE_FREE,
             CLASS_UNKNOWN => self.unknown_code(),
             _ => CODE_BLOCKED,
+        };
+        if base == CODE_BLOCKED {
+            return CODE_BLOCKED;
         }
+        let band = if self.near_turn[i] > 0 {
+            BAND_NO_TURN
+        } else if self.near_band[i] > 0 {
+            BAND_NEAR
+        } else {
+            0
+        };
+        base + 2 * band
     }
 
-    /// Adds `delta` (+1 or -1) to the counts under the disc centred on cell `i`, refreshing the
-    /// step code of every cell whose count changes between zero and non-zero.
+    /// Adds `delta` (+1 or -1) to the counts under the discs centred on cell `i`, refreshing
+    /// the step code of every cell whose counts change between zero and non-zero.
     fn stamp_disc(&mut self, i: usize, delta: i32) {
         let w = self.geometry.width as i32;
         let h = self.geometry.height as i32;
         let col = (i % self.geometry.width) as i32;
         let row = (i / self.geometry.width) as i32;
-        for k in 0..self.stencil_len {
+        let bump = |count: &mut u16| {
+            let before = *count;
+            *count = if delta > 0 {
+                before.saturating_add(1)
+            } else {
+                before.saturating_sub(1)
+            };
+            (before == 0) != (*count == 0)
+        };
+        for k in 0..self.stencil_near_len {
             let [dc, dr] = self.stencil[k];
             let c = col + dc as i32;
             let r = row + dr as i32;
@@ -441,13 +571,16 @@ impl<const N: usize> Traversability<N> {
                 continue;
             }
             let j = (r * w + c) as usize;
-            let before = self.near[j];
-            self.near[j] = if delta > 0 {
-                before.saturating_add(1)
-            } else {
-                before.saturating_sub(1)
-            };
-            if (before == 0) != (self.near[j] == 0) {
+            // Offsets are ordered inner band first: an offset counts in its own band and
+            // every wider one.
+            let mut changed = bump(&mut self.near_band[j]);
+            if k < self.stencil_turn_len {
+                changed |= bump(&mut self.near_turn[j]);
+            }
+            if k < self.stencil_len {
+                changed |= bump(&mut self.near[j]);
+            }
+            if changed {
                 self.set_code(j, self.code_of(j));
             }
         }
@@ -517,12 +650,32 @@ impl<const N: usize> Traversability<N> {
                     cost_factor: self.unknown_cost_factor,
                 }
             },
+            bands: self.bands,
         }
     }
 
     /// Offsets (col, row) \[cells\] of the inflation disc, (0, 0) included.
     pub fn inflation_stencil(&self) -> &[[i16; 2]] {
         &self.stencil[..self.stencil_len]
+    }
+
+    /// Whether the robot may turn in place on the cell: passable, and outside the no-turn
+    /// band. `false` outside the grid.
+    #[inline]
+    pub fn can_turn(&self, cell: Cell) -> bool {
+        self.geometry.index(cell).is_some_and(|i| {
+            let code = self.code[i];
+            code != CODE_BLOCKED && band_of_code(code) != BAND_NO_TURN
+        })
+    }
+
+    /// The wall band of the cell: 0 clear of walls, 1 near a wall, 2 where the robot cannot
+    /// turn in place; `None` if blocked or outside the grid.
+    #[inline]
+    pub fn wall_band(&self, cell: Cell) -> Option<u8> {
+        let i = self.geometry.index(cell)?;
+        let code = self.code[i];
+        (code != CODE_BLOCKED).then(|| band_of_code(code))
     }
 
     /// Whether the robot may stand on the cell; `false` outside the grid.
@@ -552,11 +705,17 @@ impl<const N: usize> Traversability<N> {
 
     #[inline]
     pub(crate) fn factor_of_code(&self, code: u8) -> Option<f32> {
-        match code {
-            CODE_FREE => Some(1.0),
-            CODE_UNKNOWN => Some(self.unknown_cost_factor),
-            _ => None,
-        }
+        (code != CODE_BLOCKED && (code as usize) < CODE_COUNT)
+            .then(|| self.step_factors()[code as usize])
+    }
+
+    /// Cost factor by step code (index [`CODE_BLOCKED`] holds 0: never entered).
+    #[inline]
+    pub(crate) fn step_factors(&self) -> [f32; CODE_COUNT] {
+        let u = self.unknown_cost_factor;
+        let near = self.bands.near_cost_factor;
+        let turn = self.bands.no_turn_cost_factor;
+        [0.0, 1.0, u, near, u * near, turn, u * turn]
     }
 
     /// Step codes of the cells in use, flat-index order.
@@ -572,17 +731,18 @@ impl<const N: usize> Traversability<N> {
         &self.moves[..self.geometry.cell_count()]
     }
 
-    /// Whether every legal step costs its plain length: no traversable Unknown cells, or their
-    /// cost factor is 1.
+    /// Whether every legal step costs its plain length: every passable code's factor is 1.
     #[inline]
     pub(crate) fn uniform_costs(&self) -> bool {
-        self.unknown_blocked || self.unknown_cost_factor == 1.0
+        self.step_factors()[1..].iter().all(|&f| f == 1.0)
     }
 
-    /// The unknown-cell cost factor (1 when Unknown is blocked).
+    /// The largest cost factor of a passable cell (at least 1).
     #[inline]
-    pub(crate) fn unknown_factor(&self) -> f32 {
-        self.unknown_cost_factor
+    pub(crate) fn max_factor(&self) -> f32 {
+        self.step_factors()[1..]
+            .iter()
+            .fold(1.0f32, |m, &f| m.max(f))
     }
 
     /// Checks that start and goal lie inside and are passable; returns their flat indices.
@@ -616,6 +776,8 @@ impl<const N: usize> Traversability<N> {
             && self.config() == other.config()
             && self.class[..n] == other.class[..n]
             && self.near[..n] == other.near[..n]
+            && self.near_turn[..n] == other.near_turn[..n]
+            && self.near_band[..n] == other.near_band[..n]
             && self.code[..n] == other.code[..n]
             && self.moves[..n] == other.moves[..n]
     }
@@ -693,12 +855,14 @@ mod tests {
         let strict = TraversabilityConfig {
             robot_radius_m: 0.0,
             unknown_policy: UnknownPolicy::Blocked,
+            bands: WallBands::NONE,
         };
         let t = Traversability::<CAP>::new(g, strict).unwrap();
         assert!(!t.is_passable(Cell::new(3, 3)));
         let lax = TraversabilityConfig {
             robot_radius_m: 0.0,
             unknown_policy: UnknownPolicy::Traversable { cost_factor: 2.5 },
+            bands: WallBands::NONE,
         };
         let t = Traversability::<CAP>::new(g, lax).unwrap();
         assert_eq!(t.cost_factor(Cell::new(3, 3)), Some(2.5));
@@ -711,6 +875,7 @@ mod tests {
         let cfg = |r, f| TraversabilityConfig {
             robot_radius_m: r,
             unknown_policy: UnknownPolicy::Traversable { cost_factor: f },
+            bands: WallBands::NONE,
         };
         assert_eq!(
             Traversability::<CAP>::new(g, cfg(-0.1, 1.0)).unwrap_err(),
@@ -745,6 +910,7 @@ mod tests {
             let config = TraversabilityConfig {
                 robot_radius_m: radius,
                 unknown_policy: policy,
+                bands: WallBands::NONE,
             };
             let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
             let mut t = Traversability::<CAP>::new(g, config).unwrap();

@@ -7,8 +7,15 @@
 //! exactly through a cell corner (the grid traversal of Amanatides & Woo, "A Fast Voxel
 //! Traversal Algorithm for Ray Tracing", Eurographics 1987, in the exact integer form of
 //! Bresenham, "Algorithm for computer control of a digital plotter", IBM Systems Journal 4(1),
-//! 1965). No segment may cross a blocked or inflated cell. A path from A* or the distance field
-//! never cuts corners, so consecutive cells always see each other and the pass always advances.
+//! 1965). No segment may cross a blocked or inflated cell, nor a cell of a wall band closer to
+//! the walls than the path itself went between its ends (a shortcut would bring the robot
+//! nearer the walls than the planner chose to). A path from A* or the distance field never cuts
+//! corners, so consecutive cells always see each other and the pass always advances.
+//!
+//! The robot turns in place at a waypoint, so a waypoint is put where it can
+//! ([`Traversability::can_turn`]): where the line of sight ends inside the no-turn band (a
+//! door), the waypoint goes back to the last cell of the path before it where the robot can
+//! turn, if there is one since the previous waypoint.
 
 use super::{BlockedBoxes, PlanError, Traversability};
 use crate::geometry::Point2;
@@ -71,7 +78,13 @@ pub fn prune_to_waypoints<const N: usize>(
     path: &[Cell],
     out: &mut [Point2],
 ) -> Result<usize, PlanError> {
-    prune_with(trav, path, out, |a, b| has_line_of_sight(trav, a, b))
+    prune_with(trav, path, out, |a, b, band| sight_within(trav, a, b, band))
+}
+
+/// Whether the segment between the centres of `a` and `b` touches only passable cells whose
+/// wall band is at most `band`.
+fn sight_within<const N: usize>(trav: &Traversability<N>, a: Cell, b: Cell, band: u8) -> bool {
+    supercover(a, b, |c| trav.wall_band(c).is_some_and(|x| x <= band))
 }
 
 /// Halvings of a segment when covering it with boxes ([`BlockedBoxes::is_segment_clear`]):
@@ -91,16 +104,18 @@ pub fn prune_to_waypoints_with_boxes<const N: usize>(
     path: &[Cell],
     out: &mut [Point2],
 ) -> Result<usize, PlanError> {
-    prune_with(trav, path, out, |a, b| {
-        boxes.is_segment_clear(a, b, BOX_DEPTH) || has_line_of_sight(trav, a, b)
+    prune_with(trav, path, out, |a, b, band| {
+        boxes.is_segment_clear(a, b, BOX_DEPTH) || sight_within(trav, a, b, band)
     })
 }
 
+/// `sees(a, b, band)`: whether `b` is in sight of `a` through cells of wall band at most
+/// `band`.
 fn prune_with<const N: usize>(
     trav: &Traversability<N>,
     path: &[Cell],
     out: &mut [Point2],
-    sees: impl Fn(Cell, Cell) -> bool,
+    sees: impl Fn(Cell, Cell, u8) -> bool,
 ) -> Result<usize, PlanError> {
     let geometry = trav.geometry();
     let mut count = 0usize;
@@ -119,10 +134,27 @@ fn prune_with<const N: usize>(
         return Ok(0);
     };
     push(first, &mut count)?;
+    let band_at = |c: Cell| trav.wall_band(c).unwrap_or(u8::MAX);
+    // The highest wall band the step into `path[k]` touches: the cell, and for a diagonal
+    // step the two cells beside its corner.
+    let step_band = |k: usize| {
+        let (a, b) = (path[k - 1], path[k]);
+        let mut band = band_at(b);
+        if a.col != b.col && a.row != b.row {
+            band = band
+                .max(band_at(Cell::new(b.col, a.row)))
+                .max(band_at(Cell::new(a.col, b.row)));
+        }
+        band
+    };
     let mut anchor = 0usize;
+    // The highest wall band of the path's cells from the anchor to `k`.
+    let mut band = band_at(first);
     let mut k = 1usize;
     while k < path.len() {
-        if sees(path[anchor], path[k]) {
+        let with_k = band.max(step_band(k));
+        if sees(path[anchor], path[k], with_k) {
+            band = with_k;
             k += 1;
             continue;
         }
@@ -132,8 +164,16 @@ fn prune_with<const N: usize>(
                 goal: path[k],
             });
         }
-        anchor = k - 1;
+        // Turn where the robot can: the last such cell since the anchor, else where the
+        // sight ends. Every cell up to `k - 1` was in sight of the anchor.
+        let turn = (anchor + 1..k)
+            .rev()
+            .find(|&j| trav.can_turn(path[j]))
+            .unwrap_or(k - 1);
+        anchor = turn;
         push(path[anchor], &mut count)?;
+        band = band_at(path[anchor]);
+        k = anchor + 1;
     }
     if path.len() > 1 {
         push(path[path.len() - 1], &mut count)?;

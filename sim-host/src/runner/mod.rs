@@ -459,6 +459,15 @@ impl Runner {
             let stalled = body.stalled();
             if stalled && !r.was_stalled {
                 r.report.collisions += 1;
+                if std::env::var_os("PAPILLON_DEBUG_CONTACTS").is_some() {
+                    eprintln!(
+                        "contact t={time_s:.1} true={:?} state={:?} speed={:.0} turn={:.0}",
+                        body.true_pose(),
+                        r.mission.state(),
+                        body.speed_mm_s(),
+                        body.turn_deg_s()
+                    );
+                }
             }
             r.was_stalled = stalled;
             let p = body.true_pose().position();

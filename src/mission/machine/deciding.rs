@@ -228,6 +228,10 @@ impl<const N: usize> Mission<N> {
         self.errand.replans = 0;
         self.failed_in_row = 0;
         events.stats.decisions += 1;
+        let here = self.senses.pose_map.position();
+        if here.distance(self.abandoned_in_row.1) >= REPLAN_PROGRESS_M {
+            self.abandoned_in_row.0 = 0;
+        }
         events.push(MissionEvent::Decided {
             targets: d.targets.clone(),
             path_length_m: d.path_length_m,
@@ -256,6 +260,18 @@ impl<const N: usize> Mission<N> {
         self.follower.clear();
         self.ahead = None;
         self.phase = Phase::Deciding;
+        let here = self.senses.pose_map.position();
+        let (count, from) = &mut self.abandoned_in_row;
+        if *count == 0 || here.distance(*from) >= REPLAN_PROGRESS_M {
+            *count = 0;
+            *from = here;
+        }
+        *count += 1;
+        if *count >= self.config.max_failed_decisions {
+            // Every errand of the last ones was dropped where it started: nothing the robot
+            // chooses is reachable from here.
+            let _ = self.finish(DoneReason::NothingReachable, events);
+        }
     }
 
     /// Counts one more replan against the errand; `true` when that is more than

@@ -1,0 +1,156 @@
+//! The planning layer a robot's body asks for: which cells it may enter, where it may turn,
+//! and where it should rather not drive.
+//!
+//! A differential-drive robot that turns only in place needs two things of the map (the
+//! inscribed and circumscribed radii of a costmap's inflation layer, Lu, Hershberger & Smart,
+//! "Layered costmaps for context-sensitive navigation", IROS 2014):
+//! - **fit**: driving straight, its body fits where the walls are farther than half its width
+//!   plus the clearance from the path. Cells closer than that to an Occupied cell are blocked.
+//!   The map only knows walls to the cell, so the distance is counted between cell centres and
+//!   half a cell is added: a wall's face lies at most half a cell from the centre of the cell
+//!   its return fell in. At 0.1 m cells a P3-DX (0.381 m) with 5 cm of clearance is blocked
+//!   within 0.29 m of a wall's cell: a 0.5 m opening aligned with the cells leaves its middle
+//!   column free (0.3 m from both sides), a 0.4 m opening never does.
+//! - **turn**: turning in place sweeps the swing circle, so within its radius plus the safety
+//!   monitor's turning margin (and half a cell) of a wall the robot may pass but not turn
+//!   ([`crate::planner::WallBands::no_turn_radius_m`]); waypoints avoid those cells.
+//!
+//! A band beyond it costs a little more, so that paths keep to the middle where there is room.
+
+use crate::control::safety::SafetyConfig;
+use crate::planner::{TraversabilityConfig, UnknownPolicy, WallBands};
+
+/// Default clearance between the body's side and a wall on a planned path \[m\].
+pub const DEFAULT_CLEARANCE_M: f32 = 0.05;
+/// Width of the near-wall band beyond the no-turn band \[m\].
+pub const NEAR_BAND_WIDTH_M: f32 = 0.15;
+/// Cost factor of a no-turn cell: crossing a door costs a little, so paths do not run along
+/// walls, but never so much that a detour of metres beats a door.
+pub const NO_TURN_COST_FACTOR: f32 = 2.0;
+/// Cost factor of a near-wall cell.
+pub const NEAR_COST_FACTOR: f32 = 1.3;
+
+/// The planning layer for the body described by `safety` (its footprint and turning margin),
+/// `clearance_m` on each side, cells of `resolution_m`, and Unknown cells as `unknown_policy`
+/// says.
+pub fn planning_layer(
+    safety: &SafetyConfig,
+    clearance_m: f32,
+    resolution_m: f32,
+    unknown_policy: UnknownPolicy,
+) -> TraversabilityConfig {
+    let fp = safety.footprint;
+    let half_cell = 0.5 * resolution_m;
+    let no_turn = fp.radius_m + safety.turn_margin_m + half_cell;
+    TraversabilityConfig {
+        robot_radius_m: 0.5 * fp.width_m + clearance_m + half_cell,
+        unknown_policy,
+        bands: WallBands {
+            no_turn_radius_m: no_turn,
+            no_turn_cost_factor: NO_TURN_COST_FACTOR,
+            near_radius_m: no_turn + NEAR_BAND_WIDTH_M,
+            near_cost_factor: NEAR_COST_FACTOR,
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_p3dx_plans_with_its_half_width_clearance_and_swing_circle() {
+        let t = planning_layer(
+            &SafetyConfig::default(),
+            DEFAULT_CLEARANCE_M,
+            0.1,
+            UnknownPolicy::Blocked,
+        );
+        assert!((t.robot_radius_m - 0.2905).abs() < 1e-4);
+        // Between the 0.2 m and 0.3 m cell-centre distances of a 0.4 m and a 0.5 m door.
+        assert!(t.robot_radius_m > 0.2 && t.robot_radius_m < 0.3);
+        assert!((t.bands.no_turn_radius_m - 0.347).abs() < 1e-4);
+        assert!(t.bands.near_radius_m > t.bands.no_turn_radius_m);
+    }
+}
+
+/// Most map obstacles passed to the safety monitor in one period.
+pub const MAX_REMEMBERED: usize = 128;
+
+/// Speed while any part of the body is in the no-turn band (a door, a narrow aisle)
+/// \[mm/s\]: slow enough that the safety monitor's corridor is only a little wider than the
+/// body (its side margin grows with speed) and that path tracking stays within centimetres.
+pub const NARROW_SPEED_MM_S: i16 = 150;
+
+/// How far ahead of the robot a narrow place already slows it \[m\].
+pub const NARROW_LOOKAHEAD_M: f32 = 0.4;
+
+/// The Occupied cells of `grid` within `radius_m` of the robot at `pose`, as the point of
+/// each cell nearest the robot, in the robot's frame, into `out` (the nearest first fill it;
+/// the rest are dropped). What the laser cannot see (behind a 180° laser, inside its blind
+/// zone) the map still knows: the safety monitor checks turns and back-offs against it.
+pub fn remembered_obstacles<const N: usize>(
+    grid: &crate::grid::OccupancyGrid<N>,
+    pose: crate::geometry::Pose2,
+    radius_m: f32,
+    out: &mut heapless::Vec<crate::geometry::Point2, MAX_REMEMBERED>,
+) {
+    use crate::geometry::Point2;
+    use crate::grid::{Cell, CellClass};
+    out.clear();
+    let g = *grid.geometry();
+    let res = g.resolution_m;
+    let reach = crate::math::ceil(radius_m / res) as i32 + 1;
+    let Some(centre) = g.cell_at(pose.position()) else {
+        return;
+    };
+    let (sin, cos) = (crate::math::sin(pose.theta), crate::math::cos(pose.theta));
+    for dr in -reach..=reach {
+        for dc in -reach..=reach {
+            let cell = Cell::new(centre.col + dc, centre.row + dr);
+            let Some(i) = g.index(cell) else { continue };
+            if grid.class(i) != CellClass::Occupied {
+                continue;
+            }
+            // The nearest point of the cell's square to the robot.
+            let c = g.cell_center(cell);
+            let half = 0.5 * res;
+            let near = Point2::new(
+                pose.x.clamp(c.x - half, c.x + half),
+                pose.y.clamp(c.y - half, c.y + half),
+            );
+            let (dx, dy) = (near.x - pose.x, near.y - pose.y);
+            if dx * dx + dy * dy > radius_m * radius_m {
+                continue;
+            }
+            let base = Point2::new(cos * dx + sin * dy, -sin * dx + cos * dy);
+            if out.push(base).is_err() {
+                return;
+            }
+        }
+    }
+}
+
+/// The speed cap where the body is, or is about to be, in the no-turn band of `trav`
+/// (within [`NARROW_LOOKAHEAD_M`] ahead along the heading): [`NARROW_SPEED_MM_S`]; `None`
+/// elsewhere.
+pub fn narrow_speed_cap<const N: usize>(
+    trav: &crate::planner::Traversability<N>,
+    pose: crate::geometry::Pose2,
+) -> Option<i16> {
+    use crate::geometry::Point2;
+    let g = trav.geometry();
+    let steps = 4;
+    for k in 0..=steps {
+        let d = NARROW_LOOKAHEAD_M * k as f32 / steps as f32;
+        let p = Point2::new(
+            pose.x + d * crate::math::cos(pose.theta),
+            pose.y + d * crate::math::sin(pose.theta),
+        );
+        let Some(cell) = g.cell_at(p) else { continue };
+        if trav.wall_band(cell) == Some(crate::planner::traversability::BAND_NO_TURN) {
+            return Some(NARROW_SPEED_MM_S);
+        }
+    }
+    None
+}
