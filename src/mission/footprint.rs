@@ -54,26 +54,6 @@ pub fn planning_layer(
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_p3dx_plans_with_its_half_width_clearance_and_swing_circle() {
-        let t = planning_layer(
-            &SafetyConfig::default(),
-            DEFAULT_CLEARANCE_M,
-            0.1,
-            UnknownPolicy::Blocked,
-        );
-        assert!((t.robot_radius_m - 0.2905).abs() < 1e-4);
-        // Between the 0.2 m and 0.3 m cell-centre distances of a 0.4 m and a 0.5 m door.
-        assert!(t.robot_radius_m > 0.2 && t.robot_radius_m < 0.3);
-        assert!((t.bands.no_turn_radius_m - 0.347).abs() < 1e-4);
-        assert!(t.bands.near_radius_m > t.bands.no_turn_radius_m);
-    }
-}
-
 /// Most map obstacles passed to the safety monitor in one period.
 pub const MAX_REMEMBERED: usize = 128;
 
@@ -153,4 +133,24 @@ pub fn narrow_speed_cap<const N: usize>(
         }
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_p3dx_plans_with_its_half_width_clearance_and_swing_circle() {
+        let t = planning_layer(
+            &SafetyConfig::default(),
+            DEFAULT_CLEARANCE_M,
+            0.1,
+            UnknownPolicy::Blocked,
+        );
+        assert!((t.robot_radius_m - 0.2905).abs() < 1e-4);
+        // Between the 0.2 m and 0.3 m cell-centre distances of a 0.4 m and a 0.5 m door.
+        assert!(t.robot_radius_m > 0.2 && t.robot_radius_m < 0.3);
+        assert!((t.bands.no_turn_radius_m - 0.347).abs() < 1e-4);
+        assert!(t.bands.near_radius_m > t.bands.no_turn_radius_m);
+    }
 }
