@@ -522,6 +522,17 @@ impl SafetyMonitor {
             + self.config.side_margin_s * math::abs(speed_m_s)
     }
 
+    /// What is watched at `v`: the corridor's half width, the distance ahead of (or behind)
+    /// the body's edge, and the turning circle's radius \[m\].
+    fn watched(&self, v: Velocity) -> (f32, f32, f32) {
+        let speed_m_s = mm_to_m(f32::from(v.speed_mm_s()));
+        (
+            self.corridor_half_width_m(speed_m_s),
+            self.stopping_distance_m(speed_m_s),
+            self.config.footprint.radius_m + self.config.turn_margin_m,
+        )
+    }
+
     /// Distance needed ahead of the robot's edge at `speed_m_s` \[m\].
     pub fn stopping_distance_m(&self, speed_m_s: f32) -> f32 {
         let v = math::abs(speed_m_s);
@@ -542,9 +553,7 @@ impl SafetyMonitor {
             return None;
         }
         let fp = self.config.footprint;
-        let half_width = self.corridor_half_width_m(mm_to_m(f32::from(speed_mm_s)));
-        let stop_m = self.stopping_distance_m(mm_to_m(f32::from(speed_mm_s)));
-        let turn_limit = fp.radius_m + self.config.turn_margin_m;
+        let (half_width, stop_m, turn_limit) = self.watched(v);
         // A return counts only within this distance of the robot's centre (the box ahead or
         // behind, or the turning circle); a beam longer than that plus the laser's offset, with
         // a margin far above rounding, is skipped before its direction is worked out.
@@ -582,9 +591,7 @@ impl SafetyMonitor {
             return None;
         }
         let fp = self.config.footprint;
-        let half_width = self.corridor_half_width_m(mm_to_m(f32::from(speed_mm_s)));
-        let stop_m = self.stopping_distance_m(mm_to_m(f32::from(speed_mm_s)));
-        let turn_limit = fp.radius_m + self.config.turn_margin_m;
+        let (half_width, stop_m, turn_limit) = self.watched(v);
         let mut nearest: Option<(f32, Point2)> = None;
         for p in points {
             let clearance = if speed_mm_s > 0 {

@@ -376,7 +376,7 @@ pub struct MissionStats {
     pub stopped_s: f32,
     /// Events dropped because a step had more than [`MAX_EVENTS`].
     pub events_dropped: u32,
-    /// Targets given up (blacklisted).
+    /// Targets given up (blacklisted, or found inside a wall when replanning).
     pub abandoned_targets: u32,
     /// Decisions computed ahead while driving, and how many of them were used.
     pub decisions_ahead: u32,

@@ -107,6 +107,8 @@ impl<const N: usize> Mission<N> {
                     .last()
                     .is_some_and(|&t| !map.trav.is_passable(geom.cell_at_unchecked(t)));
                 if in_wall && !self.errand.from_goal {
+                    // Given up without a blacklist entry: the map says the target is a wall.
+                    events.stats.abandoned_targets += 1;
                     self.errand.targets.clear();
                     self.phase = Phase::Deciding;
                     return;
