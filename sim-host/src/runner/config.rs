@@ -40,6 +40,47 @@ pub struct RunConfig {
     pub starts: Option<Vec<Pose2>>,
     /// Simulated-time limit \[s\].
     pub max_sim_time_s: f64,
+    /// How the missions are pumped: as the runner always did, or as `papillon run` does.
+    pub pump: PumpModel,
+}
+
+/// What the mission sees of time and of the world beyond its sensors: the runner's ideal
+/// pump ([`PumpModel::ideal`], the default) or the onboard binary's ([`PumpModel::onboard`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PumpModel {
+    /// The mission is told the coverage of the world's truth and ends at its target
+    /// (`CoverageReached`). `papillon run` cannot know it: its mission ends when no reachable
+    /// frontier is left, or on the battery.
+    pub coverage_known: bool,
+    /// Simulated time a decision takes \[s\]: the robot stands (stopped, its mission not
+    /// stepped) while the scans go on into the map, as while `papillon run`'s mission thread
+    /// decides. 0: decisions take no simulated time.
+    pub decision_latency_s: f64,
+}
+
+impl PumpModel {
+    /// The runner's pump: the coverage is known, decisions take no simulated time.
+    pub const fn ideal() -> Self {
+        Self {
+            coverage_known: true,
+            decision_latency_s: 0.0,
+        }
+    }
+
+    /// `papillon run`'s pump: no coverage from the truth, and a decision takes
+    /// `decision_latency_s` (what its `decision` telemetry's `compute_ms` says).
+    pub const fn onboard(decision_latency_s: f64) -> Self {
+        Self {
+            coverage_known: false,
+            decision_latency_s,
+        }
+    }
+}
+
+impl Default for PumpModel {
+    fn default() -> Self {
+        Self::ideal()
+    }
 }
 
 impl RunConfig {
@@ -59,6 +100,7 @@ impl RunConfig {
             },
             starts: None,
             max_sim_time_s,
+            pump: PumpModel::ideal(),
         }
     }
 }

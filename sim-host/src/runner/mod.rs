@@ -41,7 +41,7 @@ mod config;
 mod coverage;
 mod report;
 
-pub use config::{RunConfig, RunError, default_time_limit_s, derive_seed};
+pub use config::{PumpModel, RunConfig, RunError, default_time_limit_s, derive_seed};
 use config::{STREAM_BODY, STREAM_DECIDE, STREAM_LASER};
 use coverage::CoverageCounter;
 pub use report::{EndReason, LoggedEvent, RobotReport, RunReport};
@@ -71,6 +71,8 @@ struct Robot {
     report: RobotReport,
     last_odom: Option<Pose2>,
     was_stalled: bool,
+    /// Until when the mission is deciding ([`PumpModel::decision_latency_s`]) \[µs\].
+    busy_until_us: u64,
 }
 
 impl Robot {
@@ -214,6 +216,7 @@ impl Runner {
                 },
                 last_odom: None,
                 was_stalled: false,
+                busy_until_us: 0,
             });
         }
         let map = SharedMap::<MAP_CAPACITY>::new_boxed(g, &config.mission)?;
@@ -427,11 +430,30 @@ impl Runner {
             let r = &mut self.robots[k];
             let body = &mut self.bodies[k];
             r.feed_odometry(now, body);
-            r.mission.set_coverage(coverage);
+            if self.now_us < r.busy_until_us {
+                // Still deciding: the robot stands, the mission is not stepped.
+                continue;
+            }
+            if self.config.pump.coverage_known {
+                r.mission.set_coverage(coverage);
+            }
             let t0 = Instant::now();
             let out = r.mission.step(now, &mut self.map, &mut self.ws, &mut r.rng);
             let elapsed_ms = t0.elapsed().as_secs_f64() * 1e3;
-            apply(body, out.command);
+            let latency_us = (self.config.pump.decision_latency_s.max(0.0) * 1e6).round() as u64;
+            let deciding = latency_us > 0
+                && out
+                    .events
+                    .iter()
+                    .any(|e| matches!(e, MissionEvent::Decided { .. }));
+            if deciding {
+                // The decision's command comes `latency` later; until then the robot stops.
+                // (A simplification: the binary holds the last command up to 0.3 s first.)
+                r.busy_until_us = self.now_us + latency_us;
+                body.stop();
+            } else {
+                apply(body, out.command);
+            }
             for e in out.events {
                 match &e {
                     MissionEvent::Decided { targets, .. } => {
