@@ -11,7 +11,8 @@
 //!   cargo test --release -p papillon --test onboard_compare -- --ignored --nocapture
 //! ```
 //!
-//! It prints one line per seed and pump, then checks the targets of issue 26: coverage within
+//! `PAPILLON_COMPARE_WORLD_GRID=1` gives the runner its own map (the world's extent) instead of
+//! the board's grid. It prints one line per seed and pump, then checks the targets of issue 26: coverage within
 //! 2 points and energy steps within 15 %.
 #![cfg(feature = "onboard")]
 
@@ -133,9 +134,46 @@ fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
     }
 }
 
+/// `world` on the board's grid: the binary maps a grid of the board's extent around its start
+/// (the lab's 8 m inside `boards/sim.json`'s 26 m), and the selector draws its candidate
+/// targets anywhere in it; the runner's map is its world's extent. So the runner gets the
+/// world padded with solid cells out to the board's grid (placed at the world's start, the
+/// binary's map frame): the padding is never observable (the outer walls hide it), the
+/// robot's map holds the same Unknown beyond the walls as the binary's.
+fn on_board_grid(world: &World, board: &BoardConfig) -> World {
+    let start = world.start();
+    let g = &board.grid;
+    let geometry = papillon::grid::GridGeometry::from_extent(
+        g.width_m,
+        g.height_m,
+        g.resolution_m,
+        papillon::geometry::Point2::new(start.x + g.origin_x_m, start.y + g.origin_y_m),
+    )
+    .unwrap();
+    assert!(start.theta.abs() < 1e-6, "a world whose start is not heading east");
+    let inner = world.geometry();
+    let blocked = (0..geometry.cell_count())
+        .map(|i| {
+            let p = geometry.cell_center(geometry.cell(i));
+            match inner.cell_at(p) {
+                Some(c) if inner.index(c).is_some() => world.is_blocked(c),
+                _ => true,
+            }
+        })
+        .collect();
+    World::from_blocked(world.name(), geometry, blocked)
+        .unwrap()
+        .with_start(start)
+}
+
 fn runner(map: &str, seed: u64, decision_s: f64) -> Outcome {
     let (board, _) = board(seed);
     let world = World::load(map, RESOLUTION_M).unwrap();
+    let world = if std::env::var("PAPILLON_COMPARE_WORLD_GRID").is_ok() {
+        world
+    } else {
+        on_board_grid(&world, &board)
+    };
     let mut config = RunConfig::new(mission_config(&board).unwrap(), 1, seed);
     config.pump = PumpModel::onboard(decision_s);
     let report = Runner::new(world, Dynamics::new(), config)

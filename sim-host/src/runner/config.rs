@@ -56,7 +56,19 @@ pub struct PumpModel {
     /// stepped) while the scans go on into the map, as while `papillon run`'s mission thread
     /// decides. 0: decisions take no simulated time.
     pub decision_latency_s: f64,
+    /// End the run, as `papillon run` ends its mission, when [`STALL_DECISIONS`] decisions
+    /// in a row added fewer than [`STALL_NEW_CELLS`] known cells to the map while the robot
+    /// spent at least [`STALL_STEPS`] on them (`papillon::onboard::mission::Stall`: what is
+    /// left Unknown next to Free cells cannot be seen).
+    pub nothing_observable_end: bool,
 }
+
+/// See [`PumpModel::nothing_observable_end`] (the same values as `papillon run`'s).
+pub const STALL_DECISIONS: usize = 5;
+/// See [`PumpModel::nothing_observable_end`].
+pub const STALL_NEW_CELLS: usize = 20;
+/// See [`PumpModel::nothing_observable_end`] \[steps\].
+pub const STALL_STEPS: f32 = 5.0;
 
 impl PumpModel {
     /// The runner's pump: the coverage is known, decisions take no simulated time.
@@ -64,15 +76,18 @@ impl PumpModel {
         Self {
             coverage_known: true,
             decision_latency_s: 0.0,
+            nothing_observable_end: false,
         }
     }
 
-    /// `papillon run`'s pump: no coverage from the truth, and a decision takes
-    /// `decision_latency_s` (what its `decision` telemetry's `compute_ms` says).
+    /// `papillon run`'s pump: no coverage from the truth, a decision takes
+    /// `decision_latency_s` (what its `decision` telemetry's `compute_ms` says), and the run
+    /// ends when decisions stop adding to the map.
     pub const fn onboard(decision_latency_s: f64) -> Self {
         Self {
             coverage_known: false,
             decision_latency_s,
+            nothing_observable_end: true,
         }
     }
 }

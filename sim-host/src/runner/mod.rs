@@ -25,7 +25,7 @@ use papillon::control::Time;
 use papillon::control::command::RobotCommand;
 use papillon::control::safety::RobotFlags;
 use papillon::geometry::Pose2;
-use papillon::grid::DEFAULT_CELL_CAPACITY;
+use papillon::grid::{CellClass, DEFAULT_CELL_CAPACITY};
 use papillon::mission::{DoneReason, Mission, MissionEvent, MissionState, SharedMap, Workspace};
 use papillon::random::{self, ProjectRng};
 use papillon::sensor::Scan;
@@ -41,7 +41,10 @@ mod config;
 mod coverage;
 mod report;
 
-pub use config::{PumpModel, RunConfig, RunError, default_time_limit_s, derive_seed};
+pub use config::{
+    PumpModel, RunConfig, RunError, STALL_DECISIONS, STALL_NEW_CELLS, STALL_STEPS,
+    default_time_limit_s, derive_seed,
+};
 use config::{STREAM_BODY, STREAM_DECIDE, STREAM_LASER};
 use coverage::CoverageCounter;
 pub use report::{EndReason, LoggedEvent, RobotReport, RunReport};
@@ -73,6 +76,9 @@ struct Robot {
     was_stalled: bool,
     /// Until when the mission is deciding ([`PumpModel::decision_latency_s`]) \[µs\].
     busy_until_us: u64,
+    /// (known cells of the map, energy used) at the latest decisions
+    /// ([`PumpModel::nothing_observable_end`]).
+    stall: std::collections::VecDeque<(usize, f32)>,
 }
 
 impl Robot {
@@ -111,6 +117,13 @@ fn apply(body: &mut RobotBody, command: RobotCommand) {
         RobotCommand::EnableMotors(on) => body.set_motors_enabled(on),
         _ => {}
     }
+}
+
+/// Whether a step's events hold a decision.
+fn deciding_now(events: &[MissionEvent]) -> bool {
+    events
+        .iter()
+        .any(|e| matches!(e, MissionEvent::Decided { .. }))
 }
 
 /// What [`Runner::run_with`] reports to its observer.
@@ -217,6 +230,7 @@ impl Runner {
                 last_odom: None,
                 was_stalled: false,
                 busy_until_us: 0,
+                stall: std::collections::VecDeque::new(),
             });
         }
         let map = SharedMap::<MAP_CAPACITY>::new_boxed(g, &config.mission)?;
@@ -426,6 +440,7 @@ impl Runner {
         self.periods += 1;
         let coverage = self.coverage.coverage();
         let mut decided = Vec::new();
+        let mut nothing_observable = false;
         for k in 0..self.robots.len() {
             let r = &mut self.robots[k];
             let body = &mut self.bodies[k];
@@ -441,11 +456,23 @@ impl Runner {
             let out = r.mission.step(now, &mut self.map, &mut self.ws, &mut r.rng);
             let elapsed_ms = t0.elapsed().as_secs_f64() * 1e3;
             let latency_us = (self.config.pump.decision_latency_s.max(0.0) * 1e6).round() as u64;
-            let deciding = latency_us > 0
-                && out
-                    .events
-                    .iter()
-                    .any(|e| matches!(e, MissionEvent::Decided { .. }));
+            let deciding = latency_us > 0 && deciding_now(&out.events);
+            if deciding_now(&out.events) && self.config.pump.nothing_observable_end {
+                let known = (0..self.map.grid.cell_count())
+                    .filter(|&i| self.map.grid.class(i) != CellClass::Unknown)
+                    .count();
+                if r.stall.len() > STALL_DECISIONS {
+                    r.stall.pop_front();
+                }
+                r.stall.push_back((known, r.mission.stats().steps));
+                if let (Some(&(k0, s0)), Some(&(k1, s1))) = (r.stall.front(), r.stall.back())
+                    && r.stall.len() > STALL_DECISIONS
+                    && k1.saturating_sub(k0) < STALL_NEW_CELLS
+                    && s1 - s0 >= STALL_STEPS
+                {
+                    nothing_observable = true;
+                }
+            }
             if deciding {
                 // The decision's command comes `latency` later; until then the robot stops.
                 // (A simplification: the binary holds the last command up to 0.3 s first.)
@@ -490,6 +517,9 @@ impl Runner {
         }
         if !decided.is_empty() {
             self.sample();
+        }
+        if nothing_observable {
+            self.end(EndReason::NothingObservable);
         }
         self.check_end();
         decided
@@ -536,11 +566,18 @@ impl Runner {
             None
         };
         if let Some(reason) = reason {
-            self.coverage.recount(&self.map.grid);
-            self.last_sample = None;
-            self.sample();
-            self.report.reason = Some(reason);
+            self.end(reason);
         }
+    }
+
+    fn end(&mut self, reason: EndReason) {
+        if self.report.reason.is_some() {
+            return;
+        }
+        self.coverage.recount(&self.map.grid);
+        self.last_sample = None;
+        self.sample();
+        self.report.reason = Some(reason);
     }
 }
 
