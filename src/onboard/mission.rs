@@ -75,6 +75,15 @@ pub const PENDING_SCANS: usize = 8;
 /// A turn between two status packets (100 ms apart) above which a scan between them is not
 /// mapped \[rad\] (2°).
 pub const MAX_MAPPING_TURN_RAD: f32 = 0.035;
+/// The mission ends as explored when this many decisions in a row...
+pub const STALL_DECISIONS: usize = 5;
+/// ...added fewer known cells than this between them...
+pub const STALL_NEW_CELLS: usize = 20;
+/// ...while the robot spent at least this much energy on them \[steps\]: what is left
+/// Unknown next to Free cells cannot be seen (the inside of an obstacle behind a cell of its
+/// wall that noise marked Free), and the core would otherwise chase it until the battery is
+/// spent (see [`Stall`]).
+pub const STALL_STEPS: f32 = 5.0;
 /// The state to save is published at least this often \[s of mission time\].
 pub const PUBLISH_EVERY_S: f64 = 1.0;
 /// After `--resume`, odometry within this distance of the saved odometry counts as continued
@@ -180,7 +189,8 @@ struct Published {
     command: Option<MissionCommand>,
     /// Mission time of the last re-plan the core reported \[s\].
     last_plan_s: Option<f64>,
-    done: Option<DoneReason>,
+    /// The core's end, or the onboard one ([`END_NOTHING_OBSERVABLE`]).
+    done: Option<&'static str>,
     state: SavedState,
     map: Option<MapImage>,
     telemetry: Vec<TelemetryRecord>,
@@ -258,10 +268,13 @@ impl CoreMission {
             force_fault: false,
             last_flags: RobotFlags::nominal(),
             last_status_s: 0.0,
+            stall: Stall::default(),
             history: PoseHistory::new(),
             pending: std::collections::VecDeque::with_capacity(PENDING_SCANS),
             trajectory_step_m: 0.1,
             scans_integrated: 0,
+            scans_unmapped: 0,
+            scans_dropped: 0,
             reconnects: 0,
         };
         std::thread::Builder::new()
@@ -382,6 +395,8 @@ struct Worker {
     force_fault: bool,
     last_flags: RobotFlags,
     last_status_s: f64,
+    /// Known cells at the latest decisions.
+    stall: Stall,
     /// Odometry readings with their times.
     history: PoseHistory,
     /// Scans waiting for the status packet after them.
@@ -389,6 +404,10 @@ struct Worker {
     trajectory_step_m: f32,
     /// Scans integrated into the map in this run.
     scans_integrated: u64,
+    /// Scans given to the safety monitor only (the robot turning), and scans dropped (older
+    /// than the odometry history, or more than [`PENDING_SCANS`] waiting), in this run.
+    scans_unmapped: u64,
+    scans_dropped: u64,
     /// Link reconnections in this run.
     reconnects: u64,
 }
@@ -437,6 +456,7 @@ impl Worker {
             Input::Scan(t_s, scan) => {
                 if self.pending.len() == PENDING_SCANS {
                     self.pending.pop_front();
+                    self.scans_dropped += 1;
                 }
                 self.pending.push_back((t_s, scan));
             }
@@ -474,6 +494,7 @@ impl Worker {
                 PoseAt::Later => break,
                 PoseAt::TooOld => {
                     self.pending.pop_front();
+                    self.scans_dropped += 1;
                     continue;
                 }
                 PoseAt::Pose(p) => p,
@@ -487,6 +508,7 @@ impl Worker {
                 .is_some_and(|r| r > max_turn_rate);
             if turning {
                 mission.on_scan_unmapped(time(t_scan), &scan);
+                self.scans_unmapped += 1;
             } else {
                 mission.on_odometry(time(t_scan), pose, flags);
                 mission
@@ -575,12 +597,12 @@ impl Worker {
                     fields: serde_json::json!({ "reason": format!("{reason:?}") }),
                 }),
                 MissionEvent::Done(reason) => {
-                    out.done = Some(*reason);
+                    out.done = Some(done_name(*reason));
                     out.telemetry.push(TelemetryRecord {
                         t_s,
                         kind: "done",
                         fields: serde_json::json!({
-                            "reason": format!("{reason:?}"),
+                            "reason": done_name(*reason),
                             "battery_steps": mission.battery_steps(),
                             "decisions": stats.decisions,
                             "replans": stats.replans,
@@ -591,6 +613,37 @@ impl Worker {
                 }
                 _ => {}
             }
+        }
+        let decided = output
+            .events
+            .iter()
+            .any(|e| matches!(e, MissionEvent::Decided { .. }));
+        if decided
+            && out.done.is_none()
+            && self
+                .stall
+                .on_decision(known_cells(&self.map), stats.steps)
+        {
+            out.done = Some(END_NOTHING_OBSERVABLE);
+            out.telemetry.push(TelemetryRecord {
+                t_s,
+                kind: "done",
+                fields: serde_json::json!({
+                    "reason": END_NOTHING_OBSERVABLE,
+                    "battery_steps": mission.battery_steps(),
+                    "decisions": stats.decisions,
+                    "replans": stats.replans,
+                    "replans_per_decision":
+                        f64::from(stats.replans) / f64::from(stats.decisions.max(1)),
+                }),
+            });
+            // Stop here: the decision's path is not driven.
+            out.command = Some(MissionCommand::Drive(Velocity::ZERO));
+            out.commands += 1;
+            drop(out);
+            self.last_publish_s = t_s;
+            self.publish(t_s, true);
+            return;
         }
         // The monitor's command as the velocity it sets (zero for a stop, and for a command
         // that sets none): a clamped `Velocity`, unchanged down to the VEL/RVEL bytes.
@@ -663,6 +716,9 @@ impl Worker {
                 "replans": stats.replans,
                 "replans_per_decision": f64::from(stats.replans) / f64::from(stats.decisions.max(1)),
                 "known_cells": known,
+                "scans_mapped": self.scans_integrated,
+                "scans_unmapped": self.scans_unmapped,
+                "scans_dropped": self.scans_dropped,
                 "known_m2": known as f64 * f64::from(self.map.grid.geometry().resolution_m).powi(2),
                 "escapes": stats.escapes,
                 "faults": stats.faults,
@@ -685,6 +741,45 @@ fn known_cells(map: &Map) -> usize {
     (0..g.cell_count())
         .filter(|&i| map.grid.class(i) != CellClass::Unknown)
         .count()
+}
+
+/// The `done` reason of an onboard end: decisions stopped adding to the map.
+pub const END_NOTHING_OBSERVABLE: &str = "NothingObservable";
+
+fn done_name(reason: DoneReason) -> &'static str {
+    match reason {
+        DoneReason::CoverageReached => "CoverageReached",
+        DoneReason::BatteryExhausted => "BatteryExhausted",
+        DoneReason::NothingReachable => "NothingReachable",
+    }
+}
+
+/// The onboard end of an explored building: [`STALL_DECISIONS`] decisions in a row that
+/// together added fewer than [`STALL_NEW_CELLS`] known cells while the robot spent at least
+/// [`STALL_STEPS`] on them. The core ends with `NothingReachable` only when no frontier cell
+/// can be reached; a frontier cell that can be reached but never seen (measured on the lab:
+/// the inside of a box behind a cell of its wall that range noise marked Free) keeps it
+/// deciding, driving there and back until the battery is spent.
+#[derive(Clone, Debug, Default)]
+struct Stall {
+    /// (known cells, energy used) at each of the latest decisions.
+    at: std::collections::VecDeque<(usize, f32)>,
+}
+
+impl Stall {
+    /// Records a decision; true when the mission should end.
+    fn on_decision(&mut self, known_cells: usize, steps: f32) -> bool {
+        if self.at.len() > STALL_DECISIONS {
+            self.at.pop_front();
+        }
+        self.at.push_back((known_cells, steps));
+        match (self.at.front(), self.at.back()) {
+            (Some(&(k0, s0)), Some(&(k1, s1))) if self.at.len() > STALL_DECISIONS => {
+                k1.saturating_sub(k0) < STALL_NEW_CELLS && s1 - s0 >= STALL_STEPS
+            }
+            _ => false,
+        }
+    }
 }
 
 fn pose(p: PoseRecord) -> Pose2 {
@@ -715,11 +810,37 @@ mod tests {
     }
 
     #[test]
+    fn decisions_that_add_nothing_end_the_mission_only_after_enough_of_them_and_of_driving() {
+        let mut stall = Stall::default();
+        // Growing map: never.
+        for i in 0..20 {
+            assert!(!stall.on_decision(1000 + 100 * i, i as f32));
+        }
+        // Nothing new, but no driving either (decisions dropped at once): not yet.
+        let mut stall = Stall::default();
+        for _ in 0..10 {
+            assert!(!stall.on_decision(5000, 3.0));
+        }
+        // Nothing new over STALL_DECISIONS decisions and STALL_STEPS of driving: the end.
+        let mut stall = Stall::default();
+        let ends: Vec<bool> = (0..=STALL_DECISIONS)
+            .map(|i| stall.on_decision(5000 + i, 10.0 + 2.0 * i as f32))
+            .collect();
+        assert_eq!(ends.iter().filter(|&&e| e).count(), 1);
+        assert!(ends[STALL_DECISIONS]);
+    }
+
+    #[test]
     fn the_simulator_board_is_the_runners_default_mission_with_its_laser() {
         let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
         let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
         let mut config = mission_config(&board).unwrap();
-        assert_eq!(config.laser, crate::sensor::LaserConfig::lms1xx());
+        // The LMS1xx at 0.5° scans at 50 Hz (`papillon-sim serve`'s emulator too).
+        let lms1xx = crate::sensor::LaserConfig {
+            rate_hz: 50.0,
+            ..crate::sensor::LaserConfig::lms1xx()
+        };
+        assert_eq!(config.laser, lms1xx);
         config.laser = MissionConfig::default().laser;
         assert_eq!(config, MissionConfig::default());
     }

@@ -61,6 +61,10 @@ pub struct PumpModel {
     /// spent at least [`STALL_STEPS`] on them (`papillon::onboard::mission::Stall`: what is
     /// left Unknown next to Free cells cannot be seen).
     pub nothing_observable_end: bool,
+    /// Above this turn rate a scan only feeds the safety monitor, it is not mapped
+    /// (`papillon run` maps no scan between two status packets whose headings differ by more
+    /// than 2°: its scans are timed by their arrival) \[deg/s\]. `None`: every scan is mapped.
+    pub unmapped_turn_deg_s: Option<f32>,
 }
 
 /// See [`PumpModel::nothing_observable_end`] (the same values as `papillon run`'s).
@@ -77,17 +81,20 @@ impl PumpModel {
             coverage_known: true,
             decision_latency_s: 0.0,
             nothing_observable_end: false,
+            unmapped_turn_deg_s: None,
         }
     }
 
     /// `papillon run`'s pump: no coverage from the truth, a decision takes
-    /// `decision_latency_s` (what its `decision` telemetry's `compute_ms` says), and the run
-    /// ends when decisions stop adding to the map.
+    /// `decision_latency_s` (what its `decision` telemetry's `compute_ms` says), no scan is
+    /// mapped while the robot turns faster than 20 deg/s, and the run ends when decisions stop
+    /// adding to the map.
     pub const fn onboard(decision_latency_s: f64) -> Self {
         Self {
             coverage_known: false,
             decision_latency_s,
             nothing_observable_end: true,
+            unmapped_turn_deg_s: Some(20.0),
         }
     }
 }

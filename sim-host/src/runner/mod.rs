@@ -416,6 +416,15 @@ impl Runner {
             // A laser with more beams than a scan holds keeps the first ones.
             let _ = r.laser.scan_into(&self.world, pose, &discs, &mut self.scan);
             r.feed_odometry(now, body);
+            let turning = self
+                .config
+                .pump
+                .unmapped_turn_deg_s
+                .is_some_and(|limit| body.turn_deg_s().abs() > limit);
+            if turning {
+                r.mission.on_scan_unmapped(now, &self.scan);
+                continue;
+            }
             r.mission.on_scan(now, &self.scan, &mut self.map)?;
             self.coverage.update_after_scan(
                 &self.map.grid,
