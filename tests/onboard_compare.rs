@@ -150,7 +150,10 @@ fn on_board_grid(world: &World, board: &BoardConfig) -> World {
         papillon::geometry::Point2::new(start.x + g.origin_x_m, start.y + g.origin_y_m),
     )
     .unwrap();
-    assert!(start.theta.abs() < 1e-6, "a world whose start is not heading east");
+    assert!(
+        start.theta.abs() < 1e-6,
+        "a world whose start is not heading east"
+    );
     let inner = world.geometry();
     let blocked = (0..geometry.cell_count())
         .map(|i| {

@@ -198,7 +198,11 @@ fn sigterm_saves_the_mission_and_resume_finishes_it_without_losing_the_map() {
         .skip_while(|l| !l.contains("\"stopped by signal\""))
         .skip(1)
         .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .find_map(|r| (r["kind"] == "mission").then(|| r["t_s"].as_f64()).flatten())
+        .find_map(|r| {
+            (r["kind"] == "mission")
+                .then(|| r["t_s"].as_f64())
+                .flatten()
+        })
         .expect("mission telemetry after the resume");
     assert!(
         first_resumed_s >= time_before_s,

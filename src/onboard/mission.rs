@@ -42,8 +42,8 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Instant as WallInstant;
 
 use super::driver::{MissionCommand, MissionDriver, TelemetryRecord};
-use super::pose_history::{PoseAt, PoseHistory};
 use super::persist::{Counters, MapImage, MissionState as SavedState, PoseRecord, STATE_VERSION};
+use super::pose_history::{PoseAt, PoseHistory};
 use super::robot::Fault;
 use crate::config::{BoardConfig, Strategy};
 use crate::control::Time;
@@ -620,9 +620,7 @@ impl Worker {
             .any(|e| matches!(e, MissionEvent::Decided { .. }));
         if decided
             && out.done.is_none()
-            && self
-                .stall
-                .on_decision(known_cells(&self.map), stats.steps)
+            && self.stall.on_decision(known_cells(&self.map), stats.steps)
         {
             out.done = Some(END_NOTHING_OBSERVABLE);
             out.telemetry.push(TelemetryRecord {

@@ -325,7 +325,9 @@ pub async fn run_with(
         let mut laser_client = connect_laser(board, laser()).await?;
         // Mission time runs on across reconnections, and across a `--resume` from where the
         // saved mission stopped.
-        let resumed_s = resumed.as_ref().map_or(0.0, |(s, _)| s.mission_time_s.max(0.0));
+        let resumed_s = resumed
+            .as_ref()
+            .map_or(0.0, |(s, _)| s.mission_time_s.max(0.0));
         let epoch = Instant::now()
             .checked_sub(Duration::from_secs_f64(resumed_s))
             .unwrap_or_else(Instant::now);
