@@ -109,9 +109,9 @@ fn wait_for_progress(log: &Path, cells: usize, limit: Duration) {
 fn done_record(telemetry: &str) -> serde_json::Value {
     telemetry
         .lines()
+        .rev()
         .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .filter(|r| r["kind"] == "done")
-        .last()
+        .find(|r| r["kind"] == "done")
         .expect("a done record in the telemetry")
 }
 

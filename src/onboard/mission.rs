@@ -82,7 +82,7 @@ pub const STALL_NEW_CELLS: usize = 20;
 /// ...while the robot spent at least this much energy on them \[steps\]: what is left
 /// Unknown next to Free cells cannot be seen (the inside of an obstacle behind a cell of its
 /// wall that noise marked Free), and the core would otherwise chase it until the battery is
-/// spent (see [`Stall`]).
+/// spent (see `Stall`).
 pub const STALL_STEPS: f32 = 5.0;
 /// The state to save is published at least this often \[s of mission time\].
 pub const PUBLISH_EVERY_S: f64 = 1.0;
