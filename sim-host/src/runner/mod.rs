@@ -14,6 +14,12 @@
 //! seed: every robot's body, laser and decision generator is a seeded Xoshiro stream derived
 //! from the run's seed ([`derive_seed`]).
 //!
+//! How the missions are pumped is [`RunConfig::pump`]: the runner's ideal pump (the coverage
+//! of the truth reported to the missions, decisions taking no simulated time, every scan
+//! mapped), or `papillon run`'s ([`PumpModel::onboard`]: no coverage, decisions taking the
+//! binary's time while the robot stands, no scan mapped while turning faster than 20 deg/s, the
+//! run ended when decisions stop adding to the map), so that a run predicts the binary.
+//!
 //! The run ends when every mission is done, or at a simulated-time limit
 //! ([`RunConfig::max_sim_time_s`]) so that a stuck mission ends with a reason instead of
 //! running forever. What is recorded is listed on [`RunReport`] and [`RobotReport`].
