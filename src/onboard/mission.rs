@@ -78,7 +78,7 @@ pub const MAX_MAPPING_TURN_RAD: f32 = 0.035;
 /// The mission ends as explored when this many decisions in a row...
 pub const STALL_DECISIONS: usize = 5;
 /// ...added fewer known cells than this between them...
-pub const STALL_NEW_CELLS: usize = 20;
+pub const STALL_NEW_CELLS: usize = 100;
 /// ...while the robot spent at least this much energy on them \[steps\]: what is left
 /// Unknown next to Free cells cannot be seen (the inside of an obstacle behind a cell of its
 /// wall that noise marked Free), and the core would otherwise chase it until the battery is

@@ -70,7 +70,7 @@ pub struct PumpModel {
 /// See [`PumpModel::nothing_observable_end`] (the same values as `papillon run`'s).
 pub const STALL_DECISIONS: usize = 5;
 /// See [`PumpModel::nothing_observable_end`].
-pub const STALL_NEW_CELLS: usize = 20;
+pub const STALL_NEW_CELLS: usize = 100;
 /// See [`PumpModel::nothing_observable_end`] \[steps\].
 pub const STALL_STEPS: f32 = 5.0;
 
