@@ -105,6 +105,16 @@ fn wait_for_progress(log: &Path, cells: usize, limit: Duration) {
     }
 }
 
+/// The last `done` record of a telemetry log.
+fn done_record(telemetry: &str) -> serde_json::Value {
+    telemetry
+        .lines()
+        .rev()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .find(|r| r["kind"] == "done")
+        .expect("a done record in the telemetry")
+}
+
 fn only_the_log_in(dir: &Path, log: &Path) {
     let entries: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
@@ -123,7 +133,7 @@ fn a_lab_mission_finishes_with_95_percent_coverage() {
         run(&sim.arcos_tcp(), &sim.laser(), &log, false),
         MISSION_LIMIT,
     );
-    assert_exit_0(&out);
+    let stderr = assert_exit_0(&out);
     let (state, map) = saved(&log);
     assert!(state.finished, "{state:?}");
     let c = coverage(&lab(), &map);
@@ -140,6 +150,17 @@ fn a_lab_mission_finishes_with_95_percent_coverage() {
     let telemetry = std::fs::read_to_string(log.join("telemetry.jsonl")).unwrap();
     assert!(telemetry.contains("\"kind\":\"decision\""));
     assert!(telemetry.contains("\"compute_ms\""));
+    // The telemetry says why the mission ended, and counts re-plans per decision; stderr
+    // shows the progress.
+    let done = done_record(&telemetry);
+    assert!(
+        ["NothingReachable", "NothingObservable", "BatteryExhausted"]
+            .contains(&done["reason"].as_str().unwrap_or("")),
+        "{done}"
+    );
+    assert!(done["replans_per_decision"].is_number(), "{done}");
+    assert!(stderr.contains(" progress "), "{stderr}");
+    assert!(stderr.contains("mission done"), "{stderr}");
     only_the_log_in(&dir, &log);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -159,6 +180,8 @@ fn sigterm_saves_the_mission_and_resume_finishes_it_without_losing_the_map() {
     assert!(!state.finished);
     let before = known_cells(&map);
     assert!(before.len() >= 1500);
+    let time_before_s = state.mission_time_s;
+    assert!(time_before_s > 3.0, "{state:?}");
 
     let out = wait_bounded(
         run(&sim.arcos_tcp(), &sim.laser(), &log, true),
@@ -168,6 +191,24 @@ fn sigterm_saves_the_mission_and_resume_finishes_it_without_losing_the_map() {
     assert!(stderr.contains("resuming saved mission"), "{stderr}");
     let (state, map) = saved(&log);
     assert!(state.finished, "{state:?}");
+    // Mission time carries over the resume (it restarted at 0 before).
+    let telemetry = std::fs::read_to_string(log.join("telemetry.jsonl")).unwrap();
+    let first_resumed_s = telemetry
+        .lines()
+        .skip_while(|l| !l.contains("\"stopped by signal\""))
+        .skip(1)
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .find_map(|r| {
+            (r["kind"] == "mission")
+                .then(|| r["t_s"].as_f64())
+                .flatten()
+        })
+        .expect("mission telemetry after the resume");
+    assert!(
+        first_resumed_s >= time_before_s,
+        "resumed at {first_resumed_s} s, saved at {time_before_s} s"
+    );
+    assert!(state.mission_time_s > time_before_s, "{state:?}");
     let lost = before
         .iter()
         .filter(|&&i| map.pixels[i] == PGM_UNKNOWN)
@@ -197,6 +238,8 @@ fn after_kill_9_the_saved_map_is_intact_and_resume_continues_from_it() {
     assert!(!state.finished);
     let before = known_cells(&map);
     assert!(before.len() >= 1500);
+    let time_before_s = state.mission_time_s;
+    assert!(time_before_s > 3.0, "{state:?}");
     let saved_at = state.mission_time_s;
 
     let child = run(&sim.arcos_tcp(), &sim.laser(), &log, true);
@@ -421,6 +464,62 @@ fn an_lms200_on_a_second_serial_line_feeds_the_mission() {
     assert_exit_0(&out);
     drop(sim);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 26: at 0.1 % byte corruption on the robot link the lab mission finishes (before,
+/// two of three seeds looped on `PathBlocked` re-plans towards targets outside the lab until
+/// the time limit). Two seeds at once here; the five-seed check is
+/// `scripts/house-check.sh --map lab --faults corrupt=0.001 1 2 3 4 5`.
+#[test]
+fn lab_missions_finish_at_a_tenth_of_a_percent_corruption() {
+    let runs: Vec<_> = [4u64, 5]
+        .into_iter()
+        .map(|seed| {
+            std::thread::spawn(move || {
+                let seed_text = seed.to_string();
+                let sim = Sim::start("lab", None, &["--faults", "corrupt=0.001", "--seed", &seed_text]);
+                let dir = temp_dir(&format!("mission-corrupt-{seed}"));
+                let mut board: serde_json::Value =
+                    serde_json::from_str(&std::fs::read_to_string(board()).unwrap()).unwrap();
+                board["mission"]["seed"] = serde_json::json!(seed);
+                let board_path = dir.join("board.json");
+                std::fs::write(&board_path, board.to_string()).unwrap();
+                let log = dir.join("log");
+                let child = papillon(
+                    &[
+                        "run",
+                        "--board",
+                        board_path.to_str().unwrap(),
+                        "--tcp",
+                        &sim.arcos_tcp(),
+                        "--laser",
+                        &sim.laser(),
+                        "--log-dir",
+                        log.to_str().unwrap(),
+                    ],
+                    &dir,
+                );
+                let out = wait_bounded(child, MISSION_LIMIT);
+                assert_exit_0(&out);
+                let (state, map) = saved(&log);
+                let c = coverage(&lab(), &map);
+                let telemetry = std::fs::read_to_string(log.join("telemetry.jsonl")).unwrap();
+                let done = done_record(&telemetry);
+                eprintln!(
+                    "lab at 0.1 % corruption, seed {seed}: coverage {:.1} %, {:.0} s, {} decisions, end {done}",
+                    c * 100.0,
+                    state.mission_time_s,
+                    state.counters.decisions
+                );
+                assert!(state.finished, "seed {seed}: {state:?}");
+                assert!(c >= 0.95, "seed {seed}: coverage {c}");
+                std::fs::remove_dir_all(&dir).unwrap();
+            })
+        })
+        .collect();
+    for r in runs {
+        r.join().unwrap();
+    }
 }
 
 /// The manual check of the user guide: the same mission on the 24 m x 24 m `house`. Run with

@@ -6,15 +6,17 @@
 //! ([`CoreMission`]) only posts inputs and picks up results, never waits for the thread:
 //! - status packets become odometry ([`ArcosOdometry`] over the SIP's XPOS/YPOS/THPOS) and
 //!   [`RobotFlags`] (STALL AND BUMPERS, FLAGS);
-//! - scans are integrated into the shared map, the first one after each status packet and
-//!   only if it came within [`SCAN_WINDOW_S`] (or one laser period) of it: a scan is placed
-//!   at the latest odometry pose, and a stale pose smears the map while the robot turns;
-//!   a scan after a status packet whose heading turned more than [`MAX_MAPPING_TURN_RAD`]
-//!   since the previous one (20 deg/s at the SIP's 100 ms) only feeds the safety monitor:
-//!   a loaded computer delivers scans tens of milliseconds late, which at the 60 deg/s of a
-//!   turn in place fans the walls out across the map (seen end to end under load: phantom
-//!   walls inside the lab, every path then cut, the robot turning in place until the battery
-//!   ran out);
+//! - scans are integrated into the shared map, every one of them, each at the odometry pose
+//!   interpolated to its time ([`PoseHistory`], the odometry readings of the last seconds with
+//!   their times): a scan waits for the status packet after it, and the mission then sees
+//!   the pose at the scan's time, the scan, and the packet's pose, in time order (the
+//!   interpolated pose lies on the way between the two readings, so the distance and energy
+//!   counted on odometry are unchanged). A scan while the robot turns faster than
+//!   [`MAX_MAPPING_TURN_RAD`] per status period (20 deg/s) only feeds the safety monitor: its
+//!   time is its arrival in the pump, a few milliseconds after the laser took it, and at the
+//!   60 deg/s of a turn in place that is enough to fan the walls out across the map (seen
+//!   end to end under load before the interpolation: phantom walls inside the lab, every
+//!   path then cut, the robot turning in place until the battery ran out);
 //! - the mission steps right after each status packet (at most every [`MIN_STEP_S`], at least
 //!   every [`STEP_FALLBACK_S`]), so a command is computed from the freshest pose; each new
 //!   command is handed to the runtime once; between periods the runtime is told to
@@ -41,6 +43,7 @@ use std::time::Instant as WallInstant;
 
 use super::driver::{MissionCommand, MissionDriver, TelemetryRecord};
 use super::persist::{Counters, MapImage, MissionState as SavedState, PoseRecord, STATE_VERSION};
+use super::pose_history::{PoseAt, PoseHistory};
 use super::robot::Fault;
 use crate::config::{BoardConfig, Strategy};
 use crate::control::Time;
@@ -66,11 +69,21 @@ pub const MIN_STEP_S: f64 = 0.05;
 pub const STEP_FALLBACK_S: f64 = 0.15;
 /// With no new command for this long after a moving one, the runtime is told to stop \[s\].
 pub const BUSY_STOP_S: f64 = 0.3;
-/// A scan is integrated only if it arrives within this long after a status packet (or one
-/// laser period, if longer) \[s\].
-pub const SCAN_WINDOW_S: f64 = 0.04;
-/// A turn between two status packets above which the next scan is not mapped \[rad\] (2°).
+/// Scans kept while they wait for the status packet after them (more are dropped, oldest
+/// first: at 25 Hz, 0.3 s of scans).
+pub const PENDING_SCANS: usize = 8;
+/// A turn between two status packets (100 ms apart) above which a scan between them is not
+/// mapped \[rad\] (2°).
 pub const MAX_MAPPING_TURN_RAD: f32 = 0.035;
+/// The mission ends as explored when this many decisions in a row...
+pub const STALL_DECISIONS: usize = 5;
+/// ...added fewer known cells than this between them...
+pub const STALL_NEW_CELLS: usize = 100;
+/// ...while the robot spent at least this much energy on them \[steps\]: what is left
+/// Unknown next to Free cells cannot be seen (the inside of an obstacle behind a cell of its
+/// wall that noise marked Free), and the core would otherwise chase it until the battery is
+/// spent (see `Stall`).
+pub const STALL_STEPS: f32 = 5.0;
 /// The state to save is published at least this often \[s of mission time\].
 pub const PUBLISH_EVERY_S: f64 = 1.0;
 /// After `--resume`, odometry within this distance of the saved odometry counts as continued
@@ -100,7 +113,10 @@ pub fn grid_geometry(board: &BoardConfig) -> Result<GridGeometry, String> {
     Ok(geometry)
 }
 
-/// The core mission configuration of a board.
+/// The core mission configuration of a board: [`MissionConfig::default`] (the runner's set-up)
+/// with what the board says (selector, battery, laser, optimizer budget, limits, PID gains,
+/// safety distances); `boards/sim.json` says what the runner's defaults say, so that
+/// `papillon-sim mission` predicts `papillon run` on the simulator.
 pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     let m = &board.mission;
     let selector = match m.method.as_str() {
@@ -137,10 +153,10 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
         whole(r.rot_accel_deg_s2),
         whole(r.rot_accel_deg_s2),
     );
-    // Plan with the safety distance on top of the radius: a path the safety monitor would
-    // refuse (a return inside `obstacle_stop_m` of the robot's edge) is never planned, so the
-    // robot does not stop and re-plan the same path again and again.
-    config.traversability.robot_radius_m = r.radius_m + board.safety.obstacle_stop_m;
+    // The planning layer is the runner's (`MissionConfig::default().traversability`): the
+    // runner predicts the binary only if both plan alike. (A planning radius of the robot's
+    // radius plus the stop distance, as before, made every doorway of the house narrower
+    // than in the runner.)
     let f = &mut config.follower;
     f.cruise_speed_mm_s = f.cruise_speed_mm_s.min(r.max_speed_mm_s);
     f.max_turn_rate_deg_s = f.max_turn_rate_deg_s.min(r.max_turn_rate_deg_s);
@@ -173,7 +189,8 @@ struct Published {
     command: Option<MissionCommand>,
     /// Mission time of the last re-plan the core reported \[s\].
     last_plan_s: Option<f64>,
-    done: Option<DoneReason>,
+    /// The core's end, or the onboard one ([`END_NOTHING_OBSERVABLE`]).
+    done: Option<&'static str>,
     state: SavedState,
     map: Option<MapImage>,
     telemetry: Vec<TelemetryRecord>,
@@ -251,13 +268,14 @@ impl CoreMission {
             force_fault: false,
             last_flags: RobotFlags::nominal(),
             last_status_s: 0.0,
-            scan_taken: false,
-            scan_window_s: SCAN_WINDOW_S.max(1.0 / f64::from(board.laser.rate_hz.max(1.0))),
+            stall: Stall::default(),
+            history: PoseHistory::new(),
+            pending: std::collections::VecDeque::with_capacity(PENDING_SCANS),
             trajectory_step_m: 0.1,
             scans_integrated: 0,
+            scans_unmapped: 0,
+            scans_dropped: 0,
             reconnects: 0,
-            last_heading: None,
-            turning: false,
         };
         std::thread::Builder::new()
             .name("mission".into())
@@ -377,19 +395,21 @@ struct Worker {
     force_fault: bool,
     last_flags: RobotFlags,
     last_status_s: f64,
-    /// A scan was integrated since the last status packet.
-    scan_taken: bool,
-    /// How soon after a status packet a scan must arrive to be integrated \[s\].
-    scan_window_s: f64,
+    /// Known cells at the latest decisions.
+    stall: Stall,
+    /// Odometry readings with their times.
+    history: PoseHistory,
+    /// Scans waiting for the status packet after them.
+    pending: std::collections::VecDeque<(f64, Box<Scan>)>,
     trajectory_step_m: f32,
     /// Scans integrated into the map in this run.
     scans_integrated: u64,
+    /// Scans given to the safety monitor only (the robot turning), and scans dropped (older
+    /// than the odometry history, or more than [`PENDING_SCANS`] waiting), in this run.
+    scans_unmapped: u64,
+    scans_dropped: u64,
     /// Link reconnections in this run.
     reconnects: u64,
-    /// Heading of the latest status packet \[rad\], and whether the robot turned faster than
-    /// mapping allows since the one before.
-    last_heading: Option<f32>,
-    turning: bool,
 }
 
 impl Worker {
@@ -417,45 +437,28 @@ impl Worker {
                     .update(status.x_pos, status.y_pos, status.th_pos);
                 self.last_flags = RobotFlags::from_sip(status.stall_bumpers, status.flags);
                 self.last_status_s = t_s;
-                self.scan_taken = false;
-                self.turning = self.last_heading.is_some_and(|h| {
-                    libm::fabsf(crate::geometry::normalize_angle(pose_odom.theta - h))
-                        > MAX_MAPPING_TURN_RAD
-                });
-                self.last_heading = Some(pose_odom.theta);
+                self.history.push(t_s, pose_odom);
                 let start = self.start_pose(pose_odom);
-                let mission = match &mut self.mission {
-                    Some(m) => m,
-                    None => {
-                        let m = Mission::new(0, self.config.clone(), start)
-                            .map_err(|e| format!("mission: {e}"))?;
-                        self.mission.insert(m)
-                    }
-                };
+                if self.mission.is_none() {
+                    let m = Mission::new(0, self.config.clone(), start)
+                        .map_err(|e| format!("mission: {e}"))?;
+                    self.mission = Some(m);
+                }
                 let mut flags = self.last_flags;
                 if self.force_fault {
                     flags.motors_enabled = false;
                 }
-                mission.on_odometry(time(t_s), pose_odom, flags);
+                self.integrate_pending(flags)?;
+                if let Some(m) = &mut self.mission {
+                    m.on_odometry(time(t_s), pose_odom, flags);
+                }
             }
             Input::Scan(t_s, scan) => {
-                // Only the first scan after each status packet is integrated, and only if it
-                // came soon after it: a scan is placed at the latest odometry pose, so the
-                // older that pose, the more a turning robot smears the map.
-                let fresh = t_s - self.last_status_s <= self.scan_window_s;
-                if self.scan_taken || !fresh {
-                    return Ok(());
+                if self.pending.len() == PENDING_SCANS {
+                    self.pending.pop_front();
+                    self.scans_dropped += 1;
                 }
-                self.scan_taken = true;
-                if let Some(m) = &mut self.mission {
-                    if self.turning {
-                        m.on_scan_unmapped(time(t_s), &scan);
-                    } else {
-                        m.on_scan(time(t_s), &scan, &mut self.map)
-                            .map_err(|e| format!("scan integration: {e}"))?;
-                        self.scans_integrated += 1;
-                    }
-                }
+                self.pending.push_back((t_s, scan));
             }
             Input::Fault => {
                 self.force_fault = true;
@@ -465,8 +468,54 @@ impl Worker {
                     m.on_odometry(time(self.last_status_s), self.odometry.pose_odom(), flags);
                 }
             }
-            Input::Reconnected => self.reconnects += 1,
+            Input::Reconnected => {
+                // A reset robot's odometry jumps: never interpolate across a reconnection.
+                self.reconnects += 1;
+                self.history.clear();
+                self.pending.clear();
+            }
             Input::Step(t_s) => self.step(t_s),
+        }
+        Ok(())
+    }
+
+    /// Integrates the scans waiting for a status packet, each at the odometry pose of its time
+    /// (between the previous reading and the one just pushed), before the mission sees the new
+    /// reading. A scan older than the history is dropped.
+    fn integrate_pending(&mut self, flags: RobotFlags) -> Result<(), String> {
+        let Some(mission) = &mut self.mission else {
+            self.pending.clear();
+            return Ok(());
+        };
+        let max_turn_rate = MAX_MAPPING_TURN_RAD / 0.1;
+        while let Some((t_scan, _)) = self.pending.front() {
+            let t_scan = *t_scan;
+            let pose = match self.history.at(t_scan) {
+                PoseAt::Later => break,
+                PoseAt::TooOld => {
+                    self.pending.pop_front();
+                    self.scans_dropped += 1;
+                    continue;
+                }
+                PoseAt::Pose(p) => p,
+            };
+            let Some((_, scan)) = self.pending.pop_front() else {
+                break;
+            };
+            let turning = self
+                .history
+                .turn_rate_at(t_scan)
+                .is_some_and(|r| r > max_turn_rate);
+            if turning {
+                mission.on_scan_unmapped(time(t_scan), &scan);
+                self.scans_unmapped += 1;
+            } else {
+                mission.on_odometry(time(t_scan), pose, flags);
+                mission
+                    .on_scan(time(t_scan), &scan, &mut self.map)
+                    .map_err(|e| format!("scan integration: {e}"))?;
+                self.scans_integrated += 1;
+            }
         }
         Ok(())
     }
@@ -504,6 +553,7 @@ impl Worker {
             let pose_odom = self.odometry.pose_odom();
             mission.on_odometry(time(self.last_status_s), pose_odom, self.last_flags);
         }
+        let stats = mission.stats();
         let mut out = lock(&self.out);
         for event in &output.events {
             match event {
@@ -547,15 +597,51 @@ impl Worker {
                     fields: serde_json::json!({ "reason": format!("{reason:?}") }),
                 }),
                 MissionEvent::Done(reason) => {
-                    out.done = Some(*reason);
+                    out.done = Some(done_name(*reason));
                     out.telemetry.push(TelemetryRecord {
                         t_s,
                         kind: "done",
-                        fields: serde_json::json!({ "reason": format!("{reason:?}") }),
+                        fields: serde_json::json!({
+                            "reason": done_name(*reason),
+                            "battery_steps": mission.battery_steps(),
+                            "decisions": stats.decisions,
+                            "replans": stats.replans,
+                            "replans_per_decision":
+                                f64::from(stats.replans) / f64::from(stats.decisions.max(1)),
+                        }),
                     });
                 }
                 _ => {}
             }
+        }
+        let decided = output
+            .events
+            .iter()
+            .any(|e| matches!(e, MissionEvent::Decided { .. }));
+        if decided
+            && out.done.is_none()
+            && self.stall.on_decision(known_cells(&self.map), stats.steps)
+        {
+            out.done = Some(END_NOTHING_OBSERVABLE);
+            out.telemetry.push(TelemetryRecord {
+                t_s,
+                kind: "done",
+                fields: serde_json::json!({
+                    "reason": END_NOTHING_OBSERVABLE,
+                    "battery_steps": mission.battery_steps(),
+                    "decisions": stats.decisions,
+                    "replans": stats.replans,
+                    "replans_per_decision":
+                        f64::from(stats.replans) / f64::from(stats.decisions.max(1)),
+                }),
+            });
+            // Stop here: the decision's path is not driven.
+            out.command = Some(MissionCommand::Drive(Velocity::ZERO));
+            out.commands += 1;
+            drop(out);
+            self.last_publish_s = t_s;
+            self.publish(t_s, true);
+            return;
         }
         // The monitor's command as the velocity it sets (zero for a stop, and for a command
         // that sets none): a clamped `Velocity`, unchanged down to the VEL/RVEL bytes.
@@ -592,6 +678,7 @@ impl Worker {
             }
         }
         let stats = mission.stats();
+        let known = known_cells(&self.map);
         let base = self.base.counters;
         let o = self.odometry.pose_odom();
         let state = SavedState {
@@ -612,7 +699,7 @@ impl Worker {
                 reconnects: base.reconnects + self.reconnects,
                 scans: base.scans + self.scans_integrated,
             },
-            coverage: known_fraction(&self.map),
+            coverage: known as f32 / self.map.grid.geometry().cell_count().max(1) as f32,
             finished,
         };
         let image = MapImage::from_grid(&self.map.grid);
@@ -625,6 +712,12 @@ impl Worker {
                 "decisions": stats.decisions,
                 "failed_decisions": stats.failed_decisions,
                 "replans": stats.replans,
+                "replans_per_decision": f64::from(stats.replans) / f64::from(stats.decisions.max(1)),
+                "known_cells": known,
+                "scans_mapped": self.scans_integrated,
+                "scans_unmapped": self.scans_unmapped,
+                "scans_dropped": self.scans_dropped,
+                "known_m2": known as f64 * f64::from(self.map.grid.geometry().resolution_m).powi(2),
                 "escapes": stats.escapes,
                 "faults": stats.faults,
                 "stopped_s": stats.stopped_s,
@@ -639,14 +732,52 @@ impl Worker {
     }
 }
 
-/// Fraction of the grid's cells that are known (Free or Occupied): without the world's
-/// truth the onboard program cannot tell how much of the reachable area this is.
-fn known_fraction(map: &Map) -> f32 {
+/// Known (Free or Occupied) cells of the grid: without the world's truth the onboard program
+/// cannot tell how much of the building this is, so it is reported, never a target.
+fn known_cells(map: &Map) -> usize {
     let g = map.grid.geometry();
-    let known = (0..g.cell_count())
+    (0..g.cell_count())
         .filter(|&i| map.grid.class(i) != CellClass::Unknown)
-        .count();
-    known as f32 / g.cell_count().max(1) as f32
+        .count()
+}
+
+/// The `done` reason of an onboard end: decisions stopped adding to the map.
+pub const END_NOTHING_OBSERVABLE: &str = "NothingObservable";
+
+fn done_name(reason: DoneReason) -> &'static str {
+    match reason {
+        DoneReason::CoverageReached => "CoverageReached",
+        DoneReason::BatteryExhausted => "BatteryExhausted",
+        DoneReason::NothingReachable => "NothingReachable",
+    }
+}
+
+/// The onboard end of an explored building: [`STALL_DECISIONS`] decisions in a row that
+/// together added fewer than [`STALL_NEW_CELLS`] known cells while the robot spent at least
+/// [`STALL_STEPS`] on them. The core ends with `NothingReachable` only when no frontier cell
+/// can be reached; a frontier cell that can be reached but never seen (measured on the lab:
+/// the inside of a box behind a cell of its wall that range noise marked Free) keeps it
+/// deciding, driving there and back until the battery is spent.
+#[derive(Clone, Debug, Default)]
+struct Stall {
+    /// (known cells, energy used) at each of the latest decisions.
+    at: std::collections::VecDeque<(usize, f32)>,
+}
+
+impl Stall {
+    /// Records a decision; true when the mission should end.
+    fn on_decision(&mut self, known_cells: usize, steps: f32) -> bool {
+        if self.at.len() > STALL_DECISIONS {
+            self.at.pop_front();
+        }
+        self.at.push_back((known_cells, steps));
+        match (self.at.front(), self.at.back()) {
+            (Some(&(k0, s0)), Some(&(k1, s1))) if self.at.len() > STALL_DECISIONS => {
+                k1.saturating_sub(k0) < STALL_NEW_CELLS && s1 - s0 >= STALL_STEPS
+            }
+            _ => false,
+        }
+    }
 }
 
 fn pose(p: PoseRecord) -> Pose2 {
@@ -674,6 +805,42 @@ mod tests {
             assert_eq!(config.limits.max_speed_mm_s(), 400);
             grid_geometry(&board).unwrap();
         }
+    }
+
+    #[test]
+    fn decisions_that_add_nothing_end_the_mission_only_after_enough_of_them_and_of_driving() {
+        let mut stall = Stall::default();
+        // Growing map: never.
+        for i in 0..20 {
+            assert!(!stall.on_decision(1000 + 100 * i, i as f32));
+        }
+        // Nothing new, but no driving either (decisions dropped at once): not yet.
+        let mut stall = Stall::default();
+        for _ in 0..10 {
+            assert!(!stall.on_decision(5000, 3.0));
+        }
+        // Nothing new over STALL_DECISIONS decisions and STALL_STEPS of driving: the end.
+        let mut stall = Stall::default();
+        let ends: Vec<bool> = (0..=STALL_DECISIONS)
+            .map(|i| stall.on_decision(5000 + i, 10.0 + 2.0 * i as f32))
+            .collect();
+        assert_eq!(ends.iter().filter(|&&e| e).count(), 1);
+        assert!(ends[STALL_DECISIONS]);
+    }
+
+    #[test]
+    fn the_simulator_board_is_the_runners_default_mission_with_its_laser() {
+        let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
+        let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
+        let mut config = mission_config(&board).unwrap();
+        // The LMS1xx at 0.5° scans at 50 Hz (`papillon-sim serve`'s emulator too).
+        let lms1xx = crate::sensor::LaserConfig {
+            rate_hz: 50.0,
+            ..crate::sensor::LaserConfig::lms1xx()
+        };
+        assert_eq!(config.laser, lms1xx);
+        config.laser = MissionConfig::default().laser;
+        assert_eq!(config, MissionConfig::default());
     }
 
     #[test]

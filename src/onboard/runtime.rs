@@ -323,8 +323,14 @@ pub async fn run_with(
     };
     let outcome = {
         let mut laser_client = connect_laser(board, laser()).await?;
-        // Mission time runs on across reconnections.
-        let epoch = Instant::now();
+        // Mission time runs on across reconnections, and across a `--resume` from where the
+        // saved mission stopped.
+        let resumed_s = resumed
+            .as_ref()
+            .map_or(0.0, |(s, _)| s.mission_time_s.max(0.0));
+        let epoch = Instant::now()
+            .checked_sub(Duration::from_secs_f64(resumed_s))
+            .unwrap_or_else(Instant::now);
         let mut reconnects = 0u32;
         let outcome = loop {
             let r = pump(
@@ -427,7 +433,10 @@ pub async fn pump(
     let t = |i: Instant| i.saturating_duration_since(epoch).as_secs_f64();
     let stale = Duration::from_secs_f32(board.safety.stale_timeout_s);
     let save_every = Duration::from_secs_f32(board.persistence.save_every_s);
-    let tick = Duration::from_millis(20);
+    // Short, so that a scan waiting on its socket is read (and timed) within a few
+    // milliseconds of its arrival: its time places it on the odometry.
+    let tick = Duration::from_millis(5);
+    let mut progress = Progress::new(now_s(epoch));
     let mut last_status = start;
     let mut last_scan = start;
     let mut next_save = start + save_every;
@@ -496,8 +505,10 @@ pub async fn pump(
             client.clear_fault();
         }
         for r in mission.take_telemetry() {
+            progress.note(&r);
             telemetry.record(r.t_s, r.kind, r.fields)?;
         }
+        progress.print_if_due(t(now));
         match mission.step(t(now)) {
             MissionCommand::Done => return Ok(RunOutcome::Finished),
             MissionCommand::Hold => {}
@@ -516,6 +527,64 @@ pub async fn pump(
             telemetry.link_stats(t(now), &client.stats())?;
             telemetry.flush()?;
         }
+    }
+}
+
+/// How often `papillon run` prints a progress line \[s\].
+pub const PROGRESS_EVERY_S: f64 = 5.0;
+
+fn now_s(epoch: Instant) -> f64 {
+    Instant::now()
+        .saturating_duration_since(epoch)
+        .as_secs_f64()
+}
+
+/// The progress line on standard error: the mission's latest `mission` telemetry record,
+/// every [`PROGRESS_EVERY_S`], and the `done` record with its reason.
+struct Progress {
+    last: Option<serde_json::Value>,
+    next_s: f64,
+}
+
+impl Progress {
+    fn new(now_s: f64) -> Self {
+        Self {
+            last: None,
+            next_s: now_s + PROGRESS_EVERY_S,
+        }
+    }
+
+    fn note(&mut self, record: &super::driver::TelemetryRecord) {
+        match record.kind {
+            "mission" => self.last = Some(record.fields.clone()),
+            "done" => tracing::info!(
+                t_s = format_args!("{:.0}", record.t_s),
+                reason = %record.fields["reason"].as_str().unwrap_or("?"),
+                "mission done"
+            ),
+            _ => {}
+        }
+    }
+
+    fn print_if_due(&mut self, t_s: f64) {
+        if t_s < self.next_s {
+            return;
+        }
+        self.next_s = t_s + PROGRESS_EVERY_S;
+        let Some(m) = &self.last else {
+            return;
+        };
+        let num = |k: &str| m[k].as_f64().unwrap_or(0.0);
+        tracing::info!(
+            t_s = format_args!("{t_s:.0}"),
+            known_m2 = format_args!("{:.1}", num("known_m2")),
+            battery_steps = format_args!("{:.1}", num("battery_steps")),
+            state = %m["state"].as_str().unwrap_or("?"),
+            decisions = num("decisions"),
+            replans = num("replans"),
+            replans_per_decision = format_args!("{:.2}", num("replans_per_decision")),
+            "progress"
+        );
     }
 }
 

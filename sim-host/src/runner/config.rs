@@ -40,6 +40,69 @@ pub struct RunConfig {
     pub starts: Option<Vec<Pose2>>,
     /// Simulated-time limit \[s\].
     pub max_sim_time_s: f64,
+    /// How the missions are pumped: as the runner always did, or as `papillon run` does.
+    pub pump: PumpModel,
+}
+
+/// What the mission sees of time and of the world beyond its sensors: the runner's ideal
+/// pump ([`PumpModel::ideal`], the default) or the onboard binary's ([`PumpModel::onboard`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PumpModel {
+    /// The mission is told the coverage of the world's truth and ends at its target
+    /// (`CoverageReached`). `papillon run` cannot know it: its mission ends when no reachable
+    /// frontier is left, or on the battery.
+    pub coverage_known: bool,
+    /// Simulated time a decision takes \[s\]: the robot stands (stopped, its mission not
+    /// stepped) while the scans go on into the map, as while `papillon run`'s mission thread
+    /// decides. 0: decisions take no simulated time.
+    pub decision_latency_s: f64,
+    /// End the run, as `papillon run` ends its mission, when [`STALL_DECISIONS`] decisions
+    /// in a row added fewer than [`STALL_NEW_CELLS`] known cells to the map while the robot
+    /// spent at least [`STALL_STEPS`] on them (`papillon::onboard::mission::Stall`: what is
+    /// left Unknown next to Free cells cannot be seen).
+    pub nothing_observable_end: bool,
+    /// Above this turn rate a scan only feeds the safety monitor, it is not mapped
+    /// (`papillon run` maps no scan between two status packets whose headings differ by more
+    /// than 2°: its scans are timed by their arrival) \[deg/s\]. `None`: every scan is mapped.
+    pub unmapped_turn_deg_s: Option<f32>,
+}
+
+/// See [`PumpModel::nothing_observable_end`] (the same values as `papillon run`'s).
+pub const STALL_DECISIONS: usize = 5;
+/// See [`PumpModel::nothing_observable_end`].
+pub const STALL_NEW_CELLS: usize = 100;
+/// See [`PumpModel::nothing_observable_end`] \[steps\].
+pub const STALL_STEPS: f32 = 5.0;
+
+impl PumpModel {
+    /// The runner's pump: the coverage is known, decisions take no simulated time.
+    pub const fn ideal() -> Self {
+        Self {
+            coverage_known: true,
+            decision_latency_s: 0.0,
+            nothing_observable_end: false,
+            unmapped_turn_deg_s: None,
+        }
+    }
+
+    /// `papillon run`'s pump: no coverage from the truth, a decision takes
+    /// `decision_latency_s` (what its `decision` telemetry's `compute_ms` says), no scan is
+    /// mapped while the robot turns faster than 20 deg/s, and the run ends when decisions stop
+    /// adding to the map.
+    pub const fn onboard(decision_latency_s: f64) -> Self {
+        Self {
+            coverage_known: false,
+            decision_latency_s,
+            nothing_observable_end: true,
+            unmapped_turn_deg_s: Some(20.0),
+        }
+    }
+}
+
+impl Default for PumpModel {
+    fn default() -> Self {
+        Self::ideal()
+    }
 }
 
 impl RunConfig {
@@ -59,6 +122,7 @@ impl RunConfig {
             },
             starts: None,
             max_sim_time_s,
+            pump: PumpModel::ideal(),
         }
     }
 }

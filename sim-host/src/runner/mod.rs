@@ -14,6 +14,12 @@
 //! seed: every robot's body, laser and decision generator is a seeded Xoshiro stream derived
 //! from the run's seed ([`derive_seed`]).
 //!
+//! How the missions are pumped is [`RunConfig::pump`]: the runner's ideal pump (the coverage
+//! of the truth reported to the missions, decisions taking no simulated time, every scan
+//! mapped), or `papillon run`'s ([`PumpModel::onboard`]: no coverage, decisions taking the
+//! binary's time while the robot stands, no scan mapped while turning faster than 20 deg/s, the
+//! run ended when decisions stop adding to the map), so that a run predicts the binary.
+//!
 //! The run ends when every mission is done, or at a simulated-time limit
 //! ([`RunConfig::max_sim_time_s`]) so that a stuck mission ends with a reason instead of
 //! running forever. What is recorded is listed on [`RunReport`] and [`RobotReport`].
@@ -25,7 +31,7 @@ use papillon::control::Time;
 use papillon::control::command::RobotCommand;
 use papillon::control::safety::RobotFlags;
 use papillon::geometry::Pose2;
-use papillon::grid::DEFAULT_CELL_CAPACITY;
+use papillon::grid::{CellClass, DEFAULT_CELL_CAPACITY};
 use papillon::mission::{DoneReason, Mission, MissionEvent, MissionState, SharedMap, Workspace};
 use papillon::random::{self, ProjectRng};
 use papillon::sensor::Scan;
@@ -43,7 +49,10 @@ mod config;
 mod coverage;
 mod report;
 
-pub use config::{RunConfig, RunError, default_time_limit_s, derive_seed};
+pub use config::{
+    PumpModel, RunConfig, RunError, STALL_DECISIONS, STALL_NEW_CELLS, STALL_STEPS,
+    default_time_limit_s, derive_seed,
+};
 use config::{STREAM_BODY, STREAM_DECIDE, STREAM_LASER};
 use coverage::CoverageCounter;
 pub use report::{EndReason, LoggedEvent, RobotReport, RunReport};
@@ -73,6 +82,11 @@ struct Robot {
     report: RobotReport,
     last_odom: Option<Pose2>,
     was_stalled: bool,
+    /// Until when the mission is deciding ([`PumpModel::decision_latency_s`]) \[µs\].
+    busy_until_us: u64,
+    /// (known cells of the map, energy used) at the latest decisions
+    /// ([`PumpModel::nothing_observable_end`]).
+    stall: std::collections::VecDeque<(usize, f32)>,
 }
 
 impl Robot {
@@ -111,6 +125,13 @@ fn apply(body: &mut RobotBody, command: RobotCommand) {
         RobotCommand::EnableMotors(on) => body.set_motors_enabled(on),
         _ => {}
     }
+}
+
+/// Whether a step's events hold a decision.
+fn deciding_now(events: &[MissionEvent]) -> bool {
+    events
+        .iter()
+        .any(|e| matches!(e, MissionEvent::Decided { .. }))
 }
 
 /// What [`Runner::run_with`] reports to its observer.
@@ -216,6 +237,8 @@ impl Runner {
                 },
                 last_odom: None,
                 was_stalled: false,
+                busy_until_us: 0,
+                stall: std::collections::VecDeque::new(),
             });
         }
         let map = SharedMap::<MAP_CAPACITY>::new_boxed(g, &config.mission)?;
@@ -403,6 +426,15 @@ impl Runner {
             // A laser with more beams than a scan holds keeps the first ones.
             let _ = r.laser.scan_into(&self.world, pose, &discs, &mut self.scan);
             r.feed_odometry(now, body);
+            let turning = self
+                .config
+                .pump
+                .unmapped_turn_deg_s
+                .is_some_and(|limit| body.turn_deg_s().abs() > limit);
+            if turning {
+                r.mission.on_scan_unmapped(now, &self.scan);
+                continue;
+            }
             r.mission.on_scan(now, &self.scan, &mut self.map)?;
             self.coverage.update_after_scan(
                 &self.map.grid,
@@ -427,15 +459,47 @@ impl Runner {
         self.periods += 1;
         let coverage = self.coverage.coverage();
         let mut decided = Vec::new();
+        let mut nothing_observable = false;
         for k in 0..self.robots.len() {
             let r = &mut self.robots[k];
             let body = &mut self.bodies[k];
             r.feed_odometry(now, body);
-            r.mission.set_coverage(coverage);
+            if self.now_us < r.busy_until_us {
+                // Still deciding: the robot stands, the mission is not stepped.
+                continue;
+            }
+            if self.config.pump.coverage_known {
+                r.mission.set_coverage(coverage);
+            }
             let t0 = Instant::now();
             let out = r.mission.step(now, &mut self.map, &mut self.ws, &mut r.rng);
             let elapsed_ms = t0.elapsed().as_secs_f64() * 1e3;
-            apply(body, out.command);
+            let latency_us = (self.config.pump.decision_latency_s.max(0.0) * 1e6).round() as u64;
+            let deciding = latency_us > 0 && deciding_now(&out.events);
+            if deciding_now(&out.events) && self.config.pump.nothing_observable_end {
+                let known = (0..self.map.grid.cell_count())
+                    .filter(|&i| self.map.grid.class(i) != CellClass::Unknown)
+                    .count();
+                if r.stall.len() > STALL_DECISIONS {
+                    r.stall.pop_front();
+                }
+                r.stall.push_back((known, r.mission.stats().steps));
+                if let (Some(&(k0, s0)), Some(&(k1, s1))) = (r.stall.front(), r.stall.back())
+                    && r.stall.len() > STALL_DECISIONS
+                    && k1.saturating_sub(k0) < STALL_NEW_CELLS
+                    && s1 - s0 >= STALL_STEPS
+                {
+                    nothing_observable = true;
+                }
+            }
+            if deciding {
+                // The decision's command comes `latency` later; until then the robot stops.
+                // (A simplification: the binary holds the last command up to 0.3 s first.)
+                r.busy_until_us = self.now_us + latency_us;
+                body.stop();
+            } else {
+                apply(body, out.command);
+            }
             for e in out.events {
                 match &e {
                     MissionEvent::Decided { targets, .. } => {
@@ -482,6 +546,9 @@ impl Runner {
         if !decided.is_empty() {
             self.sample();
         }
+        if nothing_observable {
+            self.end(EndReason::NothingObservable);
+        }
         self.check_end();
         decided
     }
@@ -527,11 +594,18 @@ impl Runner {
             None
         };
         if let Some(reason) = reason {
-            self.coverage.recount(&self.map.grid);
-            self.last_sample = None;
-            self.sample();
-            self.report.reason = Some(reason);
+            self.end(reason);
         }
+    }
+
+    fn end(&mut self, reason: EndReason) {
+        if self.report.reason.is_some() {
+            return;
+        }
+        self.coverage.recount(&self.map.grid);
+        self.last_sample = None;
+        self.sample();
+        self.report.reason = Some(reason);
     }
 }
 

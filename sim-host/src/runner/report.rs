@@ -17,17 +17,21 @@ pub enum EndReason {
     NothingReachable,
     /// The simulated-time limit was hit with missions still running.
     TimeLimit,
+    /// Decisions stopped adding to the map ([`super::PumpModel::nothing_observable_end`],
+    /// `papillon run`'s end of an explored building).
+    NothingObservable,
 }
 
 impl EndReason {
     /// Name in reports: `coverage-reached`, `battery-exhausted`, `nothing-reachable`,
-    /// `time-limit`.
+    /// `time-limit`, `nothing-observable`.
     pub fn name(self) -> &'static str {
         match self {
             EndReason::CoverageReached => "coverage-reached",
             EndReason::BatteryExhausted => "battery-exhausted",
             EndReason::NothingReachable => "nothing-reachable",
             EndReason::TimeLimit => "time-limit",
+            EndReason::NothingObservable => "nothing-observable",
         }
     }
 }

@@ -116,6 +116,8 @@ struct Sim {
     faults: Faults,
     /// ARCOS sessions opened so far (each draws its fault RNG from its number).
     links: AtomicU64,
+    /// Scans cast so far (each draws its noise from its number).
+    scans: AtomicU64,
     stop: AtomicBool,
 }
 
@@ -156,7 +158,12 @@ impl Sim {
                 .collect();
             (bodies[robot].true_pose(), others)
         };
-        LaserSim::new(config, self.seed ^ robot as u64).scan(&self.world, pose, &others)
+        // A fresh noise stream per scan: a laser made anew with one seed for every scan drew
+        // the same noise for each beam every time (a fixed range bias per beam, which never
+        // averaged out in the map and punched the same holes through walls scan after scan).
+        let n = self.scans.fetch_add(1, Ordering::Relaxed);
+        let seed = crate::runner::derive_seed(self.seed, robot, 16 + n);
+        LaserSim::new(config, seed).scan(&self.world, pose, &others)
     }
 }
 
@@ -212,6 +219,7 @@ impl Server {
             seed: config.seed,
             faults: config.faults.clone(),
             links: AtomicU64::new(0),
+            scans: AtomicU64::new(0),
             stop: AtomicBool::new(false),
         });
         let truth = match &config.truth_log {
