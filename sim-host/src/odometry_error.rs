@@ -22,14 +22,12 @@
 //! At ±0.3 % a robot driving straight turns up to 0.5° per metre; at ±1 % a full turn is off
 //! by up to 3.6°.
 //!
-//! Random (non-systematic) errors are [`SlipConfig`]'s Gaussian random walks in distance and
+//! Random (non-systematic) errors are [`crate::physics::SlipConfig`]'s Gaussian random walks in distance and
 //! heading; turns faster than [`WheelErrors::fast_turn_deg_s`] add heading variance in
 //! proportion to the excess rate (the wheels skid sideways more when the robot spins fast),
 //! and the end-of-move slide stays as the thesis measured it.
 
 use papillon::random::{ProjectRng, range_f32};
-
-use crate::physics::SlipConfig;
 
 /// Systematic-error ranges and fast-turn slip of a robot model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -131,30 +129,6 @@ impl DrawnWheels {
     }
 }
 
-impl SlipConfig {
-    /// The realistic model: [`WheelErrors::realistic`] systematic errors and fast-turn slip,
-    /// the default random walks (about 1 cm per metre and 1° per quarter turn, 1 σ) and the
-    /// thesis's end-of-move slide with 0.5° of heading.
-    pub fn realistic() -> Self {
-        Self {
-            wheels: WheelErrors::realistic(),
-            ..Self::default()
-        }
-    }
-
-    /// The model named `name` on the command line: `realistic`, `thesis`, `full` (the random
-    /// walks and the slide, no systematic error) or `none`.
-    pub fn named(name: &str) -> Option<Self> {
-        match name {
-            "realistic" => Some(Self::realistic()),
-            "thesis" => Some(Self::thesis()),
-            "full" => Some(Self::default()),
-            "none" => Some(Self::none()),
-            _ => None,
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -210,16 +184,5 @@ mod tests {
         let w = WheelErrors::realistic().draw(&mut seeded(1));
         assert_eq!(w.fast_turn_var(0.1, 30.0), 0.0);
         assert!((w.fast_turn_var(0.1, -60.0) - 2e-5 * 20.0 * 0.1).abs() < 1e-9);
-    }
-
-    #[test]
-    fn names_map_to_models() {
-        assert_eq!(SlipConfig::named("thesis"), Some(SlipConfig::thesis()));
-        assert_eq!(SlipConfig::named("none"), Some(SlipConfig::none()));
-        assert_eq!(
-            SlipConfig::named("realistic").unwrap().wheels,
-            WheelErrors::realistic()
-        );
-        assert_eq!(SlipConfig::named("lots"), None);
     }
 }

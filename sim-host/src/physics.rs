@@ -94,6 +94,30 @@ impl SlipConfig {
     }
 }
 
+impl SlipConfig {
+    /// The realistic model: [`WheelErrors::realistic`] systematic errors and fast-turn slip,
+    /// the default random walks (about 1 cm per metre and 1° per quarter turn, 1 σ) and the
+    /// thesis's end-of-move slide with 0.5° of heading.
+    pub fn realistic() -> Self {
+        Self {
+            wheels: WheelErrors::realistic(),
+            ..Self::default()
+        }
+    }
+
+    /// The model named `name` on the command line: `realistic`, `thesis`, `full` (the random
+    /// walks and the slide, no systematic error) or `none`.
+    pub fn named(name: &str) -> Option<Self> {
+        match name {
+            "realistic" => Some(Self::realistic()),
+            "thesis" => Some(Self::thesis()),
+            "full" => Some(Self::default()),
+            "none" => Some(Self::none()),
+            _ => None,
+        }
+    }
+}
+
 impl Default for SlipConfig {
     /// About 1 cm per metre and 1° per quarter turn (1 σ), and a 1.5 cm, 0.5° slide at the
     /// end of each move.
@@ -947,5 +971,16 @@ mod tests {
         let want = rad_to_arcos_angle(normalize_angle(t.odometry_pose().theta)).round() as i16;
         assert_eq!(t.arcos_heading(), want);
         assert!(t.arcos_heading() > 0);
+    }
+
+    #[test]
+    fn names_map_to_models() {
+        assert_eq!(SlipConfig::named("thesis"), Some(SlipConfig::thesis()));
+        assert_eq!(SlipConfig::named("none"), Some(SlipConfig::none()));
+        assert_eq!(
+            SlipConfig::named("realistic").unwrap().wheels,
+            crate::odometry_error::WheelErrors::realistic()
+        );
+        assert_eq!(SlipConfig::named("lots"), None);
     }
 }

@@ -6,7 +6,7 @@ use papillon::random;
 use papillon::sensor::{LaserConfig, Scan};
 use papillon_sim::dynamic::{Door, DoorState, Dynamics, Person};
 use papillon_sim::laser::LaserSim;
-use papillon_sim::physics::{BodyConfig, RobotBody, advance_all};
+use papillon_sim::physics::{BodyConfig, BodyOutline, RobotBody, advance_all, body_penetration};
 use papillon_sim::world::{World, builtin};
 
 #[test]
@@ -126,9 +126,14 @@ fn a_run_is_deterministic_per_seed() {
 fn robots_never_end_up_inside_walls() {
     let (poses, _, _) = run(3);
     let world = World::load("lab", 0.1).unwrap();
+    let body = BodyOutline::p3dx();
     for p in poses {
-        // Checked against the static walls (the door cells are free in a freshly loaded lab).
-        assert!(!world.disc_hits_blocked(p.position(), 0.25 - 1e-3), "{p:?}");
+        // The body's outline, checked against the static walls (the door cells are free in a
+        // freshly loaded lab).
+        assert!(
+            body_penetration(&world, &[], p, &body, 0.25) <= 1e-3,
+            "{p:?}"
+        );
     }
 }
 
