@@ -510,7 +510,15 @@ pub async fn pump(
         }
         progress.print_if_due(t(now));
         match mission.step(t(now)) {
-            MissionCommand::Done => return Ok(RunOutcome::Finished),
+            MissionCommand::Done => {
+                // The mission thread may have published its end (and its `done` record)
+                // after the telemetry above was taken: record what is left.
+                for r in mission.take_telemetry() {
+                    progress.note(&r);
+                    telemetry.record(r.t_s, r.kind, r.fields)?;
+                }
+                return Ok(RunOutcome::Finished);
+            }
             MissionCommand::Hold => {}
             MissionCommand::Drive(velocity) => match client.drive(velocity).await {
                 Ok(()) | Err(SessionError::Faulted(_)) => {}
