@@ -784,6 +784,22 @@ mod tests {
     use crate::onboard::laser::tests::ByteCodec;
     use crate::onboard::testkit::{CommandLog, FakeRobotScript, run_fake_robot};
 
+    /// Waits (up to 5 s) until the fake robot has logged a CLOSE: it reads the link on its
+    /// own task, so the last commands reach its log a little after the run returns.
+    async fn wait_for_close(log: &CommandLog) {
+        for _ in 0..500 {
+            if log
+                .lock()
+                .unwrap()
+                .iter()
+                .any(|&(_, n, a)| (n, a) == (2, Some(1)))
+            {
+                return;
+            }
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    }
+
     /// A mission that is done at its first step, never moving the robot.
     struct DoneAtOnce;
 
@@ -857,7 +873,7 @@ mod tests {
         .await
         .unwrap();
         assert_eq!(outcome, RunOutcome::Finished);
-        tokio::time::sleep(Duration::from_millis(50)).await;
+        wait_for_close(&log).await;
         let sent: Vec<(u8, Option<i16>)> = log
             .lock()
             .unwrap()
@@ -922,7 +938,7 @@ mod tests {
         assert!(text.contains("watchdog 2000 ms"), "{text}");
         assert!(text.contains("battery 13.0 V"), "{text}");
         assert!(text.contains("disconnected"), "{text}");
-        tokio::time::sleep(Duration::from_millis(50)).await;
+        wait_for_close(&log).await;
         let last = log.lock().unwrap().last().map(|&(_, n, a)| (n, a));
         assert_eq!(last, Some((2, Some(1))));
     }
