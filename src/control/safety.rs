@@ -549,9 +549,6 @@ impl SafetyMonitor {
         laser: &LaserConfig,
     ) -> Option<(f32, Point2)> {
         let speed_mm_s = v.speed_mm_s();
-        if speed_mm_s == 0 && v.turn_rate_deg_s() == 0 {
-            return None;
-        }
         let fp = self.config.footprint;
         let (half_width, stop_m, turn_limit) = self.watched(v);
         // A return counts only within this distance of the robot's centre (the box ahead or
@@ -576,6 +573,7 @@ impl SafetyMonitor {
                 Point2::new(r * math::cos(beam.angle_rad), r * math::sin(beam.angle_rad));
             Some(laser.mount.transform_point(in_laser))
         });
+        // Standing still runs into nothing: `nearest_in_path` returns before reading a beam.
         self.nearest_in_path(v, points)
     }
 
