@@ -5,14 +5,14 @@
 //! [`RobotCommand`]. A velocity command can only be built through [`Limits::clamp`], so every
 //! [`RobotCommand::Velocity`] in existence is within the limits it was built with; and
 //! [`Limits`] itself cannot exceed the P3-DX's absolute maxima (2200 mm/s, 500 deg/s,
-//! protocols.md §1.9). The wire layer maps the variants to ARCOS commands: `Velocity` to
+//! docs/protocols.md §1.9). The wire layer maps the variants to ARCOS commands: `Velocity` to
 //! VEL (11) + RVEL (21), `Stop` to STOP (29), `EnableMotors` to ENABLE (4), `KeepAlive` to
 //! PULSE (0), `EmergencyStop` to E_STOP (55), `SetLimits` to SETV (6), SETRV (10), SETA (5)
 //! and SETRA (23).
 
-/// P3-DX absolute maximum translational velocity [mm/s] (MaxVelocity, protocols.md §1.9).
+/// P3-DX absolute maximum translational velocity [mm/s] (MaxVelocity, docs/protocols.md §1.9).
 pub const P3DX_ABSOLUTE_MAX_SPEED_MM_S: u16 = 2200;
-/// P3-DX absolute maximum rotational velocity [deg/s] (MaxRVelocity, protocols.md §1.9).
+/// P3-DX absolute maximum rotational velocity [deg/s] (MaxRVelocity, docs/protocols.md §1.9).
 pub const P3DX_ABSOLUTE_MAX_TURN_RATE_DEG_S: u16 = 500;
 
 /// A velocity the path follower asks for, before safety and limits.

@@ -2,7 +2,7 @@
 //!
 //! Two trackers:
 //! - [`ArcosOdometry`] follows the pose the P3-DX integrates itself and reports in every SIP
-//!   (protocols.md §1.6): XPOS and YPOS are 15-bit counters of millimetres that wrap modulo
+//!   (docs/protocols.md §1.6): XPOS and YPOS are 15-bit counters of millimetres that wrap modulo
 //!   0x8000, THPOS is the heading in 4096 units per turn. Each new reading is unwrapped
 //!   against the previous one: the 15-bit difference is read as a signed number in
 //!   [-0x4000, 0x4000), so a step larger than half the counter's range is taken for a wrap.
@@ -19,7 +19,7 @@
 //! little from its reset point starts at a small negative coordinate, not 32 m away.
 //!
 //! Robots of the `p3dx` subclass (old AROS/P2OS firmware) count XPOS, YPOS and MOVE in units
-//! of 0.485 mm, not millimetres (DistConvFactor, protocols.md §1.9 and §5). [`ConversionFactors`]
+//! of 0.485 mm, not millimetres (DistConvFactor, docs/protocols.md §1.9 and §5). [`ConversionFactors`]
 //! is the one table of the factors per subclass, and [`SipUnitConverter`] turns a robot's
 //! status readings into the ARCOS P3-DX-SH units the trackers here expect: each position delta
 //! is unwrapped in robot units, the unwrapped total is multiplied by DistConvFactor and wrapped
@@ -91,7 +91,7 @@ const ARCOS_SH: ConversionFactors = ConversionFactors {
     rad_per_angle_unit: TAU / ARCOS_ANGLE_UNITS_PER_TURN,
 };
 
-/// Factors per subclass, from the vendor's public parameter files (protocols.md §1.9, §5).
+/// Factors per subclass, from the vendor's public parameter files (docs/protocols.md §1.9, §5).
 const SUBCLASS_FACTORS: [(&str, ConversionFactors); 4] = [
     (
         "p3dx",
@@ -342,7 +342,7 @@ pub struct EncoderGeometry {
 }
 
 impl EncoderGeometry {
-    /// P3-DX values: 128 ticks/mm (TicksMM a P3-DX user pushed, protocols.md §1.9) and the
+    /// P3-DX values: 128 ticks/mm (TicksMM a P3-DX user pushed, docs/protocols.md §1.9) and the
     /// 316 mm wheel track of the P3-DX URDF. Calibrate on the real robot.
     pub const fn p3dx() -> Self {
         Self {

@@ -66,7 +66,7 @@ impl RobotFootprint {
     }
 
     /// P3-DX with bumper rings, ARIA's `p3dx` parameters: 425 mm wide, 210 mm to the front,
-    /// 301 mm to the rear, 250 mm radius (protocols.md §1.9).
+    /// 301 mm to the rear, 250 mm radius (docs/protocols.md §1.9).
     pub const fn p3dx_with_bumpers() -> Self {
         Self {
             width_m: 0.425,
@@ -165,7 +165,7 @@ impl RobotFlags {
         }
     }
 
-    /// The flags from a standard SIP's STALL AND BUMPERS and FLAGS words (protocols.md
+    /// The flags from a standard SIP's STALL AND BUMPERS and FLAGS words (docs/protocols.md
     /// §1.6): bit 0 left-wheel stall, bits 1-7 rear bumper segments, bit 8 right-wheel stall,
     /// bits 9-15 front bumper segments (ARIA's reading); FLAGS bit 0 motors enabled, bits 5-6
     /// the STOP/e-stop state (either counts).

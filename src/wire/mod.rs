@@ -7,8 +7,9 @@
 //! what it had to drop and never panics. The robot-side runtime and the emulators in the
 //! simulator use the same types in both directions.
 //!
-//! Facts (field layouts, byte examples) come from the project's protocol fact sheet
-//! (`shared/docs/protocols.md`), itself drawn from public driver sources and wire captures.
+//! Facts (field layouts, byte examples) are written down in the project's protocol notes
+//! (`docs/protocols.md`), drawn from public manuals, driver sources read for facts and wire
+//! captures.
 //! Nothing here is derived from driver code.
 
 pub mod arcos;
