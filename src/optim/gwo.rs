@@ -4,7 +4,8 @@
 //! Engineering Software 69, 46–61 (2014).
 //!
 //! The three best wolves found so far lead: alpha, beta, delta. Each generation, with
-//! `a = 2 - 2 t / T` (`t` generations already run, `T` the horizon, so `a` falls from 2 to 0),
+//! `a = 2 - 2 t / T` (`t` = 1, 2, ... the generation being run, `T` the horizon, so `a` falls
+//! linearly from 2 to 0 and reaches 0 in the last generation, as the paper states),
 //! every wolf moves to the mean of `X_l - A_l * |C_l * X_l - x|` over the three leaders `l`,
 //! with `A = 2 a r1 - a` and `C = 2 r2` drawn per gene; the new position is clamped and
 //! evaluated, and replaces the old one (no greedy acceptance, as in the paper). Leaders are
@@ -84,7 +85,8 @@ impl Optimizer for Gwo {
         rng: &mut R,
     ) -> Result<(), OptimError> {
         self.engine.begin_step(problem)?;
-        let a = 2.0 - 2.0 * self.engine.progress().min(1.0);
+        let t = (self.engine.generation + 1) as f32 / self.engine.horizon as f32;
+        let a = 2.0 - 2.0 * t.min(1.0);
         let e = &mut self.engine;
         for i in 0..e.pop.len {
             let x = e.pop.genes[i];
