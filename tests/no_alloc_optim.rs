@@ -37,8 +37,8 @@ fn a_whole_run_of_every_method_allocates_nothing() {
 }
 
 #[test]
-fn standard_ga_and_pso_on_a_shifted_function_allocate_nothing() {
-    for method in [Method::Ga, Method::Pso] {
+fn the_standard_preset_on_a_shifted_function_allocates_nothing() {
+    for method in [Method::Ga, Method::Pso, Method::Gwo] {
         let (summary, n) = allocations_in(|| {
             let mut problem = TestFunction::shifted(Function::Rastrigin, 10, 1.7).unwrap();
             let mut rng = seeded(12);
