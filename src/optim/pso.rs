@@ -19,10 +19,11 @@
 //!   (synchronous update); a coordinate clamped to a bound keeps its velocity.
 //! - [`PsoVariant::Constriction`] (M. Clerc and J. Kennedy, "The particle swarm — explosion,
 //!   stability, and convergence in a multidimensional complex space", IEEE Trans. Evol. Comput.
-//!   6(1), 58–73 (2002)): `v <- chi (v + c1 r1 (pbest - x) + c2 r2 (lbest - x))`, `chi =
-//!   0.7298` for `c1 = c2 = 2.05` (their type 1'' constriction, `phi = 4.1`); velocities start
-//!   uniform in `±vmax`; `lbest` is looked up when the particle moves, so it sees the personal
-//!   bests the particles before it improved in the same generation (asynchronous update,
+//!   6(1), 58–73 (2002)): `v <- chi (v + c1 r1 (pbest - x) + c2 r2 (lbest - x))`, with
+//!   `chi = 2 kappa / |2 - phi - sqrt(phi^2 - 4 phi)| = 0.7298` for `kappa = 1` and
+//!   `phi = c1 + c2 = 4.1`; velocities start uniform in `±vmax`; `lbest` is looked up when the
+//!   particle moves, so it sees the personal bests the particles before it improved in the
+//!   same generation (asynchronous update,
 //!   A. Carlisle and G. Dozier, "An off-the-shelf PSO", Proc. Workshop on PSO (2001)); a
 //!   coordinate clamped to a bound loses its velocity ("absorbing walls", J. Robinson and
 //!   Y. Rahmat-Samii, IEEE Trans. Antennas Propag. 52(2) (2004)).
