@@ -1,7 +1,8 @@
 //! Optimizer experiments on standard test functions: one method, several seeded runs, the
 //! median, min and max best fitness, the mean evaluations and the mean time per run
 //! (`papillon-sim optimize` parses its arguments into an [`Experiment`] and prints the
-//! [`Outcome`]).
+//! [`Outcome`]). The function's optimum may be moved to `x_i = shift`
+//! ([`TestFunction::shifted`]), and the method built with either parameter set ([`Preset`]).
 //!
 //! Protocol (the thesis's): run `r` starts from a population drawn uniformly in the bounds from
 //! a seed derived from `(seed, r)` only ([`population_seed`]), so every method starts each run
@@ -13,7 +14,9 @@ use std::ops::RangeInclusive;
 use std::time::Instant;
 
 use papillon::optim::functions::{Function, TestFunction};
-use papillon::optim::{self, MAX_DIM, MAX_POP, MIN_POP, Method, Population, Problem, StopRules};
+use papillon::optim::{
+    self, MAX_DIM, MAX_POP, MIN_POP, Method, Population, Preset, Problem, StopRules,
+};
 use papillon::random::seeded;
 
 /// One experiment: a method on a test function, `runs` seeded runs.
@@ -25,6 +28,10 @@ pub struct Experiment {
     pub dim: usize,
     /// Method.
     pub method: Method,
+    /// Hyper-parameters of the method.
+    pub preset: Preset,
+    /// Where the optimum lies (every gene; `None`: the function's own optimum).
+    pub shift: Option<f32>,
     /// Population size ([`Experiment::POP`]).
     pub pop: usize,
     /// Generations per run ([`Experiment::GENS`]).
@@ -39,13 +46,15 @@ pub struct Experiment {
 }
 
 impl Default for Experiment {
-    /// xBOA on sphere, 10 genes, population 20, 100 generations, 25 runs, seed 1, no early stop
-    /// (the defaults of `papillon-sim optimize`).
+    /// xBOA (standard preset) on the unshifted sphere, 10 genes, population 20, 100
+    /// generations, 25 runs, seed 1, no early stop (the defaults of `papillon-sim optimize`).
     fn default() -> Self {
         Self {
             function: Function::Sphere,
             dim: 10,
             method: Method::Xboa,
+            preset: Preset::Standard,
+            shift: None,
             pop: 20,
             gens: 100,
             runs: 25,
@@ -115,12 +124,16 @@ impl Experiment {
         if let Some(p) = self.patience {
             within("patience", p, &Self::PATIENCE)?;
         }
-        Ok(())
+        self.problem().map(|_| ())
     }
 
-    /// The problem every run optimizes.
+    /// The problem every run optimizes; the error names the setting at fault.
     pub fn problem(&self) -> Result<TestFunction, String> {
-        TestFunction::new(self.function, self.dim).map_err(|e| e.to_string())
+        match self.shift {
+            None => TestFunction::new(self.function, self.dim).map_err(|e| format!("dim: {e}")),
+            Some(s) => TestFunction::shifted(self.function, self.dim, s)
+                .map_err(|e| format!("shift: {e} of {}", self.function)),
+        }
     }
 
     /// When a run stops.
@@ -173,7 +186,7 @@ pub fn execute(exp: &Experiment) -> Result<Outcome, String> {
         let initial = initial_population(&problem, exp.pop, exp.seed, run)?;
         let mut rng = seeded(optimizer_seed(exp.seed, run));
         let t0 = Instant::now();
-        let mut opt = exp.method.build(exp.pop, exp.gens);
+        let mut opt = exp.method.build_preset(exp.preset, exp.pop, exp.gens);
         let s = optim::run(&mut opt, &mut problem, &initial, &rules, &mut rng)
             .map_err(|e| e.to_string())?;
         ms += t0.elapsed().as_secs_f64() * 1e3;
@@ -205,6 +218,8 @@ mod tests {
             function: Function::Rastrigin,
             dim,
             method,
+            preset: Preset::Standard,
+            shift: None,
             pop: 8,
             gens: 10,
             runs: 3,
@@ -226,6 +241,27 @@ mod tests {
         x.function = Function::Rosenbrock;
         assert!(x.check().unwrap_err().starts_with("dim:"));
         assert_eq!(experiment(Method::Xboa, 4).check(), Ok(()));
+        x = experiment(Method::Xboa, 4);
+        x.shift = Some(5.2);
+        let e = execute(&x).unwrap_err();
+        assert!(e.starts_with("shift:") && e.contains("5.2"), "{e}");
+        x.shift = Some(1.7);
+        assert_eq!(x.check(), Ok(()));
+    }
+
+    #[test]
+    fn the_shift_moves_the_optimum_the_runs_approach() {
+        // CMA-ES on the 4-gene sphere gets close to wherever the optimum is; the unshifted
+        // problem scores the shifted run's best point far worse.
+        let mut x = experiment(Method::CmaEs, 4);
+        x.function = Function::Sphere;
+        x.gens = 60;
+        x.shift = Some(1.7);
+        let shifted = execute(&x).unwrap();
+        assert!(shifted.max < 1e-3, "{shifted:?}");
+        let mut p = x.problem().unwrap();
+        assert!(p.evaluate(&[1.7; 4]) < 1e-9);
+        assert!(p.evaluate(&[0.0; 4]) > 11.0);
     }
 
     #[test]

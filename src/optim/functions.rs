@@ -66,32 +66,49 @@ impl Function {
         }
     }
 
+    /// The gene value of the optimum (every gene the same): 1 for Rosenbrock, 0 for the others.
+    pub fn optimum(self) -> f32 {
+        if self == Function::Rosenbrock {
+            1.0
+        } else {
+            0.0
+        }
+    }
+
     /// Value at `x`.
     pub fn value(self, x: &[f32]) -> f32 {
+        self.value_shifted(x, 0.0)
+    }
+
+    /// Value at `x` of the function moved by `offset` along every axis, `f(x - offset)`: its
+    /// optimum lies at `x_i = optimum() + offset`. Computed in `f64`, so `x_i - offset` is
+    /// exactly zero when both are the same `f32`.
+    pub fn value_shifted(self, x: &[f32], offset: f32) -> f32 {
         use core::f64::consts::TAU;
         let n = x.len() as f64;
-        let it = x.iter().map(|&v| v as f64);
+        let offset = offset as f64;
+        let at = |i: usize| x[i] as f64 - offset;
+        let it = (0..x.len()).map(at);
         let v = match self {
             Function::Sphere => it.map(|v| v * v).sum::<f64>(),
             Function::Rastrigin => {
                 10.0 * n + it.map(|v| v * v - 10.0 * libm::cos(TAU * v)).sum::<f64>()
             }
-            Function::Rosenbrock => x
-                .windows(2)
-                .map(|w| {
-                    let (a, b) = (w[0] as f64, w[1] as f64);
+            Function::Rosenbrock => (1..x.len())
+                .map(|i| {
+                    let (a, b) = (at(i - 1), at(i));
                     100.0 * (b - a * a) * (b - a * a) + (1.0 - a) * (1.0 - a)
                 })
                 .sum::<f64>(),
             Function::Ackley => {
-                let sq = x.iter().map(|&v| (v as f64) * (v as f64)).sum::<f64>() / n;
+                let sq = (0..x.len()).map(|i| at(i) * at(i)).sum::<f64>() / n;
                 let cs = it.map(|v| libm::cos(TAU * v)).sum::<f64>() / n;
                 -20.0 * libm::exp(-0.2 * libm::sqrt(sq)) - libm::exp(cs)
                     + 20.0
                     + core::f64::consts::E
             }
             Function::Griewank => {
-                let sq = x.iter().map(|&v| (v as f64) * (v as f64)).sum::<f64>() / 4000.0;
+                let sq = (0..x.len()).map(|i| at(i) * at(i)).sum::<f64>() / 4000.0;
                 let prod = it
                     .enumerate()
                     .map(|(i, v)| libm::cos(v / libm::sqrt(i as f64 + 1.0)))
@@ -135,11 +152,18 @@ impl FromStr for Function {
     }
 }
 
-/// A test function in `dim` dimensions, as a [`Problem`].
+/// A test function in `dim` dimensions, as a [`Problem`], optionally shifted so that its
+/// optimum lies at `x_i = shift` instead of the function's own optimum.
+///
+/// Sphere, Rastrigin, Ackley and Griewank have their optimum at the centre of their box; a
+/// method that drifts toward the centre looks better there than it is. Moving the optimum
+/// (`papillon-sim optimize --shift 1.7`) takes that bias out of a comparison.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TestFunction {
     function: Function,
     dim: usize,
+    /// Added to every coordinate of the optimum.
+    offset: f32,
 }
 
 impl TestFunction {
@@ -153,7 +177,32 @@ impl TestFunction {
         if dim < min || dim > MAX_DIM {
             return Err(OptimError::BadDimension { dim });
         }
-        Ok(Self { function, dim })
+        Ok(Self {
+            function,
+            dim,
+            offset: 0.0,
+        })
+    }
+
+    /// `function` in `dim` dimensions with its optimum moved to `x_i = shift`, which must lie
+    /// strictly inside the bounds ([`OptimError::ShiftOutOfBounds`] otherwise).
+    pub fn shifted(function: Function, dim: usize, shift: f32) -> Result<Self, OptimError> {
+        let mut f = Self::new(function, dim)?;
+        let (lower, upper) = function.bounds();
+        if !(shift > lower && shift < upper) {
+            return Err(OptimError::ShiftOutOfBounds {
+                shift,
+                lower,
+                upper,
+            });
+        }
+        f.offset = shift - function.optimum();
+        Ok(f)
+    }
+
+    /// Where the optimum lies (every gene the same value).
+    pub fn optimum(&self) -> f32 {
+        self.function.optimum() + self.offset
     }
 
     /// Which function.
@@ -170,7 +219,7 @@ impl Problem for TestFunction {
         self.function.bounds()
     }
     fn evaluate(&mut self, genes: &[f32]) -> f32 {
-        self.function.value(genes)
+        self.function.value_shifted(genes, self.offset)
     }
 }
 
@@ -196,6 +245,47 @@ mod tests {
         assert!((Function::Sphere.value(&x) - 2.5).abs() < 1e-6);
         assert!((Function::Rastrigin.value(&[1.0, 0.0]) - 1.0).abs() < 1e-5);
         assert!((Function::Rosenbrock.value(&[0.0, 0.0]) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn shifted_functions_have_their_optimum_at_the_shift() {
+        for f in Function::ALL {
+            let mut p = TestFunction::shifted(f, 10, 1.7).unwrap();
+            assert_eq!(p.optimum(), 1.7);
+            assert!(
+                p.evaluate(&[1.7; 10]) < 1e-6,
+                "{f}: {}",
+                p.evaluate(&[1.7; 10])
+            );
+            // The unshifted optimum is no longer one.
+            let at = f.optimum();
+            assert!(p.evaluate(&[at; 10]) > 1e-3, "{f}");
+            // A shifted point sees the unshifted value of its offset from the optimum.
+            let x = [0.5f32; 10];
+            let moved: [f32; 10] = core::array::from_fn(|i| x[i] + 1.7 - at);
+            let expected = f.value(&x);
+            assert!(
+                (p.evaluate(&moved) - expected).abs() <= 1e-4 * expected.max(1.0),
+                "{f}"
+            );
+        }
+        // Shift 0 is the function itself, Rosenbrock's optimum included.
+        let mut p = TestFunction::shifted(Function::Rosenbrock, 3, 0.0).unwrap();
+        assert!(p.evaluate(&[0.0; 3]) < 1e-9);
+    }
+
+    #[test]
+    fn a_shift_outside_the_bounds_is_an_error() {
+        assert_eq!(
+            TestFunction::shifted(Function::Sphere, 4, 6.0),
+            Err(OptimError::ShiftOutOfBounds {
+                shift: 6.0,
+                lower: -5.12,
+                upper: 5.12
+            })
+        );
+        assert!(TestFunction::shifted(Function::Sphere, 4, f32::NAN).is_err());
+        assert!(TestFunction::shifted(Function::Sphere, 4, 5.12).is_err());
     }
 
     #[test]

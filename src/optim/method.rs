@@ -1,5 +1,5 @@
-//! The methods by name, and [`AnyOptimizer`]: any of them behind one type, chosen at run time
-//! without allocation.
+//! The methods by name, their parameter sets ([`Preset`]), and [`AnyOptimizer`]: any of them
+//! behind one type, chosen at run time without allocation.
 
 use core::fmt;
 use core::str::FromStr;
@@ -68,11 +68,35 @@ impl Method {
         }
     }
 
-    /// The method with the thesis's default hyper-parameters for `population` individuals
-    /// (xBOA and BOA interpolate between their pop-5 and pop-20 tunings, see their modules),
-    /// `max_generations` being the horizon `T` of its schedules.
+    /// The method with the thesis's hyper-parameters ([`Preset::Thesis`]) for `population`
+    /// individuals (xBOA and BOA interpolate between their pop-5 and pop-20 tunings, see their
+    /// modules), `max_generations` being the horizon `T` of its schedules. The exploration
+    /// layer builds its optimizers this way.
     pub fn build(self, population: usize, max_generations: u32) -> AnyOptimizer {
+        self.build_preset(Preset::Thesis, population, max_generations)
+    }
+
+    /// The method with the parameter set `preset`; [`Method::build`] is
+    /// `build_preset(Preset::Thesis, ..)`. Only GA, PSO and GWO differ between the presets.
+    pub fn build_preset(
+        self,
+        preset: Preset,
+        population: usize,
+        max_generations: u32,
+    ) -> AnyOptimizer {
         let t = max_generations;
+        let (ga, pso, gwo) = match preset {
+            Preset::Thesis => (
+                ga::GaParams::thesis(),
+                pso::PsoParams::thesis(),
+                gwo::Schedule::Started,
+            ),
+            Preset::Standard => (
+                ga::GaParams::standard(),
+                pso::PsoParams::standard(),
+                gwo::Schedule::Paper,
+            ),
+        };
         match self {
             Method::Xboa => AnyOptimizer::Xboa(xboa::Xboa::new(
                 xboa::XboaParams::for_population(population),
@@ -86,13 +110,74 @@ impl Method {
             Method::Saboa => {
                 AnyOptimizer::Saboa(saboa::Saboa::new(saboa::SaboaParams::default(), t))
             }
-            Method::Ga => AnyOptimizer::Ga(ga::Ga::new(ga::GaParams::default(), t)),
-            Method::Pso => AnyOptimizer::Pso(pso::Pso::new(pso::PsoParams::default(), t)),
-            Method::Gwo => AnyOptimizer::Gwo(gwo::Gwo::new(t)),
+            Method::Ga => AnyOptimizer::Ga(ga::Ga::new(ga, t)),
+            Method::Pso => AnyOptimizer::Pso(pso::Pso::new(pso, t)),
+            Method::Gwo => AnyOptimizer::Gwo(gwo::Gwo::with_schedule(gwo, t)),
             Method::Abc => AnyOptimizer::Abc(abc::Abc::new(abc::AbcParams::default(), t)),
             Method::CmaEs => AnyOptimizer::CmaEs(cmaes::CmaEs::new(t)),
             Method::Random => AnyOptimizer::Random(random_search::RandomSearch::new(t)),
         }
+    }
+}
+
+/// Which hyper-parameters a method gets ([`Method::build_preset`]).
+///
+/// ABC, CMA-ES, random search and the butterfly methods (whose only parameters are the
+/// thesis's own) are the same in both; GWO differs only in its `a` schedule
+/// ([`gwo::Schedule`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Preset {
+    /// The thesis's Table 4.1, tuned on the exploration problem: GA and PSO as in
+    /// [`ga::GaParams::thesis`] and [`pso::PsoParams::thesis`], GWO with
+    /// [`gwo::Schedule::Started`]. [`Method::build`] uses it, so the exploration experiments
+    /// reproduce the thesis's set-up and their earlier results.
+    #[default]
+    Thesis,
+    /// The literature's defaults: [`ga::GaParams::standard`] (Deb's), [`pso::PsoParams::standard`]
+    /// (Clerc and Kennedy's, pygmo's `pso` default) and [`gwo::Schedule::Paper`]. Stronger on
+    /// the standard test functions (`docs/optimizers.md`).
+    Standard,
+}
+
+impl Preset {
+    /// Both presets.
+    pub const ALL: [Preset; 2] = [Preset::Thesis, Preset::Standard];
+
+    /// Command-line name: `thesis` or `standard`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Thesis => "thesis",
+            Preset::Standard => "standard",
+        }
+    }
+}
+
+impl fmt::Display for Preset {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A preset name that is not `thesis` or `standard`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UnknownPreset;
+
+impl fmt::Display for UnknownPreset {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("unknown preset, expected one of: thesis standard")
+    }
+}
+
+impl core::error::Error for UnknownPreset {}
+
+impl FromStr for Preset {
+    type Err = UnknownPreset;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Preset::ALL
+            .iter()
+            .copied()
+            .find(|p| p.name() == s)
+            .ok_or(UnknownPreset)
     }
 }
 

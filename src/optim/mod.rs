@@ -52,7 +52,7 @@ pub mod random_search;
 pub mod saboa;
 pub mod xboa;
 
-pub use method::{AnyOptimizer, Method, UnknownMethod};
+pub use method::{AnyOptimizer, Method, Preset, UnknownMethod, UnknownPreset};
 
 /// Largest population any method holds.
 pub const MAX_POP: usize = 32;
@@ -179,6 +179,15 @@ pub enum OptimError {
     NotStarted,
     /// The best-fitness history is full ([`MAX_HISTORY`] entries).
     HistoryFull,
+    /// A test function's optimum would be moved onto or outside its bounds.
+    ShiftOutOfBounds {
+        /// Shift asked for.
+        shift: f32,
+        /// Lower bound of every gene.
+        lower: f32,
+        /// Upper bound of every gene.
+        upper: f32,
+    },
 }
 
 impl fmt::Display for OptimError {
@@ -214,6 +223,14 @@ impl fmt::Display for OptimError {
                     MAX_HISTORY - 1
                 )
             }
+            Self::ShiftOutOfBounds {
+                shift,
+                lower,
+                upper,
+            } => write!(
+                f,
+                "shift {shift} is outside the open interval ({lower}, {upper}) of the bounds"
+            ),
         }
     }
 }

@@ -5,8 +5,8 @@
 use std::ops::RangeInclusive;
 use std::process::ExitCode;
 
-use papillon::optim::Method;
 use papillon::optim::functions::Function;
+use papillon::optim::{Method, Preset};
 
 use crate::optimize::{Experiment, Outcome, execute};
 
@@ -22,6 +22,14 @@ pub struct Args {
     /// Method: xboa boa mboa aboa saboa ga pso gwo abc cmaes, or random (baseline).
     #[arg(long, default_value = "xboa")]
     pub method: String,
+    /// Hyper-parameters: standard (the literature's defaults, as pygmo's) or thesis (Table 4.1,
+    /// tuned on the exploration problem; what the exploration experiments use). Only GA and
+    /// PSO differ.
+    #[arg(long, default_value = "standard")]
+    pub preset: String,
+    /// Move the optimum to x_i = SHIFT (inside the bounds); default: the function's own.
+    #[arg(long)]
+    pub shift: Option<String>,
     /// Population size (2 to 32).
     #[arg(long, default_value = "20")]
     pub pop: String,
@@ -67,10 +75,23 @@ pub fn experiment_from_args(args: &Args) -> Result<Experiment, String> {
         .method
         .parse::<Method>()
         .map_err(|e| format!("--method: {e}, got '{}'", args.method))?;
-    Ok(Experiment {
+    let preset = args
+        .preset
+        .parse::<Preset>()
+        .map_err(|e| format!("--preset: {e}, got '{}'", args.preset))?;
+    let shift = match &args.shift {
+        None => None,
+        Some(t) => match t.parse::<f32>() {
+            Ok(s) if s.is_finite() => Some(s),
+            _ => return Err(format!("--shift: expected a number, got '{t}'")),
+        },
+    };
+    let exp = Experiment {
         function,
         dim: number("dim", &args.dim, Experiment::dim_range(function))?,
         method,
+        preset,
+        shift,
         pop: number("pop", &args.pop, Experiment::POP)?,
         gens: number("gens", &args.gens, Experiment::GENS)?,
         runs: number("runs", &args.runs, Experiment::RUNS)?,
@@ -79,14 +100,19 @@ pub fn experiment_from_args(args: &Args) -> Result<Experiment, String> {
             Some(p) => Some(number("patience", p, Experiment::PATIENCE)?),
             None => None,
         },
-    })
+    };
+    exp.problem().map_err(|e| format!("--{e}"))?;
+    Ok(exp)
 }
 
 fn print(exp: &Experiment, out: &Outcome, json: bool) {
     if json {
         let v = serde_json::json!({
             "method": exp.method.name(),
+            "preset": exp.preset.name(),
             "function": exp.function.name(),
+            // The f32 as written on the command line, not its f64 widening (1.7000000476...).
+            "shift": exp.shift.map(|s| s.to_string().parse::<f64>().unwrap_or(s as f64)),
             "dim": exp.dim,
             "median": out.median,
             "min": out.min,
@@ -96,9 +122,13 @@ fn print(exp: &Experiment, out: &Outcome, json: bool) {
         });
         println!("{v}");
     } else {
+        let optimum = match exp.shift {
+            Some(s) => format!(", optimum at {s}"),
+            None => String::new(),
+        };
         println!(
-            "{} on {} ({} genes), population {}, {} generations, {} runs, seed {}",
-            exp.method, exp.function, exp.dim, exp.pop, exp.gens, exp.runs, exp.seed
+            "{} ({} preset) on {} ({} genes{optimum}), population {}, {} generations, {} runs, seed {}",
+            exp.method, exp.preset, exp.function, exp.dim, exp.pop, exp.gens, exp.runs, exp.seed
         );
         println!(
             "best fitness: median {:.6e}  min {:.6e}  max {:.6e}",
@@ -139,6 +169,8 @@ mod tests {
             function: "rastrigin".into(),
             dim: dim.into(),
             method: method.into(),
+            preset: "standard".into(),
+            shift: None,
             pop: "8".into(),
             gens: "10".into(),
             runs: "3".into(),
@@ -160,12 +192,28 @@ mod tests {
         let mut a = args("xboa", "4");
         a.pop = "1".into();
         assert!(experiment_from_args(&a).unwrap_err().starts_with("--pop:"));
+        let mut a = args("ga", "4");
+        a.preset = "pygmo".into();
+        let e = experiment_from_args(&a).unwrap_err();
+        assert!(e.starts_with("--preset:") && e.contains("pygmo"), "{e}");
+        let mut a = args("ga", "4");
+        a.shift = Some("east".into());
+        assert!(
+            experiment_from_args(&a)
+                .unwrap_err()
+                .starts_with("--shift:")
+        );
+        a.shift = Some("9".into());
+        let e = experiment_from_args(&a).unwrap_err();
+        assert!(e.starts_with("--shift:") && e.contains('9'), "{e}");
     }
 
     #[test]
     fn arguments_become_the_experiment() {
         let mut a = args("gwo", "4");
         a.patience = Some("7".into());
+        a.preset = "thesis".into();
+        a.shift = Some("1.7".into());
         let exp = experiment_from_args(&a).unwrap();
         assert_eq!(
             exp,
@@ -173,6 +221,8 @@ mod tests {
                 function: Function::Rastrigin,
                 dim: 4,
                 method: Method::Gwo,
+                preset: Preset::Thesis,
+                shift: Some(1.7),
                 pop: 8,
                 gens: 10,
                 runs: 3,
