@@ -29,7 +29,13 @@ fn main() {
         OccupancyGrid::new_boxed(*world.geometry(), m.grid_bounds).unwrap();
     let mut matcher = Box::new(ScanMatcher::<WINDOW_CELLS>::new());
     let _ = depth;
-    let cfg = MatchConfig::default();
+    let mut cfg = MatchConfig::default();
+    if let Some(w) = std::env::var("WR").ok().and_then(|v| v.parse::<f32>().ok()) {
+        cfg.weight_range_m = w;
+    }
+    if let Some(w) = std::env::var("SIG").ok().and_then(|v| v.parse::<f32>().ok()) {
+        cfg.sigma_m = w;
+    }
     let mut hits: Box<HitMap<DEFAULT_CELL_CAPACITY>> = Box::new(bytemuck_zeroed());
     hits.set_up_zeroed(*world.geometry());
     let start = world.start();
@@ -47,7 +53,16 @@ fn main() {
         let at = if closed { Pose2::new(est.x, est.y, normalize_angle(est.theta + turn)) } else { truth };
         let mut pose = at;
         if k > 0 {
-            let r = matcher.match_scan(&grid, &hits, &scan, &laser_cfg, at, &cfg);
+            let mut mscan = scan.clone();
+            if let Some(e) = std::env::var("EDGE").ok().and_then(|v| v.parse::<usize>().ok()) {
+                let n = mscan.beams().len();
+                for (i, b) in mscan.beams_mut().iter_mut().enumerate() {
+                    if (turn > 0.0 && i + e >= n) || (turn < 0.0 && i < e) {
+                        b.range_m = None;
+                    }
+                }
+            }
+            let r = matcher.match_scan(&grid, &hits, &mscan, &laser_cfg, at, &cfg);
             if r.quality.trusted() {
                 let c = r.quality.correction;
                 for i in 0..3 {

@@ -18,22 +18,21 @@
 //! so the ridge of their density is on it. [`super::likelihood`] blurs this layer into the
 //! field a scan is scored against.
 //!
-//! Weights are fixed-point `u16` ([`UNIT`] per return, saturating), one per grid cell: half
-//! the memory of the grid's `f32` log-odds. No allocation.
+//! One `f32` per grid cell (metres of surface, see [`HitMap::add_scan`]). No allocation.
 
 use crate::geometry::{Point2, Pose2};
 use crate::grid::GridGeometry;
 use crate::math;
 use crate::sensor::{LaserConfig, Scan};
 
-/// Weight of one return (split among four cells).
-pub const UNIT: u16 = 64;
+/// Surface one return stands for at most \[m\] (a return beside a gap in the scan).
+pub const MAX_FOOTPRINT_M: f32 = 0.2;
 
 /// Where returns landed, per grid cell.
 #[derive(bytemuck::Zeroable)]
 pub struct HitMap<const N: usize> {
     geometry: GridGeometry,
-    weights: [u16; N],
+    weights: [f32; N],
 }
 
 impl<const N: usize> core::fmt::Debug for HitMap<N> {
@@ -50,7 +49,7 @@ impl<const N: usize> HitMap<N> {
     pub fn new(geometry: GridGeometry) -> Self {
         Self {
             geometry,
-            weights: [0; N],
+            weights: [0.0; N],
         }
     }
 
@@ -64,19 +63,19 @@ impl<const N: usize> HitMap<N> {
         &self.geometry
     }
 
-    /// Weight at a flat cell index (0 outside the grid) \[1/[`UNIT`] returns\].
+    /// Weight at a flat cell index (0 outside the grid) \[m of surface\].
     #[inline]
-    pub fn weight_at(&self, index: usize) -> u16 {
+    pub fn weight_at(&self, index: usize) -> f32 {
         if index < self.geometry.cell_count().min(N) {
             self.weights[index]
         } else {
-            0
+            0.0
         }
     }
 
-    /// Adds one return at map point `p` (bilinearly among the four nearest cell centres;
-    /// parts off the grid are dropped).
-    pub fn add_point(&mut self, p: Point2) {
+    /// Adds a return at map point `p` standing for `weight` (bilinearly among the four
+    /// nearest cell centres; parts off the grid are dropped).
+    pub fn add_point(&mut self, p: Point2, weight: f32) {
         let g = self.geometry;
         let u = (p.x - g.origin.x) / g.resolution_m - 0.5;
         let v = (p.y - g.origin.y) / g.resolution_m - 0.5;
@@ -86,7 +85,6 @@ impl<const N: usize> HitMap<N> {
         let (fu, fv) = (math::floor(u), math::floor(v));
         let (du, dv) = (u - fu, v - fv);
         let (c0, r0) = (fu as i64, fv as i64);
-        let unit = UNIT as f32;
         for (dc, dr, w) in [
             (0, 0, (1.0 - du) * (1.0 - dv)),
             (1, 0, du * (1.0 - dv)),
@@ -101,28 +99,53 @@ impl<const N: usize> HitMap<N> {
             if i >= N {
                 continue;
             }
-            let add = math::floor(w * unit + 0.5) as u16;
-            self.weights[i] = self.weights[i].saturating_add(add);
+            self.weights[i] += w * weight;
         }
     }
 
-    /// Adds the returns of `scan`, taken by `laser` at robot pose `pose` (map frame).
+    /// Adds the returns of `scan`, taken by `laser` at robot pose `pose` (map frame), each
+    /// weighted by the length of surface it stands for: half the distance to each neighbouring
+    /// return, at most [`MAX_FOOTPRINT_M`] a side. A wall seen close or head-on holds many
+    /// returns per metre and one seen far or at a grazing angle few; weighted so, every metre
+    /// of wall a scan sees weighs the same, and the field does not pull returns along a wall
+    /// toward where it was seen densest.
     pub fn add_scan(&mut self, scan: &Scan, laser: &LaserConfig, pose: Pose2) {
         let at = pose.compose(laser.mount);
-        for b in scan.beams() {
-            let Some(r) = b.range_m.filter(|r| {
+        let point = |i: usize| -> Option<Point2> {
+            let b = scan.beams().get(i)?;
+            let r = b.range_m.filter(|r| {
                 r.is_finite() && *r >= laser.min_range_m && *r < laser.max_range_m
-            }) else {
-                continue;
-            };
+            })?;
             if !b.angle_rad.is_finite() {
-                continue;
+                return None;
             }
             let a = at.theta + b.angle_rad;
-            self.add_point(Point2::new(
-                at.x + r * math::cos(a),
-                at.y + r * math::sin(a),
-            ));
+            Some(Point2::new(at.x + r * math::cos(a), at.y + r * math::sin(a)))
+        };
+        let n = scan.beams().len();
+        let mut prev: Option<Point2> = None;
+        let mut here = point(0);
+        for i in 0..n {
+            let next = point(i + 1);
+            if let Some(p) = here {
+                let side = |q: Option<Point2>| {
+                    q.map_or(0.0, |q| (0.5 * q.distance(p)).min(MAX_FOOTPRINT_M))
+                };
+                let (a, b) = (side(prev), side(next));
+                // A return without one neighbour stands for as much on that side as on the
+                // other.
+                let w = match (prev.is_some(), next.is_some()) {
+                    (true, true) => a + b,
+                    (true, false) => 2.0 * a,
+                    (false, true) => 2.0 * b,
+                    (false, false) => 0.0,
+                };
+                if w > 0.0 {
+                    self.add_point(p, w);
+                }
+            }
+            prev = here;
+            here = next;
         }
     }
 
@@ -138,7 +161,7 @@ impl<const N: usize> HitMap<N> {
                 if let Some(i) = g.index(cell).filter(|&i| i < N)
                     && g.cell_center(cell).distance(centre) <= radius_m
                 {
-                    self.weights[i] = 0;
+                    self.weights[i] = 0.0;
                 }
             }
         }
@@ -154,15 +177,45 @@ mod tests {
         let g = GridGeometry::new(10, 10, 0.1, Point2::new(0.0, 0.0)).unwrap();
         let mut h = HitMap::<100>::new(g);
         // On the border between columns 4 and 5, at the centre of row 3.
-        h.add_point(Point2::new(0.5, 0.35));
-        assert_eq!(h.weight_at(3 * 10 + 4), UNIT / 2);
-        assert_eq!(h.weight_at(3 * 10 + 5), UNIT / 2);
-        assert_eq!(h.weight_at(4 * 10 + 4), 0);
+        h.add_point(Point2::new(0.5, 0.35), 1.0);
+        assert!((h.weight_at(3 * 10 + 4) - 0.5).abs() < 1e-6);
+        assert!((h.weight_at(3 * 10 + 5) - 0.5).abs() < 1e-6);
+        assert_eq!(h.weight_at(4 * 10 + 4), 0.0);
         // A return at a cell centre stays in its cell.
-        h.add_point(Point2::new(0.75, 0.75));
-        assert_eq!(h.weight_at(7 * 10 + 7), UNIT);
+        h.add_point(Point2::new(0.75, 0.75), 1.0);
+        assert!((h.weight_at(7 * 10 + 7) - 1.0).abs() < 1e-6);
         h.clear_disc(Point2::new(0.75, 0.75), 0.05);
-        assert_eq!(h.weight_at(7 * 10 + 7), 0);
-        assert_eq!(h.weight_at(3 * 10 + 4), UNIT / 2);
+        assert_eq!(h.weight_at(7 * 10 + 7), 0.0);
+        assert!((h.weight_at(3 * 10 + 4) - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_wall_weighs_its_length_however_densely_it_was_sampled() {
+        use crate::sensor::{Beam, LaserConfig, Scan};
+        // A wall 1 m ahead across the laser's view: beams at 1° put returns 1.7 cm apart
+        // near its foot, farther apart away from it; the weight on the wall's cells is its
+        // length seen either way.
+        let g = GridGeometry::new(40, 40, 0.1, Point2::new(-2.0, -2.0)).unwrap();
+        let mut h = HitMap::<1600>::new(g);
+        let laser = LaserConfig::thesis();
+        let mut scan = Scan::new();
+        for i in 0..laser.beam_count as usize {
+            let a = laser.beam_angle(i);
+            let r = 1.0 / math::cos(a);
+            scan.push(Beam {
+                angle_rad: a,
+                range_m: (math::cos(a) > 0.3).then_some(r),
+            })
+            .unwrap();
+        }
+        h.add_scan(&scan, &laser, Pose2::new(0.0, 0.0, 0.0));
+        let total: f32 = (0..1600).map(|i| h.weight_at(i)).sum();
+        // The wall seen spans y = ±tan(acos 0.3) = ±3.18 m, cut by the grid at ±2 m.
+        let seen = 2.0 * (1.0f32 - 0.09).sqrt() / 0.3;
+        assert!(total > 3.8 && total < seen + 0.1, "{total} m");
+        // Near the foot and 1.5 m along: the same weight per cell of wall.
+        let foot = h.weight_at(20 * 40 + 29) + h.weight_at(20 * 40 + 30);
+        let along = h.weight_at(35 * 40 + 29) + h.weight_at(35 * 40 + 30);
+        assert!((foot - along).abs() < 0.02, "{foot} vs {along}");
     }
 }

@@ -7,13 +7,14 @@
 //! the sensor's uncertainty turns "did a return land in this cell" into "how close is this
 //! cell to where returns land", so a return a few centimetres off still scores, and the score
 //! falls smoothly with the offset. Here the value of a cell is
-//! `max over cells c' within 2σ of  s(c') · exp(-d(c, c')² / 2σ²)`, with `s` the returns a
-//! cell holds, full (1) from [`FULL_RETURNS`] on. A maximum, not a sum: how densely a wall
-//! was sampled depends on its range and incidence, and a sum would pull returns along the
-//! wall toward where it was seen from closest. Returns are spread symmetrically about the
-//! surface by the range noise, so the band of full cells is centred on it. The Gaussian is a
-//! product of an east and a north factor, so the max-convolution is separable: one pass along
-//! the rows, one along the columns, each with a short line buffer.
+//! `max over cells c' within 2σ of  s(c') · exp(-d(c, c')² / 2σ²)`, with `s(c')` the weight of
+//! the returns in `c'` (the metres of surface they stand for, [`super::hits`]) divided by the
+//! largest weight within the same reach (at least [`FLOOR_M_PER_CELL`]). The range noise
+//! spreads a wall's returns over a band across it; the normalised weight is 1 in the middle of
+//! the band however often the wall was seen and smaller on its edges, so the field's ridge is
+//! the middle of the band, which is the surface. A maximum, as Olson's, not a sum: a sum
+//! fades at the end of a wall seen so far and pulls the returns near it inward. Both passes
+//! are separable: one along the rows, one along the columns, each with a short line buffer.
 //!
 //! The same field, read with bilinear interpolation between cell centres
 //! ([`LikelihoodField::sample`]), is the continuous map function Hector's Gauss-Newton step
@@ -26,14 +27,15 @@
 use crate::geometry::Point2;
 use crate::math;
 
-use super::hits::{HitMap, UNIT};
+use super::hits::HitMap;
 
 /// Longest row or column of a window \[cells\] (the line buffer of the separable pass).
 pub const MAX_LINE: usize = 512;
 
-/// Returns a cell must hold for full strength (a wall seen once at 4 m by a 1° laser puts
-/// one or two in each of its cells).
-pub const FULL_RETURNS: f32 = 2.0;
+/// A cell's weight is normalised by at least this many metres of surface per cell side: a
+/// wall seen once by a scan (one metre of surface per metre, half of it in each of two cells
+/// when it runs along a cell border) reaches 1, a few stray returns stay faint.
+pub const FLOOR_M_PER_CELL: f32 = 0.5;
 
 /// Kernel half-width limit \[cells\].
 const MAX_KERNEL: usize = 8;
@@ -50,6 +52,8 @@ pub struct LikelihoodField<const T: usize> {
     /// Map-frame position of the centre of the window's cell (0, 0) \[m\].
     first_center: Point2,
     values: [f32; T],
+    /// The largest density within the kernel's reach of each cell (normalisation).
+    peak: [f32; T],
     line: [f32; MAX_LINE],
 }
 
@@ -81,6 +85,7 @@ impl<const T: usize> LikelihoodField<T> {
             resolution_m: 1.0,
             first_center: Point2::new(0.0, 0.0),
             values: [0.0; T],
+            peak: [0.0; T],
             line: [0.0; MAX_LINE],
         }
     }
@@ -132,8 +137,7 @@ impl<const T: usize> LikelihoodField<T> {
         self.resolution_m = geom.resolution_m;
         self.first_center = geom.cell_center(a);
 
-        // Strength of every window cell: the returns it holds, full from [`FULL_RETURNS`].
-        let inv_full = 1.0 / (FULL_RETURNS * UNIT as f32);
+        // Weight of returns in every window cell.
         for r in 0..height {
             let row = a.row + r as i32;
             let out = &mut self.values[r * width..(r + 1) * width];
@@ -146,16 +150,44 @@ impl<const T: usize> LikelihoodField<T> {
                 *v = if col < 0 || col as usize >= geom.width {
                     0.0
                 } else {
-                    let w = hits.weight_at(row as usize * geom.width + col as usize) as f32;
-                    (w * inv_full).min(1.0)
+                    hits.weight_at(row as usize * geom.width + col as usize)
                 };
             }
         }
 
-        // The separable max-convolution with a Gaussian of σ, cut at 2σ.
-        let mut kernel = [0.0f32; MAX_KERNEL + 1];
         let reach =
             (math::ceil(2.0 * sigma_m / geom.resolution_m).max(0.0) as usize).min(MAX_KERNEL);
+
+        // Each cell's weight relative to the largest within the reach: 1 in the middle of a
+        // wall's band of returns however often it was seen, less on the band's edges.
+        let flat = [1.0f32; MAX_KERNEL + 1];
+        let flat = &flat[..=reach];
+        for r in 0..height {
+            let span = r * width..(r + 1) * width;
+            max_filter(&self.values[span.clone()],
+                &mut self.peak[span],
+                1,
+                flat);
+        }
+        for c in 0..width {
+            for r in 0..height {
+                self.line[r] = self.peak[r * width + c];
+            }
+            max_filter(&self.line[..height],
+                &mut self.peak[c..],
+                width,
+                flat);
+        }
+        let floor = FLOOR_M_PER_CELL * geom.resolution_m;
+        for (v, &p) in self.values[..width * height]
+            .iter_mut()
+            .zip(&self.peak[..width * height])
+        {
+            *v /= p.max(floor);
+        }
+
+        // The separable max-convolution with a Gaussian of σ, cut at 2σ.
+        let mut kernel = [0.0f32; MAX_KERNEL + 1];
         for (k, w) in kernel.iter_mut().enumerate().take(reach + 1) {
             let d = k as f32 * geom.resolution_m;
             *w = math::exp(-d * d / (2.0 * sigma_m * sigma_m));
@@ -170,7 +202,10 @@ impl<const T: usize> LikelihoodField<T> {
             for r in 0..height {
                 self.line[r] = self.values[r * width + c];
             }
-            max_filter(&self.line[..height], &mut self.values[c..], width, kernel);
+            max_filter(&self.line[..height],
+                &mut self.values[c..],
+                width,
+                kernel);
         }
         true
     }
@@ -241,9 +276,7 @@ mod tests {
     fn a_single_return_blurs_into_a_peak_with_a_smooth_slope() {
         let geom = GridGeometry::new(20, 20, 0.1, Point2::new(0.0, 0.0)).unwrap();
         let mut hits = HitMap::<400>::new(geom);
-        for _ in 0..3 {
-            hits.add_point(Point2::new(1.05, 1.05));
-        }
+        hits.add_point(Point2::new(1.05, 1.05), 0.3);
         let mut f = LikelihoodField::<400>::new();
         assert!(f.build(&hits, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
         let centre = Point2::new(1.05, 1.05);
@@ -267,7 +300,7 @@ mod tests {
         let geom = GridGeometry::new(20, 20, 0.1, Point2::new(0.0, 0.0)).unwrap();
         let mut hits = HitMap::<400>::new(geom);
         for k in 0..80 {
-            hits.add_point(Point2::new(0.6 + 0.01 * k as f32, 1.0));
+            hits.add_point(Point2::new(0.6 + 0.01 * k as f32, 1.0), 0.01);
         }
         let mut f = LikelihoodField::<400>::new();
         assert!(f.build(&hits, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));

@@ -89,13 +89,16 @@ pub struct MatchConfig {
     pub iterations: u32,
     /// Motion prior: mean likelihood taken off at the edge of the search window.
     pub prior_at_edge: f32,
+    /// The search's best pose replaces the prediction as the refinement's start only when it
+    /// scores this much more (mean likelihood).
+    pub min_search_gain: f32,
 }
 
 impl Default for MatchConfig {
     /// ±0.3 m and ±0.1 rad (5.7°) at 0.01 rad, σ 0.1 m, at most 270 returns, at least 30,
     /// half of them on known cells, mean likelihood 0.25, information 0.5/m² and 3 % of the
     /// strongest, returns beyond 1 m
-    /// weighted by 1/r², L = 1 m, 10 steps, prior 0.02.
+    /// weighted by 1/r², L = 1 m, 10 steps, prior 0.02, search gain 0.03.
     fn default() -> Self {
         Self {
             search_xy_m: 0.3,
@@ -112,6 +115,7 @@ impl Default for MatchConfig {
             length_scale_m: 1.0,
             iterations: 10,
             prior_at_edge: 0.02,
+            min_search_gain: 0.03,
         }
     }
 }
@@ -355,15 +359,32 @@ impl<const T: usize> ScanMatcher<T> {
             &window,
             &mut self.scratch,
         );
+        // The search scores returns at their nearest cell centre, so poses whose scores differ
+        // by less than that rounding are ties; a tie keeps the prediction, or the pose would
+        // slide along whatever the scan leaves unconstrained.
+        let start = if coarse.score - coarse.score_at_prediction > config.min_search_gain {
+            coarse.pose
+        } else {
+            predicted
+        };
+        let limits = gauss_newton::Limits {
+            length_scale_m: config.length_scale_m,
+            min_information: config.min_information,
+            min_information_ratio: config.min_information_ratio,
+        };
         let fine = gauss_newton::refine(
             &self.field,
             &self.points[..self.len],
             &self.weights[..self.len],
-            coarse.pose,
+            start,
             config.iterations,
-            config.length_scale_m,
+            &limits,
         );
 
+        #[cfg(feature = "std")]
+        if std::env::var("LOCDBG").is_ok() {
+            std::eprintln!("pred {:?}\n coarse {:?}\n fine {:?} it {} val {}", predicted, coarse, fine.pose, fine.iterations, fine.mean_value);
+        }
         let constraint = Constraint::analyse(
             &fine.information,
             config.min_information,

@@ -62,7 +62,7 @@ fn draw(
         let n = (a.distance(*b) / 0.02) as usize + 1;
         for k in 0..=n {
             let t = k as f32 / n as f32;
-            hits.add_point(Point2::new(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t));
+            hits.add_point(Point2::new(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t), 0.02);
         }
     }
     for i in 0..geom.cell_count() {
