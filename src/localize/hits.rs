@@ -113,14 +113,17 @@ impl<const N: usize> HitMap<N> {
         let at = pose.compose(laser.mount);
         let point = |i: usize| -> Option<Point2> {
             let b = scan.beams().get(i)?;
-            let r = b.range_m.filter(|r| {
-                r.is_finite() && *r >= laser.min_range_m && *r < laser.max_range_m
-            })?;
+            let r = b
+                .range_m
+                .filter(|r| r.is_finite() && *r >= laser.min_range_m && *r < laser.max_range_m)?;
             if !b.angle_rad.is_finite() {
                 return None;
             }
             let a = at.theta + b.angle_rad;
-            Some(Point2::new(at.x + r * math::cos(a), at.y + r * math::sin(a)))
+            Some(Point2::new(
+                at.x + r * math::cos(a),
+                at.y + r * math::sin(a),
+            ))
         };
         let n = scan.beams().len();
         let mut prev: Option<Point2> = None;

@@ -164,19 +164,13 @@ impl<const T: usize> LikelihoodField<T> {
         let flat = &flat[..=reach];
         for r in 0..height {
             let span = r * width..(r + 1) * width;
-            max_filter(&self.values[span.clone()],
-                &mut self.peak[span],
-                1,
-                flat);
+            max_filter(&self.values[span.clone()], &mut self.peak[span], 1, flat);
         }
         for c in 0..width {
             for r in 0..height {
                 self.line[r] = self.peak[r * width + c];
             }
-            max_filter(&self.line[..height],
-                &mut self.peak[c..],
-                width,
-                flat);
+            max_filter(&self.line[..height], &mut self.peak[c..], width, flat);
         }
         let floor = FLOOR_M_PER_CELL * geom.resolution_m;
         for (v, &p) in self.values[..width * height]
@@ -202,10 +196,7 @@ impl<const T: usize> LikelihoodField<T> {
             for r in 0..height {
                 self.line[r] = self.values[r * width + c];
             }
-            max_filter(&self.line[..height],
-                &mut self.values[c..],
-                width,
-                kernel);
+            max_filter(&self.line[..height], &mut self.values[c..], width, kernel);
         }
         true
     }

@@ -92,13 +92,18 @@ pub struct MatchConfig {
     /// The search's best pose replaces the prediction as the refinement's start only when it
     /// scores this much more (mean likelihood).
     pub min_search_gain: f32,
+    /// Only returns where the field is at least this at the refinement's start take part in
+    /// it (0..=1; 0.5 is about 1.2 σ from a wall's ridge).
+    pub min_return_value: f32,
+    /// Fewer than this fraction of the returns on known ground fitting so: no match.
+    pub min_fit_fraction: f32,
 }
 
 impl Default for MatchConfig {
     /// ±0.3 m and ±0.1 rad (5.7°) at 0.01 rad, σ 0.1 m, at most 270 returns, at least 30,
     /// half of them on known cells, mean likelihood 0.25, information 0.5/m² and 3 % of the
     /// strongest, returns beyond 1 m
-    /// weighted by 1/r², L = 1 m, 10 steps, prior 0.02, search gain 0.03.
+    /// weighted by 1/r², L = 1 m, 10 steps, prior 0.02, search gain 0.03, returns refined from a field value of 0.5, at least 30 % of them.
     fn default() -> Self {
         Self {
             search_xy_m: 0.3,
@@ -116,6 +121,8 @@ impl Default for MatchConfig {
             iterations: 10,
             prior_at_edge: 0.02,
             min_search_gain: 0.03,
+            min_return_value: 0.5,
+            min_fit_fraction: 0.3,
         }
     }
 }
@@ -323,7 +330,10 @@ impl<const T: usize> ScanMatcher<T> {
             let r = math::hypot(p.x - origin.x, p.y - origin.y).max(1e-6);
             let back = (res + 2.0 * laser.noise_fraction * r).min(r);
             let t = 1.0 - back / r;
-            let before = Point2::new(origin.x + (p.x - origin.x) * t, origin.y + (p.y - origin.y) * t);
+            let before = Point2::new(
+                origin.x + (p.x - origin.x) * t,
+                origin.y + (p.y - origin.y) * t,
+            );
             let q = predicted.transform_point(p);
             if known_at(predicted.transform_point(before))
                 && (known_at(q) || self.field.sample(q).0 > 0.0)
@@ -367,6 +377,25 @@ impl<const T: usize> ScanMatcher<T> {
         } else {
             predicted
         };
+        // The refinement uses only the returns that already fit the map well at its start:
+        // a return that lands a little beyond the end of a wall seen so far has the wall's
+        // end within the blur and would pull the scan along the wall toward it (a bias in
+        // the direction the robot turns or drives, several tenths of a degree per scan).
+        let total = self.len;
+        let mut kept = 0;
+        for i in 0..total {
+            let q = start.transform_point(self.points[i]);
+            if self.field.sample(q).0 >= config.min_return_value {
+                self.points[kept] = self.points[i];
+                self.weights[kept] = self.weights[i];
+                kept += 1;
+            }
+        }
+        self.len = kept;
+        if kept < config.min_points.max(1) || (kept as f32) < config.min_fit_fraction * total as f32
+        {
+            return refuse(quality, Distrust::PoorFit);
+        }
         let limits = gauss_newton::Limits {
             length_scale_m: config.length_scale_m,
             min_information: config.min_information,
@@ -381,10 +410,6 @@ impl<const T: usize> ScanMatcher<T> {
             &limits,
         );
 
-        #[cfg(feature = "std")]
-        if std::env::var("LOCDBG").is_ok() {
-            std::eprintln!("pred {:?}\n coarse {:?}\n fine {:?} it {} val {}", predicted, coarse, fine.pose, fine.iterations, fine.mean_value);
-        }
         let constraint = Constraint::analyse(
             &fine.information,
             config.min_information,

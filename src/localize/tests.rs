@@ -62,7 +62,10 @@ fn draw(
         let n = (a.distance(*b) / 0.02) as usize + 1;
         for k in 0..=n {
             let t = k as f32 / n as f32;
-            hits.add_point(Point2::new(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t), 0.02);
+            hits.add_point(
+                Point2::new(a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t),
+                0.02,
+            );
         }
     }
     for i in 0..geom.cell_count() {
@@ -204,7 +207,14 @@ fn too_few_returns_or_an_unknown_map_keep_the_prediction() {
     // A map that knows nothing.
     let empty = OccupancyGrid::<CELLS>::new(geom, LogOddsBounds::default()).unwrap();
     let scan = scan_at(&walls, Pose2::new(4.0, 3.0, 0.0), &laser, 0.0, 1);
-    let r = m.match_scan(&empty, &HitMap::new(geom), &scan, &laser, predicted, &config());
+    let r = m.match_scan(
+        &empty,
+        &HitMap::new(geom),
+        &scan,
+        &laser,
+        predicted,
+        &config(),
+    );
     assert_eq!(r.quality.distrust, Some(Distrust::MostlyUnknown));
     assert_eq!(r.pose, predicted);
     // A scan of another place entirely: the walls do not fit.
@@ -262,7 +272,16 @@ fn the_tracker_moves_the_odometry_frame_by_the_correction_it_trusts() {
     };
     // Standing still, the prediction is as good as a match: the pose stays.
     let still = tracker
-        .on_scan(&on, &grid, &hits, &mut m, &scan, &laser, pose_odom, &mut transform)
+        .on_scan(
+            &on,
+            &grid,
+            &hits,
+            &mut m,
+            &scan,
+            &laser,
+            pose_odom,
+            &mut transform,
+        )
         .unwrap();
     assert!(
         still
@@ -275,12 +294,30 @@ fn the_tracker_moves_the_odometry_frame_by_the_correction_it_trusts() {
     let away = Pose2::new(-19.0, 0.5, 3.1);
     let before = transform;
     assert_eq!(
-        tracker.on_scan(&on, &grid, &hits, &mut m, &scan, &laser, away, &mut transform),
+        tracker.on_scan(
+            &on,
+            &grid,
+            &hits,
+            &mut m,
+            &scan,
+            &laser,
+            away,
+            &mut transform
+        ),
         None
     );
     assert_eq!(transform, before);
     let corrected = tracker
-        .on_scan(&on, &grid, &hits, &mut m, &scan, &laser, pose_odom, &mut transform)
+        .on_scan(
+            &on,
+            &grid,
+            &hits,
+            &mut m,
+            &scan,
+            &laser,
+            pose_odom,
+            &mut transform,
+        )
         .unwrap();
     let err = corrected.position().distance(truth.position());
     assert!(err < 0.03, "{err} m, {:?}", tracker.last());

@@ -179,8 +179,9 @@ impl Tracker {
         pose_map: &mut Pose2,
     ) {
         if let Some(transform) = map_from_odom.as_mut()
-            && let Some(corrected) =
-                self.on_scan(config, grid, hits, matcher, scan, laser, pose_odom, transform)
+            && let Some(corrected) = self.on_scan(
+                config, grid, hits, matcher, scan, laser, pose_odom, transform,
+            )
         {
             *pose_map = corrected;
         }
