@@ -19,11 +19,27 @@ fn bench(c: &mut Criterion) {
     let predicted = Pose2::new(2.05, 1.77, 0.82);
     let config = MatchConfig::default();
     let mut matcher = Box::new(ScanMatcher::<WINDOW_CELLS>::new());
-    let r = matcher.match_scan(&house.grid, &scan, &house.laser, predicted, &config);
+    let r = matcher.match_scan(
+        &house.grid,
+        &house.hits,
+        &scan,
+        &house.laser,
+        predicted,
+        &config,
+    );
     assert!(r.quality.trusted(), "{:?}", r.quality);
     assert_eq!(scan.len(), 541);
     c.bench_function("localize_match_lms1xx_541", |b| {
-        b.iter(|| matcher.match_scan(&house.grid, &scan, &house.laser, predicted, &config))
+        b.iter(|| {
+            matcher.match_scan(
+                &house.grid,
+                &house.hits,
+                &scan,
+                &house.laser,
+                predicted,
+                &config,
+            )
+        })
     });
 }
 

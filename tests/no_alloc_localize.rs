@@ -25,7 +25,14 @@ fn matching_scans_allocates_nothing() {
         let mut out = [None; 3];
         for (k, (scan, truth)) in scans.iter().zip(poses).enumerate() {
             let predicted = Pose2::new(truth.x + 0.06, truth.y - 0.04, truth.theta + 0.02);
-            out[k] = Some(matcher.match_scan(&house.grid, scan, &house.laser, predicted, &config));
+            out[k] = Some(matcher.match_scan(
+                &house.grid,
+                &house.hits,
+                scan,
+                &house.laser,
+                predicted,
+                &config,
+            ));
         }
         out
     });

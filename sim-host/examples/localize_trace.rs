@@ -16,6 +16,26 @@ fn main() {
     let world = World::load("house", 0.1).unwrap();
     let mut m = MissionConfig::default();
     m.localize.enabled = true;
+    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f32>().ok());
+    if let Some(v) = env("LOC_SM") {
+        m.localize.match_sigma_m = v;
+    }
+    if let Some(v) = env("LOC_SR") {
+        m.localize.match_sigma_rad = v;
+    }
+    if let Some(v) = env("LOC_WR") {
+        m.localize.matcher.weight_range_m = v;
+    }
+    if let Some(v) = env("LOC_VM") {
+        m.localize.odometry_var_m2_per_m = v;
+    }
+    if let Some(v) = env("LOC_VR") {
+        m.localize.odometry_var_rad2_per_rad = v;
+    }
+    if let Some(v) = env("LOC_N") {
+        m.localize.every_n_scans = v as u32;
+    }
+    let quiet = std::env::var("QUIET").is_ok();
     let mut cfg = RunConfig::new(m, 1, seed);
     cfg.body.slip = if args.get(2).map(|s| s.as_str()) == Some("none") {
         SlipConfig::none()
@@ -28,7 +48,7 @@ fn main() {
     while !r.finished() {
         r.advance().unwrap();
         let t = r.sim_time_s();
-        if t - last >= 5.0 || t < 3.0 {
+        if !quiet && (t - last >= 5.0 || t < 3.0) {
             last = t;
             let b = r.body(0);
             let ms = r.mission(0);
@@ -58,4 +78,17 @@ fn main() {
             last_trusted = l.trusted();
         }
     }
+    let b = r.body(0);
+    let ms = r.mission(0);
+    let tp = b.true_pose();
+    let e = ms.pose_map();
+    let rep = r.report();
+    println!(
+        "seed {seed} final err {:.3} m {:.2} deg coverage {:.1} % map acc {:.1} % t {:.0}",
+        e.position().distance(tp.position()),
+        normalize_angle(e.theta - tp.theta).to_degrees(),
+        100.0 * rep.coverage,
+        100.0 * rep.map_accuracy.accuracy,
+        r.sim_time_s()
+    );
 }

@@ -37,6 +37,8 @@ pub struct Best {
     pub pose: Pose2,
     /// Its mean likelihood, prior included.
     pub score: f32,
+    /// The mean likelihood of the prediction itself, scored the same way.
+    pub score_at_prediction: f32,
 }
 
 /// Searches `window` around `predicted` for the pose under which the `points` (robot frame
@@ -54,6 +56,7 @@ pub fn search<const T: usize>(
     let mut best = Best {
         pose: predicted,
         score: f32::NEG_INFINITY,
+        score_at_prediction: f32::NEG_INFINITY,
     };
     let (w, h) = (field.width() as i32, field.height() as i32);
     let m = window.cells;
@@ -97,15 +100,16 @@ pub fn search<const T: usize>(
                 }
                 let prior = prior_th + window.prior_at_edge * (dx * dx + dy * dy) as f32 / edge_xy;
                 let score = sum * inv_n - prior;
+                if k == 0 && dx == 0 && dy == 0 {
+                    best.score_at_prediction = score;
+                }
                 if score > best.score {
-                    best = Best {
-                        pose: Pose2::new(
-                            predicted.x + dx as f32 * res,
-                            predicted.y + dy as f32 * res,
-                            theta,
-                        ),
-                        score,
-                    };
+                    best.pose = Pose2::new(
+                        predicted.x + dx as f32 * res,
+                        predicted.y + dy as f32 * res,
+                        theta,
+                    );
+                    best.score = score;
                 }
             }
         }

@@ -9,8 +9,8 @@
 //! `∂S_i/∂ξ = [[1, 0, -sinθ·p_x - cosθ·p_y], [0, 1, cosθ·p_x - sinθ·p_y]]`.
 //!
 //! The weights `w_i` (Hector weighs every return alike) discount far returns, whose range
-//! noise is larger. Two guards Hector leaves to its multi-resolution maps: a small Levenberg damping keeps a
-//! step finite along a direction the scan does not constrain, and a step that does not lower
+//! noise is larger. Two guards Hector leaves to its multi-resolution maps: a step is taken only
+//! along the directions the scan constrains (see [`refine`]), and a step that does not lower
 //! the cost is halved, then refused. `H` at the final pose is returned: it is the information
 //! the fit carries (`H⁻¹`, scaled by the residual, approximates the covariance), and
 //! [`super::constraint`] reads from it which directions the scan pins down.
@@ -20,6 +20,7 @@ use nalgebra::{Matrix3, Vector3};
 use crate::geometry::{Point2, Pose2};
 use crate::math;
 
+use super::constraint::Constraint;
 use super::likelihood::LikelihoodField;
 
 /// The refined pose and what the fit knows about it.
@@ -30,7 +31,7 @@ pub struct Refined {
     /// Weighted mean map value at the returns, 0..=1.
     pub mean_value: f32,
     /// `Σ w_i J_iᵀ J_i / Σ w_i` at the pose, in `(x [m], y [m], θ·L [m])` with `L` the length scale
-    /// given to [`refine`] \[1/m²\].
+    /// of the [`Limits`] given to [`refine`] \[1/m²\].
     pub information: Matrix3<f64>,
     /// Gauss-Newton steps taken.
     pub iterations: u32,
@@ -40,26 +41,56 @@ pub struct Refined {
 const MAX_STEP_M: f32 = 0.1;
 const MAX_STEP_RAD: f32 = 0.05;
 
+/// How the steps are limited to what the scan constrains.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    /// Length that turns a rotation into a distance \[m\].
+    pub length_scale_m: f32,
+    /// A direction is stepped along when its information per unit weight is at least this
+    /// \[1/m²\] ...
+    pub min_information: f32,
+    /// ... and at least this fraction of the strongest direction's.
+    pub min_information_ratio: f32,
+}
+
 /// Refines `start` for the `points` (robot frame \[m\], weighted by `weights`) on `field`, for
-/// at most `iterations`
-/// steps; `length_scale_m` turns the rotation into a length for the returned information.
+/// at most `iterations` steps.
+///
+/// Each step is the Gauss-Newton step restricted to the eigen-directions of `H` the scan
+/// constrains ([`Limits`], [`Constraint`]): the truncated pseudo-inverse of Zhang, Kaess &
+/// Singh (ICRA 2016). Along a direction the scan leaves flat (a wall seen alone, a corridor)
+/// the cost still has small slopes from the map's texture, and a full step would slide the
+/// pose along them; restricted, the pose keeps the prediction there.
 pub fn refine<const T: usize>(
     field: &LikelihoodField<T>,
     points: &[Point2],
     weights: &[f32],
     start: Pose2,
     iterations: u32,
-    length_scale_m: f32,
+    limits: &Limits,
 ) -> Refined {
     let mut pose = start;
     let mut eval = evaluate(field, points, weights, pose);
     let mut taken = 0;
+    let n = (weights.iter().sum::<f32>() as f64).max(1e-9);
+    let l = limits.length_scale_m as f64;
+    let scale = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 1.0 / l));
     for _ in 0..iterations {
-        let damping = 1e-3 * (eval.h.trace() / 3.0) + 1e-9;
-        let h = eval.h + Matrix3::identity() * damping;
-        let Some(step) = h.cholesky().map(|c| c.solve(&eval.g)) else {
+        // In (x, y, θ·L), per unit weight.
+        let h = scale * eval.h * scale / n;
+        let g = scale * eval.g / n;
+        let c = Constraint::analyse(&h, limits.min_information, limits.min_information_ratio);
+        let mut step_scaled = Vector3::zeros();
+        for k in 0..3 {
+            if c.constrained[k] {
+                let v = Vector3::from(c.directions[k]).cast::<f64>();
+                step_scaled += v * (v.dot(&g) / c.eigenvalues[k] as f64);
+            }
+        }
+        if step_scaled == Vector3::zeros() {
             break;
-        };
+        }
+        let step = scale * step_scaled;
         let (mut dx, mut dy, mut dth) = (step[0] as f32, step[1] as f32, step[2] as f32);
         let t = math::hypot(dx, dy);
         if t > MAX_STEP_M {
@@ -89,9 +120,6 @@ pub fn refine<const T: usize>(
             break;
         }
     }
-    let n = (weights.iter().sum::<f32>() as f64).max(1e-9);
-    let l = length_scale_m as f64;
-    let scale = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 1.0 / l));
     Refined {
         pose,
         mean_value: (eval.sum_value / n) as f32,

@@ -1,35 +1,46 @@
-//! The smoothed likelihood field a scan is scored against: a local window of the occupancy
-//! grid, where each cell holds how likely a laser return is to land there.
+//! The smoothed likelihood field a scan is scored against: a local window of the returns
+//! the map holds ([`super::hits`]), where each cell holds how likely a laser return is to land
+//! there.
 //!
 //! Olson (*Real-time correlative scan matching*, ICRA 2009, §III) scores a pose by looking up
-//! each projected return in a rasterised, blurred copy of the map: blurring by the sensor's
-//! uncertainty turns "is this cell a wall" into "how close is this cell to a wall", so a return
-//! a few centimetres off still scores, and the score falls smoothly with the offset. Here the
-//! value of a cell is
-//! `max over cells c' within 2σ of  occ(c') · exp(-d(c, c')² / 2σ²)`, with
-//! `occ = clamp(log-odds / max log-odds, 0, 1)` (Free and Unknown are 0). The Gaussian is a
-//! product of an east and a north factor, so the max-convolution is separable: one pass along
-//! the rows, one along the columns, each with a short line buffer.
+//! each projected return in a rasterised, blurred copy of the reference points: blurring by
+//! the sensor's uncertainty turns "did a return land in this cell" into "how close is this
+//! cell to where returns land", so a return a few centimetres off still scores, and the score
+//! falls smoothly with the offset. Here the value of a cell is
+//! `max over cells c' within 2σ of  s(c') · exp(-d(c, c')² / 2σ²)`, with `s(c')` the weight of
+//! the returns in `c'` (the metres of surface they stand for, [`super::hits`]) divided by the
+//! largest weight within the same reach (at least [`FLOOR_M_PER_CELL`]). The range noise
+//! spreads a wall's returns over a band across it; the normalised weight is 1 in the middle of
+//! the band however often the wall was seen and smaller on its edges, so the field's ridge is
+//! the middle of the band, which is the surface. A maximum, as Olson's, not a sum: a sum
+//! fades at the end of a wall seen so far and pulls the returns near it inward. Both passes
+//! are separable: one along the rows, one along the columns, each with a short line buffer.
 //!
 //! The same field, read with bilinear interpolation between cell centres
 //! ([`LikelihoodField::sample`]), is the continuous map function Hector's Gauss-Newton step
 //! differentiates (Kohlbrecher et al., SSRR 2011, §IV.A).
 //!
 //! Only the window around the scan is built (sized to the capacity `T` cells), at every match:
-//! the shared grid changes with every scan of every robot, and a window of 100 x 100 cells costs
-//! tens of microseconds.
+//! the map changes with every scan of every robot, and a window of 100 x 100 cells costs tens
+//! of microseconds.
 
 use crate::geometry::Point2;
-use crate::grid::OccupancyGrid;
 use crate::math;
+
+use super::hits::HitMap;
 
 /// Longest row or column of a window \[cells\] (the line buffer of the separable pass).
 pub const MAX_LINE: usize = 512;
 
+/// A cell's weight is normalised by at least this many metres of surface per cell side: a
+/// wall seen once by a scan (one metre of surface per metre, half of it in each of two cells
+/// when it runs along a cell border) reaches 1, a few stray returns stay faint.
+pub const FLOOR_M_PER_CELL: f32 = 0.5;
+
 /// Kernel half-width limit \[cells\].
 const MAX_KERNEL: usize = 8;
 
-/// A local, blurred copy of the grid's occupied cells.
+/// A local, blurred copy of the returns the map holds.
 #[derive(bytemuck::Zeroable)]
 pub struct LikelihoodField<const T: usize> {
     /// Grid column and row of the window's cell (0, 0).
@@ -41,6 +52,8 @@ pub struct LikelihoodField<const T: usize> {
     /// Map-frame position of the centre of the window's cell (0, 0) \[m\].
     first_center: Point2,
     values: [f32; T],
+    /// The largest density within the kernel's reach of each cell (normalisation).
+    peak: [f32; T],
     line: [f32; MAX_LINE],
 }
 
@@ -72,6 +85,7 @@ impl<const T: usize> LikelihoodField<T> {
             resolution_m: 1.0,
             first_center: Point2::new(0.0, 0.0),
             values: [0.0; T],
+            peak: [0.0; T],
             line: [0.0; MAX_LINE],
         }
     }
@@ -96,18 +110,17 @@ impl<const T: usize> LikelihoodField<T> {
         &self.values[..self.width * self.height]
     }
 
-    /// Builds the field over the grid cells covering `lo..=hi` (map frame \[m\]), blurred by
-    /// `sigma_m`. Cells outside the grid count as unknown (0). Returns `false`, leaving the
-    /// field empty, when the window needs more than `T` cells or a line longer than
-    /// [`MAX_LINE`].
+    /// Builds the field over the cells covering `lo..=hi` (map frame \[m\]) from the returns
+    /// in `hits`, blurred by `sigma_m`. Cells outside the grid hold nothing. Returns `false`, leaving the field
+    /// empty, when the window needs more than `T` cells or a line longer than [`MAX_LINE`].
     pub fn build<const N: usize>(
         &mut self,
-        grid: &OccupancyGrid<N>,
+        hits: &HitMap<N>,
         lo: Point2,
         hi: Point2,
         sigma_m: f32,
     ) -> bool {
-        let geom = *grid.geometry();
+        let geom = *hits.geometry();
         let a = geom.cell_at_unchecked(lo);
         let b = geom.cell_at_unchecked(hi);
         let width = (b.col - a.col + 1).max(0) as usize;
@@ -124,8 +137,7 @@ impl<const T: usize> LikelihoodField<T> {
         self.resolution_m = geom.resolution_m;
         self.first_center = geom.cell_center(a);
 
-        // Occupancy strength of every window cell.
-        let scale = 1.0 / grid.bounds().max;
+        // Weight of returns in every window cell.
         for r in 0..height {
             let row = a.row + r as i32;
             let out = &mut self.values[r * width..(r + 1) * width];
@@ -138,38 +150,53 @@ impl<const T: usize> LikelihoodField<T> {
                 *v = if col < 0 || col as usize >= geom.width {
                     0.0
                 } else {
-                    let l = grid.log_odds_at(row as usize * geom.width + col as usize);
-                    (l * scale).clamp(0.0, 1.0)
+                    hits.weight_at(row as usize * geom.width + col as usize)
                 };
             }
         }
 
-        // The separable max-convolution with a Gaussian of σ, cut at 2σ.
-        let mut kernel = [0.0f32; MAX_KERNEL + 1];
         let reach =
             (math::ceil(2.0 * sigma_m / geom.resolution_m).max(0.0) as usize).min(MAX_KERNEL);
+
+        // Each cell's weight relative to the largest within the reach: 1 in the middle of a
+        // wall's band of returns however often it was seen, less on the band's edges.
+        let flat = [1.0f32; MAX_KERNEL + 1];
+        let flat = &flat[..=reach];
+        for r in 0..height {
+            let span = r * width..(r + 1) * width;
+            max_filter(&self.values[span.clone()], &mut self.peak[span], 1, flat);
+        }
+        for c in 0..width {
+            for r in 0..height {
+                self.line[r] = self.peak[r * width + c];
+            }
+            max_filter(&self.line[..height], &mut self.peak[c..], width, flat);
+        }
+        let floor = FLOOR_M_PER_CELL * geom.resolution_m;
+        for (v, &p) in self.values[..width * height]
+            .iter_mut()
+            .zip(&self.peak[..width * height])
+        {
+            *v /= p.max(floor);
+        }
+
+        // The separable max-convolution with a Gaussian of σ, cut at 2σ.
+        let mut kernel = [0.0f32; MAX_KERNEL + 1];
         for (k, w) in kernel.iter_mut().enumerate().take(reach + 1) {
             let d = k as f32 * geom.resolution_m;
             *w = math::exp(-d * d / (2.0 * sigma_m * sigma_m));
         }
-        if reach == 0 {
-            return true;
-        }
+        let kernel = &kernel[..=reach];
         for r in 0..height {
             let row = &mut self.values[r * width..(r + 1) * width];
             self.line[..width].copy_from_slice(row);
-            max_filter(&self.line[..width], row, 1, &kernel[..=reach]);
+            max_filter(&self.line[..width], row, 1, kernel);
         }
         for c in 0..width {
             for r in 0..height {
                 self.line[r] = self.values[r * width + c];
             }
-            max_filter(
-                &self.line[..height],
-                &mut self.values[c..],
-                width,
-                &kernel[..=reach],
-            );
+            max_filter(&self.line[..height], &mut self.values[c..], width, kernel);
         }
         true
     }
@@ -207,7 +234,7 @@ impl<const T: usize> LikelihoodField<T> {
 }
 
 /// `out[i·stride] = max_k src[i + k] · kernel[|k|]` for `|k| <= reach`, splatting each
-/// non-zero source cell onto its neighbours (most of a window is free or unknown, so this costs
+/// non-zero source cell onto its neighbours (most of a window holds no return, so this costs
 /// in proportion to the walls, not to the window).
 fn max_filter(src: &[f32], out: &mut [f32], stride: usize, kernel: &[f32]) {
     let reach = kernel.len() - 1;
@@ -234,22 +261,22 @@ fn max_filter(src: &[f32], out: &mut [f32], stride: usize, kernel: &[f32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::{CellClass, GridGeometry, LogOddsBounds};
+    use crate::grid::GridGeometry;
 
     #[test]
-    fn a_single_wall_cell_blurs_into_a_peak_with_a_smooth_slope() {
+    fn a_single_return_blurs_into_a_peak_with_a_smooth_slope() {
         let geom = GridGeometry::new(20, 20, 0.1, Point2::new(0.0, 0.0)).unwrap();
-        let mut grid = OccupancyGrid::<400>::new(geom, LogOddsBounds::default()).unwrap();
-        grid.set_class(10 * 20 + 10, CellClass::Occupied, &mut ());
+        let mut hits = HitMap::<400>::new(geom);
+        hits.add_point(Point2::new(1.05, 1.05), 0.3);
         let mut f = LikelihoodField::<400>::new();
-        assert!(f.build(&grid, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
+        assert!(f.build(&hits, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
         let centre = Point2::new(1.05, 1.05);
         let (v, _, _) = f.sample(centre);
         assert!((v - 1.0).abs() < 1e-6);
         // One cell away: exp(-0.5).
         let (v1, gx1, _) = f.sample(Point2::new(1.15, 1.05));
         assert!((v1 - (-0.5f32).exp()).abs() < 1e-4, "{v1}");
-        // Halfway between: interpolated, and the slope points back to the wall.
+        // Halfway between: interpolated, and the slope points back to the return.
         let (vh, gxh, _) = f.sample(Point2::new(1.10, 1.05));
         assert!(vh < 1.0 && vh > v1);
         assert!(gxh < 0.0 && gx1 < 0.0);
@@ -258,11 +285,28 @@ mod tests {
     }
 
     #[test]
+    fn the_ridge_of_returns_on_a_cell_border_is_on_the_border() {
+        // A wall along y = 1.0 (a border between rows 9 and 10), seen as returns on it: the
+        // field is symmetric about it, so a point on it sits on the ridge.
+        let geom = GridGeometry::new(20, 20, 0.1, Point2::new(0.0, 0.0)).unwrap();
+        let mut hits = HitMap::<400>::new(geom);
+        for k in 0..80 {
+            hits.add_point(Point2::new(0.6 + 0.01 * k as f32, 1.0), 0.01);
+        }
+        let mut f = LikelihoodField::<400>::new();
+        assert!(f.build(&hits, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
+        let below = f.sample(Point2::new(1.0, 0.96)).0;
+        let above = f.sample(Point2::new(1.0, 1.04)).0;
+        assert!((below - above).abs() < 1e-4, "{below} vs {above}");
+        assert!(f.sample(Point2::new(1.0, 1.0)).0 >= below);
+    }
+
+    #[test]
     fn a_window_larger_than_the_capacity_is_refused() {
         let geom = GridGeometry::new(20, 20, 0.1, Point2::new(0.0, 0.0)).unwrap();
-        let grid = OccupancyGrid::<400>::new(geom, LogOddsBounds::default()).unwrap();
+        let hits = HitMap::<400>::new(geom);
         let mut f = LikelihoodField::<100>::new();
-        assert!(!f.build(&grid, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
+        assert!(!f.build(&hits, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
         assert_eq!(f.width(), 0);
     }
 }

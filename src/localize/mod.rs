@@ -1,9 +1,13 @@
 //! Localisation: aligning a laser scan to the occupancy grid before it is integrated, so the
 //! map stays true while the odometry drifts.
 //!
+//! Scans are matched not to the occupancy grid but to where earlier returns landed
+//! ([`hits`], a layer of the shared map written at the corrected pose after every match): the
+//! grid's free-space clearing moves and erodes walls in ways that bias a match (see there).
+//!
 //! A match ([`ScanMatcher::match_scan`]) starts from the odometry prediction and runs in four
 //! parts, one file each:
-//! 1. [`likelihood`]: a blurred local copy of the grid's occupied cells around the scan
+//! 1. [`likelihood`]: a blurred local copy of the returns around the scan
 //!    (Olson, *Real-time correlative scan matching*, ICRA 2009);
 //! 2. [`correlative`]: Olson's exhaustive search of a small pose window around the prediction,
 //!    which finds the right basin whatever the local shape of the cost;
@@ -28,6 +32,7 @@
 pub mod constraint;
 pub mod correlative;
 pub mod gauss_newton;
+pub mod hits;
 pub mod likelihood;
 pub mod tracker;
 
@@ -43,6 +48,7 @@ use constraint::Constraint;
 use correlative::SearchWindow;
 use likelihood::LikelihoodField;
 
+pub use hits::HitMap;
 pub use tracker::{LocalizeConfig, Tracker};
 
 /// Cells of the likelihood window a mission's matcher holds: 120 x 120, enough for a 4 m laser
@@ -74,20 +80,6 @@ pub struct MatchConfig {
     pub min_information: f32,
     /// ... and at least this fraction of the strongest direction's.
     pub min_information_ratio: f32,
-    /// Each return is scored this far beyond its measured range \[m\]. The inverse sensor
-    /// model marks the cell holding a return occupied and the cells before it free, so the
-    /// occupied band the map keeps lies behind the surface the laser saw (on a 10 cm grid with
-    /// the thesis's 5 % noise, about half a cell); scoring returns where the map put them
-    /// removes the pull toward the walls this would cause.
-    pub surface_depth_m: f32,
-    /// Each return is also scored this many standard deviations of its range noise
-    /// (`laser.noise_fraction · range`) beyond its measured range. With noisy ranges, the
-    /// short returns fall in cells the longer returns of neighbouring beams have crossed and
-    /// marked free, so the band the map keeps occupied recedes behind the surface by a part of
-    /// the range noise; unmodelled, every match pulls the robot toward where the laser looks
-    /// (measured: 7-11 cm per scan at 3 m with the thesis's 5 %, its sign following the
-    /// heading; `tests::a_turn_in_place_with_exact_poses_is_not_pulled`).
-    pub depth_per_sigma: f32,
     /// Returns farther than this count less, as `(weight_range_m / range)²`: the range noise
     /// grows with the range \[m\].
     pub weight_range_m: f32,
@@ -97,13 +89,21 @@ pub struct MatchConfig {
     pub iterations: u32,
     /// Motion prior: mean likelihood taken off at the edge of the search window.
     pub prior_at_edge: f32,
+    /// The search's best pose replaces the prediction as the refinement's start only when it
+    /// scores this much more (mean likelihood).
+    pub min_search_gain: f32,
+    /// Only returns where the field is at least this at the refinement's start take part in
+    /// it (0..=1; 0.5 is about 1.2 σ from a wall's ridge).
+    pub min_return_value: f32,
+    /// Fewer than this fraction of the returns on known ground fitting so: no match.
+    pub min_fit_fraction: f32,
 }
 
 impl Default for MatchConfig {
     /// ±0.3 m and ±0.1 rad (5.7°) at 0.01 rad, σ 0.1 m, at most 270 returns, at least 30,
     /// half of them on known cells, mean likelihood 0.25, information 0.5/m² and 3 % of the
-    /// strongest, returns scored one range-noise σ beyond their range, returns beyond 1 m
-    /// weighted by 1/r², L = 1 m, 10 steps, prior 0.02.
+    /// strongest, returns beyond 1 m
+    /// weighted by 1/r², L = 1 m, 10 steps, prior 0.02, search gain 0.03, returns refined from a field value of 0.5, at least 30 % of them.
     fn default() -> Self {
         Self {
             search_xy_m: 0.3,
@@ -116,12 +116,13 @@ impl Default for MatchConfig {
             min_score: 0.25,
             min_information: 0.5,
             min_information_ratio: 0.03,
-            surface_depth_m: 0.0,
-            depth_per_sigma: 1.0,
             weight_range_m: 1.0,
             length_scale_m: 1.0,
             iterations: 10,
             prior_at_edge: 0.02,
+            min_search_gain: 0.03,
+            min_return_value: 0.5,
+            min_fit_fraction: 0.3,
         }
     }
 }
@@ -218,11 +219,13 @@ impl<const T: usize> ScanMatcher<T> {
     }
 
     /// Aligns `scan`, taken by `laser` at about `predicted` (map frame, from odometry), to
-    /// `grid`. Returns the corrected pose, or `predicted` when the match is not trusted.
+    /// the returns in `hits`; `grid` (same geometry) tells which cells the map knows.
+    /// Returns the corrected pose, or `predicted` when the match is not trusted.
     /// Allocation-free.
     pub fn match_scan<const N: usize>(
         &mut self,
         grid: &OccupancyGrid<N>,
+        hits: &HitMap<N>,
         scan: &Scan,
         laser: &LaserConfig,
         predicted: Pose2,
@@ -265,11 +268,9 @@ impl<const T: usize> ScanMatcher<T> {
             .step_by(stride)
         {
             let r = usable(b.range_m).unwrap_or(0.0);
-            let along =
-                r + config.surface_depth_m + config.depth_per_sigma * laser.noise_fraction * r;
             let p = laser.mount.transform_point(Point2::new(
-                along * math::cos(b.angle_rad),
-                along * math::sin(b.angle_rad),
+                r * math::cos(b.angle_rad),
+                r * math::sin(b.angle_rad),
             ));
             reach = reach.max(math::hypot(p.x, p.y));
             // At most MAX_BEAMS points from a scan of at most MAX_BEAMS beams.
@@ -306,21 +307,37 @@ impl<const T: usize> ScanMatcher<T> {
             + 2.0 * res;
         lo = Point2::new(lo.x - margin, lo.y - margin);
         hi = Point2::new(hi.x + margin, hi.y + margin);
-        if !self.field.build(grid, lo, hi, config.sigma_m) {
+        if !self.field.build(hits, lo, hi, config.sigma_m) {
             return refuse(quality, Distrust::WindowTooLarge);
         }
 
-        // Only returns that land on what the map knows, or near a wall it knows, take part: a
-        // return beyond the end of a wall seen so far would otherwise pull the scan back onto
-        // the known part, a bias in the direction the robot turns or drives.
+        // Only returns on a part of the world the map has seen take part: the cell the beam
+        // crosses just before its return (by a cell and two range-noise σ) must be known, and
+        // the return must land on a known cell or near returns the map holds. A return on
+        // the continuation of a wall seen only in part so far would otherwise be pulled back
+        // onto the seen part, a bias in the direction the robot turns or drives; and testing
+        // the return's own cell alone would keep the short returns of a wall (in front of it,
+        // known free) and drop the long ones (behind it, unknown), a bias toward the laser.
         let total = self.len;
         let mut kept = 0;
+        let origin = laser.mount.position();
+        let known_at = |q: Point2| {
+            grid.class_of(geom.cell_at_unchecked(q))
+                .is_some_and(|c| c.is_known())
+        };
         for i in 0..total {
-            let q = predicted.transform_point(self.points[i]);
-            let known = grid
-                .class_of(geom.cell_at_unchecked(q))
-                .is_some_and(|c| c.is_known());
-            if known || self.field.sample(q).0 > 0.0 {
+            let p = self.points[i];
+            let r = math::hypot(p.x - origin.x, p.y - origin.y).max(1e-6);
+            let back = (res + 2.0 * laser.noise_fraction * r).min(r);
+            let t = 1.0 - back / r;
+            let before = Point2::new(
+                origin.x + (p.x - origin.x) * t,
+                origin.y + (p.y - origin.y) * t,
+            );
+            let q = predicted.transform_point(p);
+            if known_at(predicted.transform_point(before))
+                && (known_at(q) || self.field.sample(q).0 > 0.0)
+            {
                 self.points[kept] = self.points[i];
                 self.weights[kept] = self.weights[i];
                 kept += 1;
@@ -352,13 +369,45 @@ impl<const T: usize> ScanMatcher<T> {
             &window,
             &mut self.scratch,
         );
+        // The search scores returns at their nearest cell centre, so poses whose scores differ
+        // by less than that rounding are ties; a tie keeps the prediction, or the pose would
+        // slide along whatever the scan leaves unconstrained.
+        let start = if coarse.score - coarse.score_at_prediction > config.min_search_gain {
+            coarse.pose
+        } else {
+            predicted
+        };
+        // The refinement uses only the returns that already fit the map well at its start:
+        // a return that lands a little beyond the end of a wall seen so far has the wall's
+        // end within the blur and would pull the scan along the wall toward it (a bias in
+        // the direction the robot turns or drives, several tenths of a degree per scan).
+        let total = self.len;
+        let mut kept = 0;
+        for i in 0..total {
+            let q = start.transform_point(self.points[i]);
+            if self.field.sample(q).0 >= config.min_return_value {
+                self.points[kept] = self.points[i];
+                self.weights[kept] = self.weights[i];
+                kept += 1;
+            }
+        }
+        self.len = kept;
+        if kept < config.min_points.max(1) || (kept as f32) < config.min_fit_fraction * total as f32
+        {
+            return refuse(quality, Distrust::PoorFit);
+        }
+        let limits = gauss_newton::Limits {
+            length_scale_m: config.length_scale_m,
+            min_information: config.min_information,
+            min_information_ratio: config.min_information_ratio,
+        };
         let fine = gauss_newton::refine(
             &self.field,
             &self.points[..self.len],
             &self.weights[..self.len],
-            coarse.pose,
+            start,
             config.iterations,
-            config.length_scale_m,
+            &limits,
         );
 
         let constraint = Constraint::analyse(

@@ -19,7 +19,7 @@ use crate::grid::OccupancyGrid;
 use crate::math;
 use crate::sensor::{LaserConfig, Scan};
 
-use super::{MatchConfig, MatchQuality, ScanMatcher, WINDOW_CELLS};
+use super::{HitMap, MatchConfig, MatchQuality, ScanMatcher, WINDOW_CELLS};
 
 /// When and how a mission matches its scans.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -112,6 +112,7 @@ impl Tracker {
         &mut self,
         config: &LocalizeConfig,
         grid: &OccupancyGrid<N>,
+        hits: &HitMap<N>,
         matcher: &mut ScanMatcher<WINDOW_CELLS>,
         scan: &Scan,
         laser: &LaserConfig,
@@ -134,7 +135,7 @@ impl Tracker {
             return None;
         }
         let predicted = map_from_odom.map_pose(pose_odom);
-        let result = matcher.match_scan(grid, scan, laser, predicted, &config.matcher);
+        let result = matcher.match_scan(grid, hits, scan, laser, predicted, &config.matcher);
         self.matches += 1;
         self.last = Some(result.quality);
         if !result.quality.trusted() {
@@ -169,6 +170,7 @@ impl Tracker {
         &mut self,
         config: &LocalizeConfig,
         grid: &OccupancyGrid<N>,
+        hits: &HitMap<N>,
         matcher: &mut ScanMatcher<WINDOW_CELLS>,
         scan: &Scan,
         laser: &LaserConfig,
@@ -177,8 +179,9 @@ impl Tracker {
         pose_map: &mut Pose2,
     ) {
         if let Some(transform) = map_from_odom.as_mut()
-            && let Some(corrected) =
-                self.on_scan(config, grid, matcher, scan, laser, pose_odom, transform)
+            && let Some(corrected) = self.on_scan(
+                config, grid, hits, matcher, scan, laser, pose_odom, transform,
+            )
         {
             *pose_map = corrected;
         }

@@ -223,6 +223,7 @@ impl<const N: usize> Mission<N> {
         self.localizer.correct(
             &self.config.localize,
             &map.grid,
+            &map.hits,
             &mut map.matcher,
             scan,
             &self.config.laser,
@@ -239,6 +240,10 @@ impl<const N: usize> Mission<N> {
             &mut map.trav,
         )
         .map_err(MissionError::Sensor)?;
+        if self.config.localize.enabled {
+            map.hits
+                .add_scan(scan, &self.config.laser, self.senses.pose_map);
+        }
         self.clear_own_trail(map);
         self.senses.on_scan(now, scan, true);
         self.watch.path_dirty = true;

@@ -76,6 +76,9 @@ pub struct SharedMap<const N: usize> {
     /// Scan-matching working memory (robots integrate their scans one after the other, so one
     /// is enough; [`crate::localize`]).
     pub matcher: crate::localize::ScanMatcher<{ crate::localize::WINDOW_CELLS }>,
+    /// Where the robots' returns landed, at their corrected poses: the map scans are matched
+    /// to (written only with [`MissionConfig::localize`] on; [`crate::localize::hits`]).
+    pub hits: crate::localize::HitMap<N>,
 }
 
 impl<const N: usize> core::fmt::Debug for SharedMap<N> {
@@ -101,6 +104,7 @@ impl<const N: usize> SharedMap<N> {
             marks: [bytemuck::Zeroable::zeroed(); MAX_ROBOTS],
             mark_count: 0,
             matcher: crate::localize::ScanMatcher::new(),
+            hits: crate::localize::HitMap::new(geometry),
         })
     }
 
@@ -117,6 +121,7 @@ impl<const N: usize> SharedMap<N> {
         map.trav
             .set_up_zeroed(geometry, config.traversability)
             .map_err(MissionError::Map)?;
+        map.hits.set_up_zeroed(geometry);
         Ok(map)
     }
 

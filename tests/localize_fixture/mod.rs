@@ -1,5 +1,5 @@
 //! A half-explored House map as a mission draws it, for the scan-matching benchmark and the
-//! no-allocation test: the thesis's inverse sensor model integrates noisy SICK LMS1xx scans
+//! no-allocation test: the thesis's inverse sensor model integrates noisy SICK LMS1xx scans (and the returns layer collects their returns)
 //! taken along a short tour of the house's south-west rooms (true poses), so walls are
 //! occupied only on the faces the laser saw and the rest of the house is Unknown.
 //!
@@ -8,6 +8,7 @@
 
 use papillon::geometry::Pose2;
 use papillon::grid::{LogOddsBounds, OccupancyGrid};
+use papillon::localize::HitMap;
 use papillon::sensor::{LaserConfig, Scan, SensorModel, integrate_scan};
 use papillon_sim::laser::LaserSim;
 use papillon_sim::world::World;
@@ -53,6 +54,8 @@ pub const TOUR: [Pose2; 6] = [
 pub struct HalfExplored {
     pub world: World,
     pub grid: Box<OccupancyGrid<CELLS>>,
+    /// Where the tour's returns landed (the map scans are matched to).
+    pub hits: Box<HitMap<CELLS>>,
     pub laser: LaserConfig,
     sim: LaserSim,
 }
@@ -64,6 +67,7 @@ impl HalfExplored {
         let mut grid =
             OccupancyGrid::<CELLS>::new_boxed(*world.geometry(), LogOddsBounds::default())
                 .expect("the house fits");
+        let mut hits = Box::new(HitMap::<CELLS>::new(*world.geometry()));
         let mut sim = LaserSim::new(laser, 11);
         for pose in TOUR {
             for _ in 0..3 {
@@ -77,11 +81,13 @@ impl HalfExplored {
                     &mut (),
                 )
                 .expect("valid pose and model");
+                hits.add_scan(&scan, &laser, pose);
             }
         }
         Self {
             world,
             grid,
+            hits,
             laser,
             sim,
         }

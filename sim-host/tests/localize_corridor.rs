@@ -1,0 +1,116 @@
+//! Scan matching along a long featureless corridor (issue 18): 43 m long, 2.4 m wide, its end
+//! walls beyond the thesis laser's 4 m for most of the way. The robot drives its length with
+//! odometry that over-counts distance by 2 % and turns 0.15° left per metre driven; the scans
+//! are matched and integrated as a mission does (`papillon::localize::Tracker`). Across the
+//! corridor and in heading the walls pin the pose down, so the matcher must hold it (within
+//! 10 cm); along it nothing does, so the matcher must keep the odometry there (its error stays
+//! within the odometry's own) instead of jumping.
+//!
+//! Today it holds across the corridor and in heading but not along it (ignored; run with
+//! `cargo test -p papillon-sim --test localize_corridor -- --ignored`).
+
+use papillon::control::odometry::MapFromOdom;
+use papillon::geometry::{Pose2, normalize_angle};
+use papillon::grid::{GridGeometry, LogOddsBounds, OccupancyGrid};
+use papillon::localize::{HitMap, LocalizeConfig, ScanMatcher, Tracker, WINDOW_CELLS};
+use papillon::math;
+use papillon::mission::MissionConfig;
+use papillon::sensor::integrate_scan;
+use papillon_sim::laser::LaserSim;
+use papillon_sim::world::World;
+
+const CELLS: usize = 440 * 40;
+
+#[test]
+#[ignore = "issue 18, not met yet: the matcher pulls the estimate back along the corridor \
+            (5.6 m behind after 40 m, odometry alone 0.7 m; docs/experiments.md, Localisation)"]
+fn along_a_featureless_corridor_the_odometry_is_kept_and_the_walls_hold_the_rest() {
+    let geom = GridGeometry::from_extent(44.0, 4.0, 0.1, Default::default()).unwrap();
+    let mut world = World::new("corridor", geom);
+    world.fill_rect(0.0, 0.0, 44.0, 0.8, true);
+    world.fill_rect(0.0, 3.2, 44.0, 4.0, true);
+    world.fill_rect(0.0, 0.0, 0.5, 4.0, true);
+    world.fill_rect(43.5, 0.0, 44.0, 4.0, true);
+
+    let mission = MissionConfig::default();
+    let laser_cfg = mission.laser;
+    let mut laser = LaserSim::new(laser_cfg, 3);
+    let mut grid = OccupancyGrid::<CELLS>::new_boxed(geom, LogOddsBounds::default()).unwrap();
+    let mut hits = Box::new(HitMap::<CELLS>::new(geom));
+    let mut matcher = Box::new(ScanMatcher::<WINDOW_CELLS>::new());
+    let config = LocalizeConfig {
+        enabled: true,
+        ..LocalizeConfig::default()
+    };
+    let mut tracker = Tracker::new();
+
+    let start = Pose2::new(1.5, 2.0, 0.0);
+    let step_m = 0.03;
+    let mut odom = Pose2::new(0.0, 0.0, 0.0);
+    let mut transform = MapFromOdom::from_start(start, odom);
+    let mut worst_across: f32 = 0.0;
+    let mut worst_heading: f32 = 0.0;
+    let (mut truth, mut estimate) = (start, start);
+    let steps = (40.0 / step_m) as usize;
+    let mut counts = [0u32; 4];
+    let mut along_sum = 0.0f32;
+    for k in 0..=steps {
+        truth = Pose2::new(start.x + k as f32 * step_m, start.y, 0.0);
+        if k > 0 {
+            // Odometry: 2 % long, 0.15° left per metre.
+            let d = step_m * 1.02;
+            let turn = (0.15f32).to_radians() * step_m;
+            odom = Pose2::new(
+                odom.x + d * math::cos(odom.theta),
+                odom.y + d * math::sin(odom.theta),
+                odom.theta + turn,
+            );
+        }
+        let scan = laser.scan(&world, truth, &[]);
+        estimate = tracker
+            .on_scan(
+                &config,
+                &grid,
+                &hits,
+                &mut matcher,
+                &scan,
+                &laser_cfg,
+                odom,
+                &mut transform,
+            )
+            .unwrap_or_else(|| transform.map_pose(odom));
+        integrate_scan(
+            &mut grid,
+            &scan,
+            estimate,
+            &laser_cfg,
+            &mission.sensor,
+            &mut (),
+        )
+        .unwrap();
+        hits.add_scan(&scan, &laser_cfg, estimate);
+        if let Some(q) = tracker.last() {
+            counts[q.constrained as usize] += 1;
+            along_sum += q.correction[0];
+        }
+        worst_across = worst_across.max((estimate.y - truth.y).abs());
+        worst_heading = worst_heading.max(normalize_angle(estimate.theta - truth.theta).abs());
+    }
+    let odometry_only = MapFromOdom::from_start(start, Pose2::new(0.0, 0.0, 0.0)).map_pose(odom);
+    let along_matched = (estimate.x - truth.x).abs();
+    let along_odometry = (odometry_only.x - truth.x).abs();
+    assert!(tracker.trusted() > steps as u32 / 2, "{tracker:?}");
+    assert!(
+        worst_across <= 0.10,
+        "across the corridor: {worst_across} m (odometry alone ends {} m off)",
+        (odometry_only.y - truth.y).abs()
+    );
+    assert!(worst_heading <= 0.05, "heading: {worst_heading} rad");
+    assert!(
+        along_matched <= along_odometry + 0.05,
+        "along the corridor: {along_matched} m (estimate - truth {} m), odometry alone \
+         {along_odometry} m; matches by directions constrained {counts:?}, corrections along \
+         summed {along_sum} m",
+        estimate.x - truth.x
+    );
+}
