@@ -25,6 +25,7 @@ pub mod memo;
 pub mod nearest_frontier;
 pub mod objective;
 pub mod optimized;
+pub mod reachable;
 pub mod view_cache;
 
 #[cfg(all(test, feature = "std"))]
@@ -36,6 +37,7 @@ pub use frontier_utility::FrontierUtility;
 pub use nearest_frontier::NearestFrontier;
 pub use objective::ExploreObjective;
 pub use optimized::{InitialPopulation, Optimized};
+pub use reachable::ReachableViewpoints;
 pub use view_cache::{ViewCache, ViewCacheStats};
 
 use crate::control::follower::MAX_WAYPOINTS;
@@ -94,9 +96,45 @@ pub enum Outcome {
     Done,
 }
 
+/// What the optimizers maximise (see [`objective`](objective#objectives)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ObjectiveKind {
+    /// The thesis's objective: predicted gain along the path to any point of the map, with
+    /// the energy only checked against the battery (`--objective thesis`, for the
+    /// reproduction experiments).
+    Thesis,
+    /// Targets snapped to viewpoints the robot can reach next to frontiers, scored by gain
+    /// discounted by the path's energy, with a bonus for small unknown pockets (the default).
+    #[default]
+    Efficient,
+}
+
+impl ObjectiveKind {
+    /// The kind named `name` (`thesis` or `efficient`, as the CLI and the board file spell
+    /// them).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "thesis" => Some(Self::Thesis),
+            "efficient" => Some(Self::Efficient),
+            _ => None,
+        }
+    }
+
+    /// The name [`Self::from_name`] reads.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Thesis => "thesis",
+            Self::Efficient => "efficient",
+        }
+    }
+}
+
 /// Exploration settings shared by the selectors.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExploreConfig {
+    /// What the optimizers maximise (default [`ObjectiveKind::Efficient`]; the frontier rules
+    /// ignore it).
+    pub objective: ObjectiveKind,
     /// Targets per decision, k (1 = the thesis's short-term strategy; at most [`MAX_TARGETS`]).
     pub targets: usize,
     /// Energy kept in reserve: a plan costing more than `battery - reserve` is infeasible
@@ -118,6 +156,7 @@ pub struct ExploreConfig {
 impl Default for ExploreConfig {
     fn default() -> Self {
         Self {
+            objective: ObjectiveKind::default(),
             targets: 1,
             reserve_steps: 0.0,
             cost_weight: None,

@@ -61,14 +61,21 @@ use crate::units;
 
 use super::evaluation::{CandidateStatus, Evaluation, WORST_FITNESS};
 use super::memo::EvalMemo;
+use super::reachable::ReachableViewpoints;
 use super::view_cache::{ViewCache, ViewCacheStats};
-use super::{Blacklist, DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS};
+use super::{Blacklist, DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS, ObjectiveKind};
 use crate::control::follower::MAX_WAYPOINTS;
 
 /// Most cells in one leg of a planned path.
 pub const MAX_LEG_CELLS: usize = 4096;
 /// Most predicted scans along one candidate's path.
 pub const MAX_VIEWPOINTS: usize = 1024;
+/// Discount of the efficient objective's gain per step of energy, lambda in
+/// `gain · exp(-lambda · steps)` \[1/step\].
+pub const EFFICIENCY_LAMBDA_PER_STEP: f32 = 0.5;
+/// Under the efficient objective, a point within this share of the laser's range of a
+/// frontier viewpoint is kept as a target if its cell is reachable and known Free.
+pub const NEAR_FRONTIER_SHARE_OF_RANGE: f32 = 0.5;
 
 /// The objective's working memory and the state of the current decision. Paths through the
 /// targets are planned by `P` (A* unless a test double stands in).
@@ -92,6 +99,7 @@ pub struct ExploreObjective<'m, const N: usize, P: Planner<N> = AStar<N>> {
     memo: EvalMemo,
     views: Option<&'m mut ViewCache>,
     cached: bool,
+    reachable: ReachableViewpoints,
 }
 
 impl<const N: usize, P: Planner<N>> core::fmt::Debug for ExploreObjective<'_, N, P> {
@@ -151,6 +159,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             memo: EvalMemo::new(),
             views,
             cached: false,
+            reachable: ReachableViewpoints::new(),
         }
     }
 
@@ -204,6 +213,10 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         self.budget_steps = req.battery_steps - config.reserve_steps;
         self.config = *config;
         self.memo.clear();
+        if predict && config.objective == ObjectiveKind::Efficient {
+            self.reachable.near_m = req.laser.max_range_m * NEAR_FRONTIER_SHARE_OF_RANGE;
+            self.reachable.collect(req.grid, req.trav, self.field);
+        }
         self.cached = match self.views.as_deref_mut() {
             Some(v) => {
                 v.boxes.build(req.trav);
@@ -309,8 +322,40 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         eval
     }
 
+    /// The frontier viewpoints of the current decision (listed by [`Self::prepare`] for the
+    /// efficient objective).
+    pub fn reachable_viewpoints(&self) -> &ReachableViewpoints {
+        &self.reachable
+    }
+
+    /// Moves each target to the cell the robot would use for it ([`ReachableViewpoints::snap`])
+    /// under the efficient objective (the thesis's targets stay where they are). Returns
+    /// `false` if a target could not be snapped (no frontier viewpoint listed, or outside the
+    /// grid).
+    pub fn snap_targets(&self, req: &DecisionRequest<'_, N>, targets: &mut [Point2]) -> bool {
+        if self.config.objective != ObjectiveKind::Efficient {
+            return true;
+        }
+        let geom = req.grid.geometry();
+        for t in targets.iter_mut() {
+            let Some(cell) = geom.cell_at(*t) else {
+                return false;
+            };
+            match self.reachable.snap(cell, req.grid, req.trav, self.field) {
+                Some(c) => *t = geom.cell_center(c),
+                None => return false,
+            }
+        }
+        true
+    }
+
     /// The scaled fitness of a feasible plan.
     fn fitness_of(&self, gain: u32, steps: f32) -> f32 {
+        if self.config.objective == ObjectiveKind::Efficient {
+            let score = gain as f32 * math::exp(-EFFICIENCY_LAMBDA_PER_STEP * steps);
+            let max = (self.unknown_cells as f32).max(1.0);
+            return -(score / max).min(1.0);
+        }
         let gain = gain as f32;
         let mut score = match self.config.cost_weight {
             Some(lambda) => (gain - lambda * steps).max(0.0),
@@ -512,6 +557,11 @@ impl<const N: usize, P: Planner<N>> BoundObjective<'_, '_, '_, N, P> {
     pub(crate) fn field(&self) -> &DistanceField<N> {
         self.objective.field
     }
+
+    /// The decision's frontier viewpoints (efficient objective).
+    pub(crate) fn viewpoints(&self) -> &ReachableViewpoints {
+        &self.objective.reachable
+    }
 }
 
 impl<const N: usize, P: Planner<N>> Problem for BoundObjective<'_, '_, '_, N, P> {
@@ -545,6 +595,15 @@ impl<const N: usize, P: Planner<N>> Problem for BoundObjective<'_, '_, '_, N, P>
         }
         if !inside {
             return self.objective.evaluate_targets(self.req, &pts[..k]).fitness;
+        }
+        if self.objective.config.objective == ObjectiveKind::Efficient {
+            if !self.objective.snap_targets(self.req, &mut pts[..k]) {
+                return WORST_FITNESS;
+            }
+            for (i, p) in pts[..k].iter().enumerate() {
+                // Snapped points are cell centres inside the grid.
+                cells[i] = geom.index(geom.cell_at_unchecked(*p)).unwrap_or(0) as u32;
+            }
         }
         if let Some(list) = self.blacklist
             && pts[..k]

@@ -930,3 +930,87 @@ fn a_replan_plans_the_same_path_as_an_evaluation_without_predicting_gain() {
     // Both feasible and refused candidates were compared.
     assert!(statuses.len() >= 2, "{statuses:?}");
 }
+
+// The thesis objective's decisions on the house fixture, recorded before the default objective
+// changed (issue 17): `--objective thesis` must keep making exactly these.
+
+/// One decision, fingerprinted: targets \[mm\], predicted gain \[cells\], energy \[centisteps\],
+/// evaluations.
+type Fingerprint = (Vec<(i32, i32)>, u32, i32, u32);
+
+fn thesis_fingerprints() -> Vec<Fingerprint> {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let mut mem = Memory::<HOUSE_CELLS>::new();
+    let mut obj = mem.objective();
+    let poses = [
+        Pose2::new(1.5, 1.5, 0.0),
+        Pose2::new(3.05, 3.05, 1.57),
+        Pose2::new(0.85, 4.45, -1.0),
+    ];
+    let mut out = Vec::new();
+    for (method, k) in [(Method::Xboa, 1), (Method::Xboa, 2), (Method::Pso, 1)] {
+        for pose in poses {
+            for seed in [25u64, 26, 27] {
+                let req = DecisionRequest {
+                    pose,
+                    battery_steps: 120.0,
+                    ..house_request(&maps, &laser)
+                };
+                let config = ExploreConfig {
+                    objective: ObjectiveKind::Thesis,
+                    targets: k,
+                    ..ExploreConfig::default()
+                };
+                let mut sel = Optimized::new(method, config, &mut obj);
+                let Outcome::Go(d) = sel.decide(&req, &mut seeded(seed)).unwrap() else {
+                    panic!("done at {pose:?}");
+                };
+                let mm = |v: f32| (v * 1000.0).round() as i32;
+                out.push((
+                    d.targets.iter().map(|p| (mm(p.x), mm(p.y))).collect(),
+                    d.predicted_gain_cells,
+                    (d.energy_steps * 100.0).round() as i32,
+                    d.evaluations,
+                ));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_thesis_objective_makes_the_decisions_recorded_before_issue_17() {
+    // xBOA k = 1, xBOA k = 2, PSO k = 1; each from three poses with seeds 25, 26, 27 (recorded
+    // on the thesis objective of commit b20c221, before any other objective existed).
+    let recorded: Vec<Fingerprint> = vec![
+        (vec![(21550, 21050)], 19980, 2939, 258),
+        (vec![(15550, 21550)], 17198, 2661, 250),
+        (vec![(17950, 22450)], 18293, 2891, 242),
+        (vec![(21650, 21150)], 20021, 2899, 258),
+        (vec![(15550, 21550)], 17175, 2453, 250),
+        (vec![(17950, 22450)], 18319, 2683, 242),
+        (vec![(21650, 20850)], 19866, 2861, 258),
+        (vec![(15550, 21550)], 17415, 2615, 250),
+        (vec![(17950, 22450)], 18324, 2713, 242),
+        (vec![(21550, 23550), (13050, 150)], 32125, 6061, 255),
+        (vec![(20550, 22750), (450, 18450)], 29252, 5483, 246),
+        (vec![(18850, 21650), (20650, 4850)], 30599, 4878, 240),
+        (vec![(21550, 23550), (13050, 150)], 32140, 5853, 255),
+        (vec![(20550, 22750), (450, 18450)], 29312, 5276, 246),
+        (vec![(18850, 21650), (20650, 4850)], 30616, 4670, 240),
+        (vec![(21550, 23550), (13050, 150)], 32592, 5868, 255),
+        (vec![(20550, 17350), (450, 20250)], 30134, 4895, 246),
+        (vec![(18850, 21650), (20650, 4850)], 30759, 4687, 240),
+        (vec![(23050, 22750)], 20008, 3166, 155),
+        (vec![(22750, 22350)], 19996, 3116, 155),
+        (vec![(23950, 23950)], 19987, 3316, 155),
+        (vec![(22050, 22150)], 20025, 3002, 155),
+        (vec![(21250, 21550)], 20063, 2906, 155),
+        (vec![(21750, 22050)], 20037, 2976, 155),
+        (vec![(21650, 20650)], 19843, 2848, 155),
+        (vec![(23950, 22650)], 19851, 3153, 155),
+        (vec![(23950, 22650)], 19851, 3153, 155),
+    ];
+    assert_eq!(thesis_fingerprints(), recorded);
+}
