@@ -398,6 +398,6 @@ fn the_objective_is_optional_and_named() {
         );
         let c = BoardConfig::from_json(json.as_bytes()).unwrap();
         assert_eq!(c.objective(), Some(kind));
-        assert_eq!(problems(&c), Vec::<String>::new());
+        assert_eq!(paths(&c), Vec::<String>::new());
     }
 }

@@ -140,6 +140,16 @@ pub struct ExploreConfig {
     /// Energy kept in reserve: a plan costing more than `battery - reserve` is infeasible
     /// \[steps\].
     pub reserve_steps: f32,
+    /// The efficient objective's discount per step of energy, lambda in
+    /// `gain · exp(-lambda · steps)` \[1/step\] (default
+    /// [`objective::EFFICIENCY_LAMBDA_PER_STEP`]).
+    pub efficiency_per_step: f32,
+    /// The efficient objective's factor on a candidate clearing a small unknown pocket
+    /// (default [`objective::POCKET_BONUS`]; 1 = no bonus).
+    pub pocket_bonus: f32,
+    /// The efficient objective ends each plan this far before the frontier viewpoint it
+    /// aims at \[m\] (default [`objective::SETBACK_M`]; 0 = drive up to it).
+    pub setback_m: f32,
     /// Optional cost weight lambda: score = gain - lambda * steps (clamped at 0) \[cells/step\].
     /// `None` (default): the thesis's pure gain.
     pub cost_weight: Option<f32>,
@@ -159,6 +169,9 @@ impl Default for ExploreConfig {
             objective: ObjectiveKind::default(),
             targets: 1,
             reserve_steps: 0.0,
+            efficiency_per_step: objective::EFFICIENCY_LAMBDA_PER_STEP,
+            pocket_bonus: objective::POCKET_BONUS,
+            setback_m: objective::SETBACK_M,
             cost_weight: None,
             gain_per_step: false,
             viewpoint_spacing_m: 0.5,

@@ -73,6 +73,13 @@ pub const MAX_VIEWPOINTS: usize = 1024;
 /// Discount of the efficient objective's gain per step of energy, lambda in
 /// `gain · exp(-lambda · steps)` \[1/step\].
 pub const EFFICIENCY_LAMBDA_PER_STEP: f32 = 0.5;
+/// How far before the frontier viewpoint the efficient objective ends a plan \[m\]
+/// ([`ExploreConfig::setback_m`]).
+pub const SETBACK_M: f32 = 1.0;
+/// Factor on the efficient objective's score of a candidate that clears a small unknown
+/// pocket ([`super::reachable::Viewpoint::pocket`]), so that it is not left behind for a long
+/// trip back.
+pub const POCKET_BONUS: f32 = 2.0;
 /// Under the efficient objective, a point within this share of the laser's range of a
 /// frontier viewpoint is kept as a target if its cell is reachable and known Free.
 pub const NEAR_FRONTIER_SHARE_OF_RANGE: f32 = 0.5;
@@ -100,6 +107,9 @@ pub struct ExploreObjective<'m, const N: usize, P: Planner<N> = AStar<N>> {
     views: Option<&'m mut ViewCache>,
     cached: bool,
     reachable: ReachableViewpoints,
+    /// Plans of this decision end [`ExploreConfig::setback_m`] short (efficient objective,
+    /// not a re-plan).
+    set_back_plans: bool,
 }
 
 impl<const N: usize, P: Planner<N>> core::fmt::Debug for ExploreObjective<'_, N, P> {
@@ -160,6 +170,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             views,
             cached: false,
             reachable: ReachableViewpoints::new(),
+            set_back_plans: false,
         }
     }
 
@@ -213,7 +224,9 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         self.budget_steps = req.battery_steps - config.reserve_steps;
         self.config = *config;
         self.memo.clear();
-        if predict && config.objective == ObjectiveKind::Efficient {
+        let efficient = predict && config.objective == ObjectiveKind::Efficient;
+        self.set_back_plans = efficient && config.setback_m > 0.0;
+        if efficient {
             self.reachable.near_m = req.laser.max_range_m * NEAR_FRONTIER_SHARE_OF_RANGE;
             self.reachable.collect(req.grid, req.trav, self.field);
         }
@@ -295,7 +308,9 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             }
             _ => self.predict_gain(req.grid, req.laser),
         };
-        eval.fitness = self.fitness_of(eval.gain_cells, eval.energy_steps);
+        let pocket =
+            self.config.objective == ObjectiveKind::Efficient && self.clears_pocket(req.grid);
+        eval.fitness = self.fitness_of(eval.gain_cells, eval.energy_steps, pocket);
         eval
     }
 
@@ -320,6 +335,12 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             eval.status = CandidateStatus::OverBudget;
         }
         eval
+    }
+
+    /// Plans of this decision end short of their viewpoints ([`ExploreConfig::setback_m`]) or
+    /// (`false`) go all the way, until the next [`Self::prepare`].
+    pub(crate) fn set_back(&mut self, on: bool) -> bool {
+        core::mem::replace(&mut self.set_back_plans, on)
     }
 
     /// The frontier viewpoints of the current decision (listed by [`Self::prepare`] for the
@@ -349,10 +370,29 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         true
     }
 
+    /// Whether a target of the last planned candidate clears a small unknown pocket: it lies
+    /// in the block of a listed viewpoint that is a [pocket](super::reachable::Viewpoint::pocket).
+    fn clears_pocket(&self, grid: &OccupancyGrid<N>) -> bool {
+        let geom = grid.geometry();
+        let side = self.reachable.block_cells();
+        self.targets().iter().any(|&t| {
+            let c = geom.cell_at_unchecked(t);
+            self.reachable
+                .nearest(c)
+                .is_some_and(|(v, d2)| v.pocket && d2 <= side * side)
+        })
+    }
+
     /// The scaled fitness of a feasible plan.
-    fn fitness_of(&self, gain: u32, steps: f32) -> f32 {
+    fn fitness_of(&self, gain: u32, steps: f32, pocket: bool) -> f32 {
         if self.config.objective == ObjectiveKind::Efficient {
-            let score = gain as f32 * math::exp(-EFFICIENCY_LAMBDA_PER_STEP * steps);
+            let bonus = if pocket {
+                self.config.pocket_bonus
+            } else {
+                1.0
+            };
+            let lambda = self.config.efficiency_per_step;
+            let score = bonus * gain as f32 * math::exp(-lambda * steps);
             let max = (self.unknown_cells as f32).max(1.0);
             return -(score / max).min(1.0);
         }
@@ -379,7 +419,9 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
     ) -> Result<(), CandidateStatus> {
         let geom = *req.grid.geometry();
         let mut prev = self.start_cell;
+        let mut last_leg = 0;
         for (k, &t) in targets.iter().enumerate() {
+            last_leg = self.waypoint_len.saturating_sub(1);
             let cell = geom.cell_at(t).ok_or(CandidateStatus::OutOfBounds)?;
             if !req.trav.is_passable(cell) {
                 return Err(CandidateStatus::Blocked);
@@ -420,6 +462,9 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         if self.waypoint_len > 0 {
             self.waypoints[0] = self.start.position();
         }
+        if self.set_back_plans {
+            self.trim_last_leg(last_leg, &geom);
+        }
         let mut heading = self.start.theta;
         let mut length = 0.0f32;
         let mut rotation = 0.0f32;
@@ -437,6 +482,32 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         eval.path_length_m = length;
         eval.energy_steps = units::steps(length, rotation);
         Ok(())
+    }
+
+    /// Ends the last leg (from waypoint `from` on) [`ExploreConfig::setback_m`] before its
+    /// end, at the centre of the cell there, which becomes the last target: the laser sees the
+    /// frontier ahead from there without the drive up to it. A leg no longer than the setback
+    /// is kept whole.
+    fn trim_last_leg(&mut self, from: usize, geom: &crate::grid::GridGeometry) {
+        let mut left = self.config.setback_m;
+        let mut end = self.waypoint_len;
+        while end >= 2 && end - 1 > from {
+            let (a, b) = (self.waypoints[end - 2], self.waypoints[end - 1]);
+            let d = a.distance(b);
+            if d > left {
+                let f = (d - left) / d;
+                let cut = Point2::new(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
+                let centre = geom.cell_center(geom.cell_at_unchecked(cut));
+                self.waypoints[end - 1] = centre;
+                self.waypoint_len = end;
+                if self.target_len > 0 {
+                    self.targets[self.target_len - 1] = centre;
+                }
+                return;
+            }
+            left -= d;
+            end -= 1;
+        }
     }
 
     /// Predicted scan poses along the waypoint polyline.
@@ -558,6 +629,11 @@ impl<const N: usize, P: Planner<N>> BoundObjective<'_, '_, '_, N, P> {
         self.objective.field
     }
 
+    /// The decision's settings.
+    pub(crate) fn config(&self) -> &ExploreConfig {
+        &self.objective.config
+    }
+
     /// The decision's frontier viewpoints (efficient objective).
     pub(crate) fn viewpoints(&self) -> &ReachableViewpoints {
         &self.objective.reachable
@@ -615,7 +691,15 @@ impl<const N: usize, P: Planner<N>> Problem for BoundObjective<'_, '_, '_, N, P>
         if let Some(eval) = self.objective.memo.get(&cells[..k]) {
             return eval.fitness;
         }
-        let eval = self.objective.evaluate_targets(self.req, &pts[..k]);
+        let mut eval = self.objective.evaluate_targets(self.req, &pts[..k]);
+        // A plan set back short of its viewpoint ends elsewhere: that end must not be a
+        // place the robot failed to reach either.
+        if let Some(list) = self.blacklist
+            && self.objective.set_back_plans
+            && self.objective.targets().iter().any(|&t| list.contains(t))
+        {
+            eval.fitness = WORST_FITNESS;
+        }
         self.objective.memo.put(&cells[..k], eval);
         eval.fitness
     }

@@ -145,7 +145,10 @@ impl<const N: usize, P: Planner<N>> TargetSelector<N> for Optimized<'_, '_, N, P
         // Every candidate was infeasible, blacklisted or blind (nothing Unknown in view), yet
         // reachable Unknown space is left: go to the nearest frontier the robot has not
         // failed to reach, so that a decision is never wasted.
+        // It drives up to that frontier, as nearest-frontier would (no set-back).
+        let was = self.objective.set_back(false);
         let eval = self.objective.evaluate_targets(req, &[fallback]);
+        self.objective.set_back(was);
         self.objective
             .decision(&eval, evaluations + 1, opt.history())
             .map(Outcome::Go)
@@ -205,7 +208,7 @@ fn near_viewpoints<const N: usize, P: Planner<N>, R: rand_core::Rng>(
     let dim = problem.dim();
     let seeded = (SEEDED_SHARE * size as f32).ceil() as usize;
     let list = problem.viewpoints().as_slice();
-    let lambda = super::objective::EFFICIENCY_LAMBDA_PER_STEP;
+    let lambda = problem.config().efficiency_per_step;
     let rank = |v: &super::reachable::Viewpoint| {
         v.frontier_cells as f32 * crate::math::exp(-lambda * v.distance_m)
     };

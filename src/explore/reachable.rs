@@ -33,6 +33,8 @@ use crate::planner::{DistanceField, Traversability};
 
 /// Most frontier viewpoints listed per decision.
 pub const MAX_VIEWPOINTS: usize = 512;
+/// Most frontier cells of a [`Viewpoint::pocket`].
+pub const POCKET_FRONTIER_CELLS: u16 = 12;
 /// Side of the blocks that each contribute one viewpoint \[cells\] (before any doubling).
 pub const BLOCK_CELLS: i32 = 5;
 /// Most blocks across the grid in one row of blocks (grids up to 1280 cells wide at
@@ -48,6 +50,9 @@ pub struct Viewpoint {
     pub distance_m: f32,
     /// Frontier cells touched by the viewpoints of its block.
     pub frontier_cells: u16,
+    /// A small unknown pocket: at most [`POCKET_FRONTIER_CELLS`] frontier cells, and no
+    /// neighbouring block (of the 8 around its own) with a viewpoint.
+    pub pocket: bool,
     /// Block coordinates (column, row) at the decision's block side.
     block: (i32, i32),
 }
@@ -66,6 +71,7 @@ const NO_VIEWPOINT: Viewpoint = Viewpoint {
     cell: Cell::new(0, 0),
     distance_m: 0.0,
     frontier_cells: 0,
+    pocket: false,
     block: (0, 0),
 };
 
@@ -111,6 +117,10 @@ impl ReachableViewpoints {
             if block > width.max(grid.geometry().height as i32) * 2 {
                 break;
             }
+        }
+        for i in 0..self.len {
+            let v = self.list[i];
+            self.list[i].pocket = v.frontier_cells <= POCKET_FRONTIER_CELLS && self.is_isolated(&v);
         }
         self.len
     }
@@ -166,6 +176,7 @@ impl ReachableViewpoints {
                             cell: c,
                             distance_m: d,
                             frontier_cells: touches,
+                            pocket: false,
                             block: (bc as i32, block_row),
                         };
                         self.len += 1;

@@ -214,6 +214,7 @@ fn the_path_visits_the_targets_in_order_and_costs_its_length_plus_turns() {
     let mut obj = mem.objective();
     let config = ExploreConfig {
         targets: 1,
+        objective: ObjectiveKind::Thesis,
         ..ExploreConfig::default()
     };
     obj.prepare(&req, &config).unwrap();
@@ -252,6 +253,7 @@ fn infeasible_or_blocked_candidates_always_score_worst() {
         let config = ExploreConfig {
             targets: k,
             reserve_steps: 1.0,
+            objective: ObjectiveKind::Thesis,
             ..ExploreConfig::default()
         };
         obj.prepare(&req, &config).unwrap();
@@ -368,6 +370,7 @@ fn the_optimized_selector_beats_the_median_random_candidate() {
     let config = ExploreConfig {
         population: 10,
         max_generations: 20,
+        objective: ObjectiveKind::Thesis,
         ..ExploreConfig::default()
     };
     let Outcome::Go(best) = Optimized::new(Method::Xboa, config, &mut obj)
@@ -621,6 +624,7 @@ fn remembered_evaluations_equal_fresh_ones() {
     for k in [1usize, 2] {
         let config = ExploreConfig {
             targets: k,
+            objective: ObjectiveKind::Thesis,
             ..ExploreConfig::default()
         };
         obj.prepare(&req, &config).unwrap();
@@ -841,6 +845,7 @@ fn without_a_feasible_candidate_the_optimizer_falls_back_to_the_nearest_frontier
     let config = ExploreConfig {
         population: 2,
         max_generations: 1,
+        objective: ObjectiveKind::Thesis,
         ..ExploreConfig::default()
     };
     let mut fell_back = 0;
@@ -908,6 +913,7 @@ fn a_replan_plans_the_same_path_as_an_evaluation_without_predicting_gain() {
     let mut statuses = std::collections::HashSet::new();
     for k in [1usize, 2] {
         let config = ExploreConfig {
+            objective: ObjectiveKind::Thesis,
             targets: k,
             ..ExploreConfig::default()
         };
@@ -1013,4 +1019,136 @@ fn the_thesis_objective_makes_the_decisions_recorded_before_issue_17() {
         (vec![(23950, 22650)], 19851, 3153, 155),
     ];
     assert_eq!(thesis_fingerprints(), recorded);
+}
+
+// The efficient objective (issue 17): targets the robot can reach, next to frontiers.
+
+#[test]
+fn frontier_viewpoints_are_reachable_free_cells_touching_unknown_space() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    obj.prepare(&req, &ExploreConfig::default()).unwrap();
+    let g = *grid.geometry();
+    let list = obj.reachable_viewpoints().as_slice().to_vec();
+    // The known part ends at column 19; one viewpoint per 5-cell block along it, except
+    // where the walls and their inflation leave no passable cell.
+    assert!(list.len() >= 5, "{list:?}");
+    for v in &list {
+        assert_eq!(grid.class_of(v.cell), Some(CellClass::Free), "{v:?}");
+        assert!(obj.field().is_reachable(v.cell), "{v:?}");
+        assert_eq!(v.cell.col, 19, "{v:?}");
+        assert!(v.frontier_cells >= 1 && !v.pocket, "{v:?}");
+    }
+    // Points in Unknown space, inside the closed box or beyond the grid's known part, snap to
+    // a listed viewpoint; a known Free reachable point near one is kept.
+    let mut config = ExploreConfig::default();
+    config.setback_m = 0.0;
+    obj.prepare(&req, &config).unwrap();
+    for (x, y) in [(5.05, 3.05), (4.05, 1.05), (2.55, 2.05)] {
+        let mut p = [Point2::new(x, y)];
+        assert!(obj.snap_targets(&req, &mut p));
+        let c = g.cell_at(p[0]).unwrap();
+        assert!(list.iter().any(|v| v.cell == c), "({x}, {y}) -> {c:?}");
+    }
+    let mut near = [Point2::new(1.35, 2.05)];
+    assert!(obj.snap_targets(&req, &mut near));
+    assert_eq!(
+        near[0],
+        g.cell_center(g.cell_at(Point2::new(1.35, 2.05)).unwrap())
+    );
+    // The thesis's objective leaves its targets where they are.
+    config.objective = ObjectiveKind::Thesis;
+    obj.prepare(&req, &config).unwrap();
+    let mut far = [Point2::new(5.05, 3.05)];
+    assert!(obj.snap_targets(&req, &mut far));
+    assert_eq!(far[0], Point2::new(5.05, 3.05));
+}
+
+#[test]
+fn the_efficient_objective_stops_short_of_the_viewpoint_by_the_setback() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    let target = [Point2::new(1.95, 3.05)];
+    let mut lengths = Vec::new();
+    for setback_m in [0.0, 1.0] {
+        let config = ExploreConfig {
+            setback_m,
+            ..ExploreConfig::default()
+        };
+        obj.prepare(&req, &config).unwrap();
+        let eval = obj.evaluate_targets(&req, &target);
+        assert_eq!(eval.status, CandidateStatus::Feasible);
+        assert!(eval.gain_cells > 0);
+        lengths.push(eval.path_length_m);
+        let end = *obj.waypoints().last().unwrap();
+        assert_eq!(obj.targets(), [end]);
+    }
+    let shorter = lengths[0] - lengths[1];
+    assert!((shorter - 1.0).abs() < 0.1, "{lengths:?}");
+}
+
+#[test]
+fn the_efficient_objective_prefers_the_cheaper_of_two_equal_gains() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    obj.prepare(&req, &ExploreConfig::default()).unwrap();
+    let a = obj.evaluate_targets(&req, &[Point2::new(1.95, 2.05)]);
+    let b = obj.evaluate_targets(&req, &[Point2::new(1.95, 3.55)]);
+    assert!(a.energy_steps < b.energy_steps, "{a:?} {b:?}");
+    // Score = gain · exp(-lambda · steps), scaled by the Unknown cells.
+    let lambda = ExploreConfig::default().efficiency_per_step;
+    for e in [a, b] {
+        let expected = -(e.gain_cells as f32 * math::exp(-lambda * e.energy_steps))
+            / obj.unknown_cells() as f32;
+        assert!((e.fitness - expected).abs() < 1e-6, "{e:?}");
+    }
+}
+
+#[test]
+fn efficient_decisions_on_the_house_fixture_aim_at_reachable_known_free_cells() {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let req = house_request(&maps, &laser);
+    let mut mem = Memory::<HOUSE_CELLS>::new();
+    let mut obj = mem.objective();
+    let g = *maps.0.geometry();
+    for seed in 25u64..30 {
+        for objective in [ObjectiveKind::Efficient, ObjectiveKind::Thesis] {
+            let config = ExploreConfig {
+                objective,
+                ..ExploreConfig::default()
+            };
+            let mut sel = Optimized::new(Method::Xboa, config, &mut obj);
+            let Outcome::Go(d) = sel.decide(&req, &mut seeded(seed)).unwrap() else {
+                panic!("done");
+            };
+            let t = g.cell_at(d.targets[0]).unwrap();
+            let known_free = maps.0.class_of(t) == Some(CellClass::Free);
+            match objective {
+                ObjectiveKind::Efficient => {
+                    assert!(known_free && obj.field().is_reachable(t), "{seed}: {d:?}");
+                    // Within the laser's range of a frontier cell.
+                    let near = (0..g.cell_count()).any(|i| {
+                        crate::frontier::is_frontier_cell(&maps.0, i)
+                            && g.cell_center(g.cell(i)).distance(d.targets[0]) <= laser.max_range_m
+                    });
+                    assert!(near, "{seed}: {d:?}");
+                }
+                // The thesis's targets lie in Unknown space (the problem of issue 17).
+                ObjectiveKind::Thesis => assert!(!known_free, "{seed}: {d:?}"),
+            }
+        }
+    }
 }
