@@ -292,6 +292,12 @@ impl Setup {
     }
 }
 
+/// The objective named `name` (`--objective`, a sweep's `objective`); the error is one line.
+pub fn objective_from_name(name: &str) -> Result<ObjectiveKind, String> {
+    ObjectiveKind::from_name(name)
+        .ok_or_else(|| format!("--objective: expected efficient or thesis, got '{name}'"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -323,10 +329,4 @@ mod tests {
         assert_eq!(s.run.mission.explore.targets, 1);
         assert_eq!(s.run.body.slip, SlipConfig::thesis());
     }
-}
-
-/// The objective named `name` (`--objective`, a sweep's `objectives`); the error is one line.
-pub fn objective_from_name(name: &str) -> Result<ObjectiveKind, String> {
-    ObjectiveKind::from_name(name)
-        .ok_or_else(|| format!("--objective: expected efficient or thesis, got '{name}'"))
 }

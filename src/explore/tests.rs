@@ -1045,8 +1045,10 @@ fn frontier_viewpoints_are_reachable_free_cells_touching_unknown_space() {
     }
     // Points in Unknown space, inside the closed box or beyond the grid's known part, snap to
     // a listed viewpoint; a known Free reachable point near one is kept.
-    let mut config = ExploreConfig::default();
-    config.setback_m = 0.0;
+    let mut config = ExploreConfig {
+        setback_m: 0.0,
+        ..ExploreConfig::default()
+    };
     obj.prepare(&req, &config).unwrap();
     for (x, y) in [(5.05, 3.05), (4.05, 1.05), (2.55, 2.05)] {
         let mut p = [Point2::new(x, y)];

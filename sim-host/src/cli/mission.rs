@@ -189,6 +189,7 @@ mod tests {
             map: "lab".into(),
             robots: "1".into(),
             method: "xboa".into(),
+            objective: "efficient".into(),
             pop: "5".into(),
             gens: "30".into(),
             strategy: "short".into(),
@@ -226,6 +227,19 @@ mod tests {
         assert_eq!(s.world.start(), Pose2::new(1.0, 1.0, 0.0));
         assert_eq!(m.battery_steps, MissionConfig::default().battery_steps);
         assert_eq!(s.run.body.slip, SlipConfig::thesis());
+        assert_eq!(
+            m.explore.objective,
+            papillon::explore::ObjectiveKind::Efficient
+        );
+        let thesis = setup_from_args(&Args {
+            objective: "thesis".into(),
+            ..args()
+        })
+        .unwrap();
+        assert_eq!(
+            thesis.run.mission.explore.objective,
+            papillon::explore::ObjectiveKind::Thesis
+        );
     }
 
     #[test]
@@ -258,6 +272,13 @@ mod tests {
                     ..args()
                 },
                 "--pop:",
+            ),
+            (
+                Args {
+                    objective: "thesys".into(),
+                    ..args()
+                },
+                "--objective:",
             ),
             (
                 Args {
