@@ -206,7 +206,7 @@ fn near_viewpoints<const N: usize, P: Planner<N>, R: rand_core::Rng>(
 ) -> Result<Population, optim::OptimError> {
     let uniform = Population::uniform(problem, size, rng)?;
     let dim = problem.dim();
-    let seeded = (SEEDED_SHARE * size as f32).ceil() as usize;
+    let seeded = crate::math::ceil(SEEDED_SHARE * size as f32) as usize;
     let list = problem.viewpoints().as_slice();
     let lambda = problem.config().efficiency_per_step;
     let rank = |v: &super::reachable::Viewpoint| {
