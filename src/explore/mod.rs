@@ -2,7 +2,10 @@
 //!
 //! - [`objective`]: the thesis's energy-constrained objective (Bendahmane 2023): the number of
 //!   Unknown cells predicted to become known along the planned path through k targets, with the
-//!   path's energy in steps checked against the battery.
+//!   path's energy in steps checked against the battery; and the default efficient objective
+//!   (targets at reachable frontier viewpoints, gain discounted by energy; issue 17).
+//! - [`reachable`]: frontier viewpoints the robot can reach, where the efficient objective
+//!   puts its targets.
 //! - [`optimized`]: targets chosen by any population optimizer of [`crate::optim`] (xBOA in the
 //!   thesis) on that objective.
 //! - [`nearest_frontier`]: Yamauchi (1997): the frontier with the shortest path distance.

@@ -18,6 +18,45 @@
 //! ([`ExploreObjective::problem_avoiding`]), a candidate with a target near a place the robot
 //! failed to reach (the mission's [`Blacklist`]).
 //!
+//! # Objectives
+//!
+//! [`ExploreConfig::objective`] chooses what the optimizers maximise; both share the path,
+//! energy and gain models above.
+//!
+//! - **Thesis** ([`ObjectiveKind::Thesis`], `--objective thesis`): the thesis's score, the
+//!   gain alone (or the variants [`ExploreConfig::cost_weight`] and
+//!   [`ExploreConfig::gain_per_step`]), with targets anywhere in the map bounds. Its
+//!   decisions on the house fixture are pinned by a test, for the reproduction experiments.
+//!   Its targets often lie in Unknown space beyond the outer walls, where the robot can never
+//!   stand (issue 17).
+//! - **Efficient** ([`ObjectiveKind::Efficient`], the default):
+//!   1. *Gains the robot can get.* Every target is snapped to a cell the robot can reach next
+//!      to a frontier ([`super::reachable`]): its own cell if known Free, passable, reachable
+//!      and within [`NEAR_FRONTIER_SHARE_OF_RANGE`] of the laser's range of a frontier
+//!      viewpoint, else the nearest listed frontier viewpoint. The memo and the blacklist see
+//!      the snapped cells. Unknown space that can only be seen from outside the reachable
+//!      region is then only counted from where the robot can really look at it.
+//!   2. *Gain against cost.* The score is `gain · exp(-lambda · steps)`
+//!      ([`ExploreConfig::efficiency_per_step`], default [`EFFICIENCY_LAMBDA_PER_STEP`]): the
+//!      utility of González-Baños & Latombe ("Navigation strategies for exploring indoor
+//!      environments", IJRR 21(10–11), 2002), with the path's energy in steps (turns
+//!      included) as its cost. The gain still counts every predicted scan along the path,
+//!      so information on the way counts.
+//!   3. *No pockets left behind.* A candidate whose target clears a small unknown pocket (a
+//!      frontier viewpoint with few frontier cells and no neighbouring block with one,
+//!      [`super::reachable::Viewpoint::pocket`]) scores [`ExploreConfig::pocket_bonus`] times
+//!      more (default [`POCKET_BONUS`]), so that the robot clears it while near rather than
+//!      after a long trip back.
+//!   4. *Stop when the frontier is in view.* A plan ends [`ExploreConfig::setback_m`] before
+//!      the viewpoint it aims at (default [`SETBACK_M`]; a shorter last leg is kept whole);
+//!      its end is the decision's target. Re-plans ([`ExploreObjective::prepare_plan`]) go to
+//!      the targets as given.
+//!
+//!   The optimizer's initial population puts half its individuals on the frontier
+//!   viewpoints ranked best by `frontier cells · exp(-lambda · path distance)` (see
+//!   [`super::optimized`]). Measured against the frontier baselines in `docs/experiments.md`
+//!   ("Issue 17: the efficient objective").
+//!
 //! # Speed
 //!
 //! One distance field from the robot's cell per decision ([`ExploreObjective::prepare`])

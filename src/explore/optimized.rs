@@ -3,7 +3,8 @@
 //! methods of [`crate::optim`] for comparison.
 //!
 //! The initial population is drawn from the caller's seeded RNG, uniformly in the map bounds
-//! (the thesis; the default) or partly on reachable frontier cells
+//! (the thesis; the default, with half the individuals then moved onto the best frontier
+//! viewpoints under the efficient objective) or partly on reachable frontier cells
 //! ([`InitialPopulation::NearFrontiers`]; measured in `docs/benchmarks.md`); the run stops after [`ExploreConfig::max_generations`] generations (no early stop, so the
 //! history has one entry per generation). The best genome is evaluated once more to produce
 //! the plan.
