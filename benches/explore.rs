@@ -1,5 +1,6 @@
 //! One exploration decision on a mid-mission snapshot of the project's House world: xBOA with
-//! population 5 and 20 (30 generations, k = 1) and the two frontier selectors.
+//! population 5 and 20 (30 generations, k = 1) on the default (efficient) objective, population 5
+//! on the thesis's objective, and the two frontier selectors.
 //!
 //! The snapshot is the fixture `fixtures/house-mid-mission.yaml` (240 x 240 cells at 10 cm;
 //! cells within 6 m of the robot at (1.5 m, 1.5 m) known, the rest Unknown; see
@@ -14,7 +15,7 @@ mod house_fixture;
 use criterion::{Criterion, criterion_group, criterion_main};
 use house_fixture::{DecisionMemory, HouseSnapshot};
 use papillon::explore::{
-    ExploreConfig, FrontierUtility, NearestFrontier, Optimized, TargetSelector,
+    ExploreConfig, FrontierUtility, NearestFrontier, ObjectiveKind, Optimized, TargetSelector,
 };
 use papillon::frontier::FrontierWorkspace;
 use papillon::optim::Method;
@@ -36,6 +37,19 @@ fn bench(c: &mut Criterion) {
             };
             let mut sel = Optimized::new(Method::Xboa, config, &mut obj);
             group.bench_function(format!("xboa_pop{pop}_gen30"), |b| {
+                b.iter(|| sel.decide(&req, &mut seeded(1)).unwrap())
+            });
+        }
+        {
+            // The thesis's objective (`--objective thesis`): the decision before issue 17.
+            let config = ExploreConfig {
+                objective: ObjectiveKind::Thesis,
+                population: 5,
+                max_generations: 30,
+                ..ExploreConfig::default()
+            };
+            let mut sel = Optimized::new(Method::Xboa, config, &mut obj);
+            group.bench_function("xboa_pop5_gen30_thesis", |b| {
                 b.iter(|| sel.decide(&req, &mut seeded(1)).unwrap())
             });
         }

@@ -278,6 +278,10 @@ pub struct MissionConfig {
     pub generations: u16,
     /// `short` or `long`.
     pub strategy: Name,
+    /// What the optimizers maximise: `efficient` (the default when absent) or `thesis`
+    /// ([`crate::explore::ObjectiveKind`]).
+    #[serde(default)]
+    pub objective: Option<Name>,
     /// Candidate targets considered per decision.
     pub targets: u16,
     /// Energy budget \[steps\] (one step = 1 m of travel or 45° of rotation).
@@ -409,6 +413,7 @@ impl Default for BoardConfig {
                 population: 20,
                 generations: 30,
                 strategy: name("short"),
+                objective: None,
                 targets: 16,
                 battery_steps: 400.0,
                 reserve_steps: 20.0,
@@ -538,6 +543,15 @@ impl BoardConfig {
     /// The laser model, `None` if the board names an unknown one.
     pub fn laser_model(&self) -> Option<LaserModel> {
         LaserModel::from_name(&self.laser.model)
+    }
+
+    /// What the optimizers maximise (the default when the board names none), `None` if the
+    /// board names an unknown objective.
+    pub fn objective(&self) -> Option<crate::explore::ObjectiveKind> {
+        match &self.mission.objective {
+            Some(name) => crate::explore::ObjectiveKind::from_name(name),
+            None => Some(crate::explore::ObjectiveKind::default()),
+        }
     }
 
     /// The target-selection strategy, `None` if the board names an unknown one.

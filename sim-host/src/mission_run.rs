@@ -72,6 +72,7 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
         "reason": report.reason.map(|r| r.name()),
         "coverage_curve": report.coverage_curve.iter().map(|&(s, c)| [s as f64, c as f64]).collect::<Vec<_>>(),
         "coverage_time_curve": report.coverage_time_curve.iter().map(|&(t, c)| [t, c as f64]).collect::<Vec<_>>(),
+        "coverage_distance_curve": report.coverage_distance_curve.iter().map(|&(m, c)| [m as f64, c as f64]).collect::<Vec<_>>(),
         "per_robot": per_robot,
     })
 }

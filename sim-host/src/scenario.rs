@@ -6,6 +6,7 @@
 //! ([`crate::bench::sim`]) from its run spec, so both run the very same set-up. Errors are one
 //! line, named by the `papillon-sim mission` option that sets the field (`--pop: ...`).
 
+use papillon::explore::ObjectiveKind;
 use std::fmt;
 
 use papillon::geometry::Pose2;
@@ -142,6 +143,8 @@ pub struct ScenarioSpec {
     pub robots: usize,
     /// Target selector.
     pub selector: SelectorKind,
+    /// What the optimizers maximise (`--objective`; the frontier rules ignore it).
+    pub objective: ObjectiveKind,
     /// Population of the optimizer (2..=64).
     pub population: usize,
     /// Generations of the optimizer (at least 1).
@@ -170,6 +173,7 @@ impl Default for ScenarioSpec {
             resolution_m: 0.1,
             robots: 1,
             selector: SelectorKind::Optimized(Method::Xboa),
+            objective: ObjectiveKind::default(),
             population: 5,
             generations: 30,
             strategy: Strategy::Short,
@@ -235,6 +239,7 @@ impl Setup {
             selector: spec.selector,
             ..MissionConfig::default()
         };
+        mission.explore.objective = spec.objective;
         mission.explore.population = pop;
         mission.explore.max_generations = spec.generations;
         mission.explore.targets = targets;
@@ -285,6 +290,12 @@ impl Setup {
     pub fn method(&self) -> &'static str {
         selector_name(self.run.mission.selector)
     }
+}
+
+/// The objective named `name` (`--objective`, a sweep's `objective`); the error is one line.
+pub fn objective_from_name(name: &str) -> Result<ObjectiveKind, String> {
+    ObjectiveKind::from_name(name)
+        .ok_or_else(|| format!("--objective: expected efficient or thesis, got '{name}'"))
 }
 
 #[cfg(test)]

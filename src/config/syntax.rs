@@ -47,6 +47,7 @@ pub(super) const SCHEMA: &[(&str, bool)] = &[
     ("$.mission.population", true),
     ("$.mission.generations", true),
     ("$.mission.strategy", true),
+    ("$.mission.objective", false),
     ("$.mission.targets", true),
     ("$.mission.battery_steps", true),
     ("$.mission.reserve_steps", true),

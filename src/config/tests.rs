@@ -300,6 +300,9 @@ fn mission_rules() {
         c.mission.population = MAX_POPULATION + 1
     });
     only_problem_at("$.mission.generations", |c| c.mission.generations = 0);
+    only_problem_at("$.mission.objective", |c| {
+        c.mission.objective = Some(name("thesys"))
+    });
     only_problem_at("$.mission.strategy", |c| {
         c.mission.strategy = name("medium")
     });
@@ -377,4 +380,24 @@ fn host_port() {
     assert!(!is_host_port("host:"));
     assert!(!is_host_port("host:0"));
     assert!(!is_host_port("host:+80"));
+}
+
+#[test]
+fn the_objective_is_optional_and_named() {
+    use crate::explore::ObjectiveKind;
+    let c = BoardConfig::from_json(LMS1XX.as_bytes()).unwrap();
+    assert_eq!(c.mission.objective, None);
+    assert_eq!(c.objective(), Some(ObjectiveKind::Efficient));
+    for (text, kind) in [
+        ("thesis", ObjectiveKind::Thesis),
+        ("efficient", ObjectiveKind::Efficient),
+    ] {
+        let json = LMS1XX.replace(
+            "\"strategy\": \"short\",",
+            &std::format!("\"strategy\": \"short\", \"objective\": \"{text}\","),
+        );
+        let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+        assert_eq!(c.objective(), Some(kind));
+        assert_eq!(paths(&c), Vec::<String>::new());
+    }
 }

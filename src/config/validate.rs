@@ -238,6 +238,9 @@ impl BoardConfig {
         if Strategy::from_name(&m.strategy).is_none() {
             r("$.mission.strategy", "must be \"short\" or \"long\"");
         }
+        if self.objective().is_none() {
+            r("$.mission.objective", "must be \"efficient\" or \"thesis\"");
+        }
         if m.targets == 0 {
             r("$.mission.targets", "must be at least 1");
         }

@@ -93,7 +93,12 @@ impl<const N: usize, const C: usize, const F: usize, P: Planner<N>> TargetSelect
         req: &DecisionRequest<'_, N>,
         _rng: &mut R,
     ) -> Result<Outcome, DecideError> {
-        self.objective.prepare(req, &self.config)?;
+        // The frontier rules plan to the cells they chose: no snapping, no set-back.
+        let plan_only = ExploreConfig {
+            objective: super::ObjectiveKind::Thesis,
+            ..self.config
+        };
+        self.objective.prepare(req, &plan_only)?;
         // Entries lapse once the map around them changed.
         self.blacklist.forget_changed(req.grid);
         find_frontiers(

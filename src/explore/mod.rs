@@ -2,7 +2,10 @@
 //!
 //! - [`objective`]: the thesis's energy-constrained objective (Bendahmane 2023): the number of
 //!   Unknown cells predicted to become known along the planned path through k targets, with the
-//!   path's energy in steps checked against the battery.
+//!   path's energy in steps checked against the battery; and the default efficient objective
+//!   (targets at reachable frontier viewpoints, gain discounted by energy; issue 17).
+//! - [`reachable`]: frontier viewpoints the robot can reach, where the efficient objective
+//!   puts its targets.
 //! - [`optimized`]: targets chosen by any population optimizer of [`crate::optim`] (xBOA in the
 //!   thesis) on that objective.
 //! - [`nearest_frontier`]: Yamauchi (1997): the frontier with the shortest path distance.
@@ -25,6 +28,7 @@ pub mod memo;
 pub mod nearest_frontier;
 pub mod objective;
 pub mod optimized;
+pub mod reachable;
 pub mod view_cache;
 
 #[cfg(all(test, feature = "std"))]
@@ -36,6 +40,7 @@ pub use frontier_utility::FrontierUtility;
 pub use nearest_frontier::NearestFrontier;
 pub use objective::ExploreObjective;
 pub use optimized::{InitialPopulation, Optimized};
+pub use reachable::ReachableViewpoints;
 pub use view_cache::{ViewCache, ViewCacheStats};
 
 use crate::control::follower::MAX_WAYPOINTS;
@@ -94,14 +99,60 @@ pub enum Outcome {
     Done,
 }
 
+/// What the optimizers maximise (see [`objective`](objective#objectives)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ObjectiveKind {
+    /// The thesis's objective: predicted gain along the path to any point of the map, with
+    /// the energy only checked against the battery (`--objective thesis`, for the
+    /// reproduction experiments).
+    Thesis,
+    /// Targets snapped to viewpoints the robot can reach next to frontiers, scored by gain
+    /// discounted by the path's energy, with a bonus for small unknown pockets (the default).
+    #[default]
+    Efficient,
+}
+
+impl ObjectiveKind {
+    /// The kind named `name` (`thesis` or `efficient`, as the CLI and the board file spell
+    /// them).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "thesis" => Some(Self::Thesis),
+            "efficient" => Some(Self::Efficient),
+            _ => None,
+        }
+    }
+
+    /// The name [`Self::from_name`] reads.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Thesis => "thesis",
+            Self::Efficient => "efficient",
+        }
+    }
+}
+
 /// Exploration settings shared by the selectors.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExploreConfig {
+    /// What the optimizers maximise (default [`ObjectiveKind::Efficient`]; the frontier rules
+    /// ignore it).
+    pub objective: ObjectiveKind,
     /// Targets per decision, k (1 = the thesis's short-term strategy; at most [`MAX_TARGETS`]).
     pub targets: usize,
     /// Energy kept in reserve: a plan costing more than `battery - reserve` is infeasible
     /// \[steps\].
     pub reserve_steps: f32,
+    /// The efficient objective's discount per step of energy, lambda in
+    /// `gain · exp(-lambda · steps)` \[1/step\] (default
+    /// [`objective::EFFICIENCY_LAMBDA_PER_STEP`]).
+    pub efficiency_per_step: f32,
+    /// The efficient objective's factor on a candidate clearing a small unknown pocket
+    /// (default [`objective::POCKET_BONUS`]; 1 = no bonus).
+    pub pocket_bonus: f32,
+    /// The efficient objective ends each plan this far before the frontier viewpoint it
+    /// aims at \[m\] (default [`objective::SETBACK_M`]; 0 = drive up to it).
+    pub setback_m: f32,
     /// Optional cost weight lambda: score = gain - lambda * steps (clamped at 0) \[cells/step\].
     /// `None` (default): the thesis's pure gain.
     pub cost_weight: Option<f32>,
@@ -118,8 +169,12 @@ pub struct ExploreConfig {
 impl Default for ExploreConfig {
     fn default() -> Self {
         Self {
+            objective: ObjectiveKind::default(),
             targets: 1,
             reserve_steps: 0.0,
+            efficiency_per_step: objective::EFFICIENCY_LAMBDA_PER_STEP,
+            pocket_bonus: objective::POCKET_BONUS,
+            setback_m: objective::SETBACK_M,
             cost_weight: None,
             gain_per_step: false,
             viewpoint_spacing_m: 0.5,

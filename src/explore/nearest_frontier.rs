@@ -81,7 +81,12 @@ impl<const N: usize, const C: usize, const F: usize, P: Planner<N>> TargetSelect
     ) -> Result<Outcome, DecideError> {
         // Entries lapse once the map around them changed.
         self.blacklist.forget_changed(req.grid);
-        self.objective.prepare(req, &self.config)?;
+        // The frontier rules plan to the cells they chose: no snapping, no set-back.
+        let plan_only = ExploreConfig {
+            objective: super::ObjectiveKind::Thesis,
+            ..self.config
+        };
+        self.objective.prepare(req, &plan_only)?;
         find_frontiers(
             req.grid,
             req.pose.position(),

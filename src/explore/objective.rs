@@ -18,6 +18,45 @@
 //! ([`ExploreObjective::problem_avoiding`]), a candidate with a target near a place the robot
 //! failed to reach (the mission's [`Blacklist`]).
 //!
+//! # Objectives
+//!
+//! [`ExploreConfig::objective`] chooses what the optimizers maximise; both share the path,
+//! energy and gain models above.
+//!
+//! - **Thesis** ([`ObjectiveKind::Thesis`], `--objective thesis`): the thesis's score, the
+//!   gain alone (or the variants [`ExploreConfig::cost_weight`] and
+//!   [`ExploreConfig::gain_per_step`]), with targets anywhere in the map bounds. Its
+//!   decisions on the house fixture are pinned by a test, for the reproduction experiments.
+//!   Its targets often lie in Unknown space beyond the outer walls, where the robot can never
+//!   stand (issue 17).
+//! - **Efficient** ([`ObjectiveKind::Efficient`], the default):
+//!   1. *Gains the robot can get.* Every target is snapped to a cell the robot can reach next
+//!      to a frontier ([`super::reachable`]): its own cell if known Free, passable, reachable
+//!      and within [`NEAR_FRONTIER_SHARE_OF_RANGE`] of the laser's range of a frontier
+//!      viewpoint, else the nearest listed frontier viewpoint. The memo and the blacklist see
+//!      the snapped cells. Unknown space that can only be seen from outside the reachable
+//!      region is then only counted from where the robot can really look at it.
+//!   2. *Gain against cost.* The score is `gain · exp(-lambda · steps)`
+//!      ([`ExploreConfig::efficiency_per_step`], default [`EFFICIENCY_LAMBDA_PER_STEP`]): the
+//!      utility of González-Baños & Latombe ("Navigation strategies for exploring indoor
+//!      environments", IJRR 21(10–11), 2002), with the path's energy in steps (turns
+//!      included) as its cost. The gain still counts every predicted scan along the path,
+//!      so information on the way counts.
+//!   3. *No pockets left behind.* A candidate whose target clears a small unknown pocket (a
+//!      frontier viewpoint with few frontier cells and no neighbouring block with one,
+//!      [`super::reachable::Viewpoint::pocket`]) scores [`ExploreConfig::pocket_bonus`] times
+//!      more (default [`POCKET_BONUS`]), so that the robot clears it while near rather than
+//!      after a long trip back.
+//!   4. *Stop when the frontier is in view.* A plan ends [`ExploreConfig::setback_m`] before
+//!      the viewpoint it aims at (default [`SETBACK_M`]; a shorter last leg is kept whole);
+//!      its end is the decision's target. Re-plans ([`ExploreObjective::prepare_plan`]) go to
+//!      the targets as given.
+//!
+//!   The optimizer's initial population puts half its individuals on the frontier
+//!   viewpoints ranked best by `frontier cells · exp(-lambda · path distance)` (see
+//!   [`super::optimized`]). Measured against the frontier baselines in `docs/experiments.md`
+//!   ("Issue 17: the efficient objective").
+//!
 //! # Speed
 //!
 //! One distance field from the robot's cell per decision ([`ExploreObjective::prepare`])
@@ -61,14 +100,28 @@ use crate::units;
 
 use super::evaluation::{CandidateStatus, Evaluation, WORST_FITNESS};
 use super::memo::EvalMemo;
+use super::reachable::ReachableViewpoints;
 use super::view_cache::{ViewCache, ViewCacheStats};
-use super::{Blacklist, DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS};
+use super::{Blacklist, DecideError, DecisionRequest, ExploreConfig, MAX_TARGETS, ObjectiveKind};
 use crate::control::follower::MAX_WAYPOINTS;
 
 /// Most cells in one leg of a planned path.
 pub const MAX_LEG_CELLS: usize = 4096;
 /// Most predicted scans along one candidate's path.
 pub const MAX_VIEWPOINTS: usize = 1024;
+/// Discount of the efficient objective's gain per step of energy, lambda in
+/// `gain · exp(-lambda · steps)` \[1/step\].
+pub const EFFICIENCY_LAMBDA_PER_STEP: f32 = 0.5;
+/// How far before the frontier viewpoint the efficient objective ends a plan \[m\]
+/// ([`ExploreConfig::setback_m`]).
+pub const SETBACK_M: f32 = 1.0;
+/// Factor on the efficient objective's score of a candidate that clears a small unknown
+/// pocket ([`super::reachable::Viewpoint::pocket`]), so that it is not left behind for a long
+/// trip back.
+pub const POCKET_BONUS: f32 = 2.0;
+/// Under the efficient objective, a point within this share of the laser's range of a
+/// frontier viewpoint is kept as a target if its cell is reachable and known Free.
+pub const NEAR_FRONTIER_SHARE_OF_RANGE: f32 = 0.5;
 
 /// The objective's working memory and the state of the current decision. Paths through the
 /// targets are planned by `P` (A* unless a test double stands in).
@@ -92,6 +145,10 @@ pub struct ExploreObjective<'m, const N: usize, P: Planner<N> = AStar<N>> {
     memo: EvalMemo,
     views: Option<&'m mut ViewCache>,
     cached: bool,
+    reachable: ReachableViewpoints,
+    /// Plans of this decision end [`ExploreConfig::setback_m`] short (efficient objective,
+    /// not a re-plan).
+    set_back_plans: bool,
 }
 
 impl<const N: usize, P: Planner<N>> core::fmt::Debug for ExploreObjective<'_, N, P> {
@@ -151,6 +208,8 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             memo: EvalMemo::new(),
             views,
             cached: false,
+            reachable: ReachableViewpoints::new(),
+            set_back_plans: false,
         }
     }
 
@@ -204,6 +263,12 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         self.budget_steps = req.battery_steps - config.reserve_steps;
         self.config = *config;
         self.memo.clear();
+        let efficient = predict && config.objective == ObjectiveKind::Efficient;
+        self.set_back_plans = efficient && config.setback_m > 0.0;
+        if efficient {
+            self.reachable.near_m = req.laser.max_range_m * NEAR_FRONTIER_SHARE_OF_RANGE;
+            self.reachable.collect(req.grid, req.trav, self.field);
+        }
         self.cached = match self.views.as_deref_mut() {
             Some(v) => {
                 v.boxes.build(req.trav);
@@ -282,7 +347,9 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             }
             _ => self.predict_gain(req.grid, req.laser),
         };
-        eval.fitness = self.fitness_of(eval.gain_cells, eval.energy_steps);
+        let pocket =
+            self.config.objective == ObjectiveKind::Efficient && self.clears_pocket(req.grid);
+        eval.fitness = self.fitness_of(eval.gain_cells, eval.energy_steps, pocket);
         eval
     }
 
@@ -309,8 +376,65 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         eval
     }
 
+    /// Plans of this decision end short of their viewpoints ([`ExploreConfig::setback_m`]) or
+    /// (`false`) go all the way, until the next [`Self::prepare`].
+    pub(crate) fn set_back(&mut self, on: bool) -> bool {
+        core::mem::replace(&mut self.set_back_plans, on)
+    }
+
+    /// The frontier viewpoints of the current decision (listed by [`Self::prepare`] for the
+    /// efficient objective).
+    pub fn reachable_viewpoints(&self) -> &ReachableViewpoints {
+        &self.reachable
+    }
+
+    /// Moves each target to the cell the robot would use for it ([`ReachableViewpoints::snap`])
+    /// under the efficient objective (the thesis's targets stay where they are). Returns
+    /// `false` if a target could not be snapped (no frontier viewpoint listed, or outside the
+    /// grid).
+    pub fn snap_targets(&self, req: &DecisionRequest<'_, N>, targets: &mut [Point2]) -> bool {
+        if self.config.objective != ObjectiveKind::Efficient {
+            return true;
+        }
+        let geom = req.grid.geometry();
+        for t in targets.iter_mut() {
+            let Some(cell) = geom.cell_at(*t) else {
+                return false;
+            };
+            match self.reachable.snap(cell, req.grid, req.trav, self.field) {
+                Some(c) => *t = geom.cell_center(c),
+                None => return false,
+            }
+        }
+        true
+    }
+
+    /// Whether a target of the last planned candidate clears a small unknown pocket: it lies
+    /// in the block of a listed viewpoint that is a [pocket](super::reachable::Viewpoint::pocket).
+    fn clears_pocket(&self, grid: &OccupancyGrid<N>) -> bool {
+        let geom = grid.geometry();
+        let side = self.reachable.block_cells();
+        self.targets().iter().any(|&t| {
+            let c = geom.cell_at_unchecked(t);
+            self.reachable
+                .nearest(c)
+                .is_some_and(|(v, d2)| v.pocket && d2 <= side * side)
+        })
+    }
+
     /// The scaled fitness of a feasible plan.
-    fn fitness_of(&self, gain: u32, steps: f32) -> f32 {
+    fn fitness_of(&self, gain: u32, steps: f32, pocket: bool) -> f32 {
+        if self.config.objective == ObjectiveKind::Efficient {
+            let bonus = if pocket {
+                self.config.pocket_bonus
+            } else {
+                1.0
+            };
+            let lambda = self.config.efficiency_per_step;
+            let score = bonus * gain as f32 * math::exp(-lambda * steps);
+            let max = (self.unknown_cells as f32).max(1.0);
+            return -(score / max).min(1.0);
+        }
         let gain = gain as f32;
         let mut score = match self.config.cost_weight {
             Some(lambda) => (gain - lambda * steps).max(0.0),
@@ -334,7 +458,9 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
     ) -> Result<(), CandidateStatus> {
         let geom = *req.grid.geometry();
         let mut prev = self.start_cell;
+        let mut last_leg = 0;
         for (k, &t) in targets.iter().enumerate() {
+            last_leg = self.waypoint_len.saturating_sub(1);
             let cell = geom.cell_at(t).ok_or(CandidateStatus::OutOfBounds)?;
             if !req.trav.is_passable(cell) {
                 return Err(CandidateStatus::Blocked);
@@ -375,6 +501,9 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         if self.waypoint_len > 0 {
             self.waypoints[0] = self.start.position();
         }
+        if self.set_back_plans {
+            self.trim_last_leg(last_leg, &geom);
+        }
         let mut heading = self.start.theta;
         let mut length = 0.0f32;
         let mut rotation = 0.0f32;
@@ -392,6 +521,32 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         eval.path_length_m = length;
         eval.energy_steps = units::steps(length, rotation);
         Ok(())
+    }
+
+    /// Ends the last leg (from waypoint `from` on) [`ExploreConfig::setback_m`] before its
+    /// end, at the centre of the cell there, which becomes the last target: the laser sees the
+    /// frontier ahead from there without the drive up to it. A leg no longer than the setback
+    /// is kept whole.
+    fn trim_last_leg(&mut self, from: usize, geom: &crate::grid::GridGeometry) {
+        let mut left = self.config.setback_m;
+        let mut end = self.waypoint_len;
+        while end >= 2 && end - 1 > from {
+            let (a, b) = (self.waypoints[end - 2], self.waypoints[end - 1]);
+            let d = a.distance(b);
+            if d > left {
+                let f = (d - left) / d;
+                let cut = Point2::new(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
+                let centre = geom.cell_center(geom.cell_at_unchecked(cut));
+                self.waypoints[end - 1] = centre;
+                self.waypoint_len = end;
+                if self.target_len > 0 {
+                    self.targets[self.target_len - 1] = centre;
+                }
+                return;
+            }
+            left -= d;
+            end -= 1;
+        }
     }
 
     /// Predicted scan poses along the waypoint polyline.
@@ -512,6 +667,16 @@ impl<const N: usize, P: Planner<N>> BoundObjective<'_, '_, '_, N, P> {
     pub(crate) fn field(&self) -> &DistanceField<N> {
         self.objective.field
     }
+
+    /// The decision's settings.
+    pub(crate) fn config(&self) -> &ExploreConfig {
+        &self.objective.config
+    }
+
+    /// The decision's frontier viewpoints (efficient objective).
+    pub(crate) fn viewpoints(&self) -> &ReachableViewpoints {
+        &self.objective.reachable
+    }
 }
 
 impl<const N: usize, P: Planner<N>> Problem for BoundObjective<'_, '_, '_, N, P> {
@@ -546,6 +711,15 @@ impl<const N: usize, P: Planner<N>> Problem for BoundObjective<'_, '_, '_, N, P>
         if !inside {
             return self.objective.evaluate_targets(self.req, &pts[..k]).fitness;
         }
+        if self.objective.config.objective == ObjectiveKind::Efficient {
+            if !self.objective.snap_targets(self.req, &mut pts[..k]) {
+                return WORST_FITNESS;
+            }
+            for (i, p) in pts[..k].iter().enumerate() {
+                // Snapped points are cell centres inside the grid.
+                cells[i] = geom.index(geom.cell_at_unchecked(*p)).unwrap_or(0) as u32;
+            }
+        }
         if let Some(list) = self.blacklist
             && pts[..k]
                 .iter()
@@ -556,7 +730,15 @@ impl<const N: usize, P: Planner<N>> Problem for BoundObjective<'_, '_, '_, N, P>
         if let Some(eval) = self.objective.memo.get(&cells[..k]) {
             return eval.fitness;
         }
-        let eval = self.objective.evaluate_targets(self.req, &pts[..k]);
+        let mut eval = self.objective.evaluate_targets(self.req, &pts[..k]);
+        // A plan set back short of its viewpoint ends elsewhere: that end must not be a
+        // place the robot failed to reach either.
+        if let Some(list) = self.blacklist
+            && self.objective.set_back_plans
+            && self.objective.targets().iter().any(|&t| list.contains(t))
+        {
+            eval.fitness = WORST_FITNESS;
+        }
         self.objective.memo.put(&cells[..k], eval);
         eval.fitness
     }

@@ -3,7 +3,8 @@
 //! methods of [`crate::optim`] for comparison.
 //!
 //! The initial population is drawn from the caller's seeded RNG, uniformly in the map bounds
-//! (the thesis; the default) or partly on reachable frontier cells
+//! (the thesis; the default, with half the individuals then moved onto the best frontier
+//! viewpoints under the efficient objective) or partly on reachable frontier cells
 //! ([`InitialPopulation::NearFrontiers`]; measured in `docs/benchmarks.md`); the run stops after [`ExploreConfig::max_generations`] generations (no early stop, so the
 //! history has one entry per generation). The best genome is evaluated once more to produce
 //! the plan.
@@ -24,8 +25,8 @@ use crate::random;
 use super::evaluation::WORST_FITNESS;
 use super::objective::{BoundObjective, ExploreObjective};
 use super::{
-    Blacklist, DecideError, DecisionRequest, ExploreConfig, FrontierScan, MAX_TARGETS, Outcome,
-    TargetSelector, nearest_reachable_frontier, sample_reachable_frontier,
+    Blacklist, DecideError, DecisionRequest, ExploreConfig, FrontierScan, MAX_TARGETS,
+    ObjectiveKind, Outcome, TargetSelector, nearest_reachable_frontier, sample_reachable_frontier,
 };
 use crate::geometry::Point2;
 
@@ -105,7 +106,11 @@ impl<const N: usize, P: Planner<N>> TargetSelector<N> for Optimized<'_, '_, N, P
             .build(self.config.population, rules.max_generations);
         let (best, evaluations, history_len) = {
             let mut problem = self.objective.problem_avoiding(req, &self.blacklist);
+            let efficient = self.config.objective == ObjectiveKind::Efficient;
             let initial = match self.initial {
+                InitialPopulation::Uniform if efficient => {
+                    near_viewpoints(&problem, req, self.config.population, rng)
+                }
                 InitialPopulation::Uniform => {
                     Population::uniform(&problem, self.config.population, rng)
                 }
@@ -128,8 +133,11 @@ impl<const N: usize, P: Planner<N>> TargetSelector<N> for Optimized<'_, '_, N, P
             for (i, p) in pts[..k].iter_mut().enumerate() {
                 *p = Point2::new(best[2 * i], best[2 * i + 1]);
             }
+            // The efficient objective scored the targets the points snap to.
+            let snapped = self.objective.snap_targets(req, &mut pts[..k]);
             let eval = self.objective.evaluate_targets(req, &pts[..k]);
-            if eval.gain_cells > 0
+            if snapped
+                && eval.gain_cells > 0
                 && let Some(d) = self.objective.decision(&eval, evaluations, opt.history())
             {
                 return Ok(Outcome::Go(d));
@@ -138,7 +146,10 @@ impl<const N: usize, P: Planner<N>> TargetSelector<N> for Optimized<'_, '_, N, P
         // Every candidate was infeasible, blacklisted or blind (nothing Unknown in view), yet
         // reachable Unknown space is left: go to the nearest frontier the robot has not
         // failed to reach, so that a decision is never wasted.
+        // It drives up to that frontier, as nearest-frontier would (no set-back).
+        let was = self.objective.set_back(false);
         let eval = self.objective.evaluate_targets(req, &[fallback]);
+        self.objective.set_back(was);
         self.objective
             .decision(&eval, evaluations + 1, opt.history())
             .map(Outcome::Go)
@@ -172,6 +183,57 @@ fn near_frontiers<const N: usize, P: Planner<N>, R: rand_core::Rng>(
                     let c = geom.cell_center(cell);
                     (g[2 * t], g[2 * t + 1]) = (c.x, c.y);
                 }
+            }
+        }
+        pop.push(&g[..dim])?;
+    }
+    Ok(pop)
+}
+
+/// Viewpoints whose individuals start on the most promising frontier viewpoints, under the
+/// efficient objective: half the population, rounded up.
+const SEEDED_SHARE: f32 = 0.5;
+
+/// An initial population for the efficient objective: drawn uniformly as the thesis's, then
+/// the first `ceil(SEEDED_SHARE * size)` individuals put every target on one of the listed
+/// frontier viewpoints ([`super::ReachableViewpoints`]) ranked best by
+/// `frontier_cells · exp(-lambda · distance)` (the objective's discount applied to a
+/// cheap estimate of the gain), the best first.
+fn near_viewpoints<const N: usize, P: Planner<N>, R: rand_core::Rng>(
+    problem: &BoundObjective<'_, '_, '_, N, P>,
+    req: &DecisionRequest<'_, N>,
+    size: usize,
+    rng: &mut R,
+) -> Result<Population, optim::OptimError> {
+    let uniform = Population::uniform(problem, size, rng)?;
+    let dim = problem.dim();
+    let seeded = crate::math::ceil(SEEDED_SHARE * size as f32) as usize;
+    let list = problem.viewpoints().as_slice();
+    let lambda = problem.config().efficiency_per_step;
+    let rank = |v: &super::reachable::Viewpoint| {
+        v.frontier_cells as f32 * crate::math::exp(-lambda * v.distance_m)
+    };
+    // The `seeded` best viewpoints, best first (insertion into a short list).
+    let mut best: heapless::Vec<(f32, usize), { optim::MAX_POP }> = heapless::Vec::new();
+    for (i, v) in list.iter().enumerate() {
+        let r = rank(v);
+        let at = best.iter().position(|&(b, _)| r > b).unwrap_or(best.len());
+        if at < seeded.min(optim::MAX_POP) {
+            if best.len() == seeded.min(optim::MAX_POP) {
+                best.pop();
+            }
+            let _ = best.insert(at, (r, i));
+        }
+    }
+    let geom = req.grid.geometry();
+    let mut pop = Population::new(dim)?;
+    let mut g = [0.0f32; MAX_DIM];
+    for n in 0..size {
+        g[..dim].copy_from_slice(uniform.genome(n));
+        if let Some(&(_, i)) = best.get(n) {
+            let c = geom.cell_center(list[i].cell);
+            for t in 0..dim / 2 {
+                (g[2 * t], g[2 * t + 1]) = (c.x, c.y);
             }
         }
         pop.push(&g[..dim])?;

@@ -214,6 +214,7 @@ fn the_path_visits_the_targets_in_order_and_costs_its_length_plus_turns() {
     let mut obj = mem.objective();
     let config = ExploreConfig {
         targets: 1,
+        objective: ObjectiveKind::Thesis,
         ..ExploreConfig::default()
     };
     obj.prepare(&req, &config).unwrap();
@@ -252,6 +253,7 @@ fn infeasible_or_blocked_candidates_always_score_worst() {
         let config = ExploreConfig {
             targets: k,
             reserve_steps: 1.0,
+            objective: ObjectiveKind::Thesis,
             ..ExploreConfig::default()
         };
         obj.prepare(&req, &config).unwrap();
@@ -368,6 +370,7 @@ fn the_optimized_selector_beats_the_median_random_candidate() {
     let config = ExploreConfig {
         population: 10,
         max_generations: 20,
+        objective: ObjectiveKind::Thesis,
         ..ExploreConfig::default()
     };
     let Outcome::Go(best) = Optimized::new(Method::Xboa, config, &mut obj)
@@ -621,6 +624,7 @@ fn remembered_evaluations_equal_fresh_ones() {
     for k in [1usize, 2] {
         let config = ExploreConfig {
             targets: k,
+            objective: ObjectiveKind::Thesis,
             ..ExploreConfig::default()
         };
         obj.prepare(&req, &config).unwrap();
@@ -841,6 +845,7 @@ fn without_a_feasible_candidate_the_optimizer_falls_back_to_the_nearest_frontier
     let config = ExploreConfig {
         population: 2,
         max_generations: 1,
+        objective: ObjectiveKind::Thesis,
         ..ExploreConfig::default()
     };
     let mut fell_back = 0;
@@ -908,6 +913,7 @@ fn a_replan_plans_the_same_path_as_an_evaluation_without_predicting_gain() {
     let mut statuses = std::collections::HashSet::new();
     for k in [1usize, 2] {
         let config = ExploreConfig {
+            objective: ObjectiveKind::Thesis,
             targets: k,
             ..ExploreConfig::default()
         };
@@ -929,4 +935,222 @@ fn a_replan_plans_the_same_path_as_an_evaluation_without_predicting_gain() {
     }
     // Both feasible and refused candidates were compared.
     assert!(statuses.len() >= 2, "{statuses:?}");
+}
+
+// The thesis objective's decisions on the house fixture, recorded before the default objective
+// changed (issue 17): `--objective thesis` must keep making exactly these.
+
+/// One decision, fingerprinted: targets \[mm\], predicted gain \[cells\], energy \[centisteps\],
+/// evaluations.
+type Fingerprint = (Vec<(i32, i32)>, u32, i32, u32);
+
+fn thesis_fingerprints() -> Vec<Fingerprint> {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let mut mem = Memory::<HOUSE_CELLS>::new();
+    let mut obj = mem.objective();
+    let poses = [
+        Pose2::new(1.5, 1.5, 0.0),
+        Pose2::new(3.05, 3.05, 1.57),
+        Pose2::new(0.85, 4.45, -1.0),
+    ];
+    let mut out = Vec::new();
+    for (method, k) in [(Method::Xboa, 1), (Method::Xboa, 2), (Method::Pso, 1)] {
+        for pose in poses {
+            for seed in [25u64, 26, 27] {
+                let req = DecisionRequest {
+                    pose,
+                    battery_steps: 120.0,
+                    ..house_request(&maps, &laser)
+                };
+                let config = ExploreConfig {
+                    objective: ObjectiveKind::Thesis,
+                    targets: k,
+                    ..ExploreConfig::default()
+                };
+                let mut sel = Optimized::new(method, config, &mut obj);
+                let Outcome::Go(d) = sel.decide(&req, &mut seeded(seed)).unwrap() else {
+                    panic!("done at {pose:?}");
+                };
+                let mm = |v: f32| (v * 1000.0).round() as i32;
+                out.push((
+                    d.targets.iter().map(|p| (mm(p.x), mm(p.y))).collect(),
+                    d.predicted_gain_cells,
+                    (d.energy_steps * 100.0).round() as i32,
+                    d.evaluations,
+                ));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_thesis_objective_makes_the_decisions_recorded_before_issue_17() {
+    // xBOA k = 1, xBOA k = 2, PSO k = 1; each from three poses with seeds 25, 26, 27 (recorded
+    // on the thesis objective of commit b20c221, before any other objective existed).
+    let recorded: Vec<Fingerprint> = vec![
+        (vec![(21550, 21050)], 19980, 2939, 258),
+        (vec![(15550, 21550)], 17198, 2661, 250),
+        (vec![(17950, 22450)], 18293, 2891, 242),
+        (vec![(21650, 21150)], 20021, 2899, 258),
+        (vec![(15550, 21550)], 17175, 2453, 250),
+        (vec![(17950, 22450)], 18319, 2683, 242),
+        (vec![(21650, 20850)], 19866, 2861, 258),
+        (vec![(15550, 21550)], 17415, 2615, 250),
+        (vec![(17950, 22450)], 18324, 2713, 242),
+        (vec![(21550, 23550), (13050, 150)], 32125, 6061, 255),
+        (vec![(20550, 22750), (450, 18450)], 29252, 5483, 246),
+        (vec![(18850, 21650), (20650, 4850)], 30599, 4878, 240),
+        (vec![(21550, 23550), (13050, 150)], 32140, 5853, 255),
+        (vec![(20550, 22750), (450, 18450)], 29312, 5276, 246),
+        (vec![(18850, 21650), (20650, 4850)], 30616, 4670, 240),
+        (vec![(21550, 23550), (13050, 150)], 32592, 5868, 255),
+        (vec![(20550, 17350), (450, 20250)], 30134, 4895, 246),
+        (vec![(18850, 21650), (20650, 4850)], 30759, 4687, 240),
+        (vec![(23050, 22750)], 20008, 3166, 155),
+        (vec![(22750, 22350)], 19996, 3116, 155),
+        (vec![(23950, 23950)], 19987, 3316, 155),
+        (vec![(22050, 22150)], 20025, 3002, 155),
+        (vec![(21250, 21550)], 20063, 2906, 155),
+        (vec![(21750, 22050)], 20037, 2976, 155),
+        (vec![(21650, 20650)], 19843, 2848, 155),
+        (vec![(23950, 22650)], 19851, 3153, 155),
+        (vec![(23950, 22650)], 19851, 3153, 155),
+    ];
+    assert_eq!(thesis_fingerprints(), recorded);
+}
+
+// The efficient objective (issue 17): targets the robot can reach, next to frontiers.
+
+#[test]
+fn frontier_viewpoints_are_reachable_free_cells_touching_unknown_space() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    obj.prepare(&req, &ExploreConfig::default()).unwrap();
+    let g = *grid.geometry();
+    let list = obj.reachable_viewpoints().as_slice().to_vec();
+    // The known part ends at column 19; one viewpoint per 5-cell block along it, except
+    // where the walls and their inflation leave no passable cell.
+    assert!(list.len() >= 5, "{list:?}");
+    for v in &list {
+        assert_eq!(grid.class_of(v.cell), Some(CellClass::Free), "{v:?}");
+        assert!(obj.field().is_reachable(v.cell), "{v:?}");
+        assert_eq!(v.cell.col, 19, "{v:?}");
+        assert!(v.frontier_cells >= 1 && !v.pocket, "{v:?}");
+    }
+    // Points in Unknown space, inside the closed box or beyond the grid's known part, snap to
+    // a listed viewpoint; a known Free reachable point near one is kept.
+    let mut config = ExploreConfig {
+        setback_m: 0.0,
+        ..ExploreConfig::default()
+    };
+    obj.prepare(&req, &config).unwrap();
+    for (x, y) in [(5.05, 3.05), (4.05, 1.05), (2.55, 2.05)] {
+        let mut p = [Point2::new(x, y)];
+        assert!(obj.snap_targets(&req, &mut p));
+        let c = g.cell_at(p[0]).unwrap();
+        assert!(list.iter().any(|v| v.cell == c), "({x}, {y}) -> {c:?}");
+    }
+    let mut near = [Point2::new(1.35, 2.05)];
+    assert!(obj.snap_targets(&req, &mut near));
+    assert_eq!(
+        near[0],
+        g.cell_center(g.cell_at(Point2::new(1.35, 2.05)).unwrap())
+    );
+    // The thesis's objective leaves its targets where they are.
+    config.objective = ObjectiveKind::Thesis;
+    obj.prepare(&req, &config).unwrap();
+    let mut far = [Point2::new(5.05, 3.05)];
+    assert!(obj.snap_targets(&req, &mut far));
+    assert_eq!(far[0], Point2::new(5.05, 3.05));
+}
+
+#[test]
+fn the_efficient_objective_stops_short_of_the_viewpoint_by_the_setback() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    let target = [Point2::new(1.95, 3.05)];
+    let mut lengths = Vec::new();
+    for setback_m in [0.0, 1.0] {
+        let config = ExploreConfig {
+            setback_m,
+            ..ExploreConfig::default()
+        };
+        obj.prepare(&req, &config).unwrap();
+        let eval = obj.evaluate_targets(&req, &target);
+        assert_eq!(eval.status, CandidateStatus::Feasible);
+        assert!(eval.gain_cells > 0);
+        lengths.push(eval.path_length_m);
+        let end = *obj.waypoints().last().unwrap();
+        assert_eq!(obj.targets(), [end]);
+    }
+    let shorter = lengths[0] - lengths[1];
+    assert!((shorter - 1.0).abs() < 0.1, "{lengths:?}");
+}
+
+#[test]
+fn the_efficient_objective_prefers_the_cheaper_of_two_equal_gains() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    obj.prepare(&req, &ExploreConfig::default()).unwrap();
+    let a = obj.evaluate_targets(&req, &[Point2::new(1.95, 2.05)]);
+    let b = obj.evaluate_targets(&req, &[Point2::new(1.95, 3.55)]);
+    assert!(a.energy_steps < b.energy_steps, "{a:?} {b:?}");
+    // Score = gain · exp(-lambda · steps), scaled by the Unknown cells.
+    let lambda = ExploreConfig::default().efficiency_per_step;
+    for e in [a, b] {
+        let expected = -(e.gain_cells as f32 * math::exp(-lambda * e.energy_steps))
+            / obj.unknown_cells() as f32;
+        assert!((e.fitness - expected).abs() < 1e-6, "{e:?}");
+    }
+}
+
+#[test]
+fn efficient_decisions_on_the_house_fixture_aim_at_reachable_known_free_cells() {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let req = house_request(&maps, &laser);
+    let mut mem = Memory::<HOUSE_CELLS>::new();
+    let mut obj = mem.objective();
+    let g = *maps.0.geometry();
+    for seed in 25u64..30 {
+        for objective in [ObjectiveKind::Efficient, ObjectiveKind::Thesis] {
+            let config = ExploreConfig {
+                objective,
+                ..ExploreConfig::default()
+            };
+            let mut sel = Optimized::new(Method::Xboa, config, &mut obj);
+            let Outcome::Go(d) = sel.decide(&req, &mut seeded(seed)).unwrap() else {
+                panic!("done");
+            };
+            let t = g.cell_at(d.targets[0]).unwrap();
+            let known_free = maps.0.class_of(t) == Some(CellClass::Free);
+            match objective {
+                ObjectiveKind::Efficient => {
+                    assert!(known_free && obj.field().is_reachable(t), "{seed}: {d:?}");
+                    // Within the laser's range of a frontier cell.
+                    let near = (0..g.cell_count()).any(|i| {
+                        crate::frontier::is_frontier_cell(&maps.0, i)
+                            && g.cell_center(g.cell(i)).distance(d.targets[0]) <= laser.max_range_m
+                    });
+                    assert!(near, "{seed}: {d:?}");
+                }
+                // The thesis's targets lie in Unknown space (the problem of issue 17).
+                ObjectiveKind::Thesis => assert!(!known_free, "{seed}: {d:?}"),
+            }
+        }
+    }
 }

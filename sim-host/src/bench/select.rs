@@ -41,6 +41,8 @@ pub struct Overrides {
     pub maps: Option<Vec<String>>,
     /// Battery \[steps\].
     pub battery_steps: Option<f32>,
+    /// What the optimizers maximise (`efficient` or `thesis`).
+    pub objective: Option<String>,
 }
 
 /// Why no sweep could be chosen.
@@ -113,6 +115,9 @@ pub fn apply(mut sweep: Sweep, overrides: &Overrides) -> Sweep {
     if let Some(b) = overrides.battery_steps {
         sweep.battery_steps = Some(b);
     }
+    if let Some(o) = &overrides.objective {
+        sweep.objective = o.clone();
+    }
     sweep
 }
 
@@ -147,12 +152,15 @@ mod tests {
             runs: Some(2),
             maps: Some(vec!["lab".into()]),
             battery_steps: Some(50.0),
+            objective: Some("thesis".into()),
         };
         let s = select(&named_source("boa-variants"), &o).unwrap();
         assert_eq!((s.runs, s.maps.clone()), (2, vec!["lab".to_string()]));
         assert_eq!(s.battery_steps, Some(50.0));
+        assert_eq!(s.objective, "thesis");
         let d = select(&named_source("boa-variants"), &Overrides::default()).unwrap();
         assert_eq!(d.runs, sweep::DEFAULT_RUNS);
+        assert_eq!(d.objective, "efficient");
         assert_eq!(d.maps, vec!["house", "empty"]);
     }
 
@@ -170,6 +178,12 @@ mod tests {
         };
         let e = select(&named_source("methods"), &bad).unwrap_err();
         assert!(e.to_string().contains("battery_steps"), "{e}");
+        let bad_objective = Overrides {
+            objective: Some("thesys".into()),
+            ..Overrides::default()
+        };
+        let e = select(&named_source("methods"), &bad_objective).unwrap_err();
+        assert!(e.to_string().contains("--objective"), "{e}");
         let e = select(&Source::File("/nonexistent/s.json".into()), &bad).unwrap_err();
         assert!(e.to_string().contains("cannot read"), "{e}");
     }

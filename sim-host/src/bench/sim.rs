@@ -9,7 +9,9 @@ use super::record::RunResult;
 use super::sweep::RunSpec;
 use crate::dynamic::Dynamics;
 use crate::runner::Runner;
-use crate::scenario::{ScenarioSpec, Setup, Slip, Strategy, selector_from_name};
+use crate::scenario::{
+    ScenarioSpec, Setup, Slip, Strategy, objective_from_name, selector_from_name,
+};
 
 /// The scenario of a run: `papillon-sim mission`'s defaults (thesis slip, the world's start)
 /// with the run's world, robots, selector, budget, strategy, seed, battery and cell size. The
@@ -21,6 +23,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
         resolution_m: spec.resolution_m,
         robots: spec.robots,
         selector: selector_from_name(&spec.method)?,
+        objective: objective_from_name(&spec.objective)?,
         population: spec.population,
         generations: spec.generations,
         strategy,

@@ -110,6 +110,9 @@ pub struct Sweep {
     /// Strategies.
     #[serde(default = "default_strategies")]
     pub strategies: Vec<Strategy>,
+    /// What the optimizers maximise (`efficient`, the default, or `thesis`).
+    #[serde(default = "default_objective")]
+    pub objective: String,
     /// Population sizes.
     #[serde(default = "default_populations")]
     pub populations: Vec<usize>,
@@ -146,6 +149,10 @@ pub struct RunSpec {
     pub method: String,
     /// `short` or `long`.
     pub strategy: String,
+    /// What the optimizers maximise (`efficient` or `thesis`; runs recorded before the
+    /// objective was an option read as `thesis`).
+    #[serde(default = "thesis_objective")]
+    pub objective: String,
     /// Targets per decision.
     pub targets: usize,
     /// Population size.
@@ -175,6 +182,14 @@ pub fn map_label(spec: &str) -> String {
     } else {
         spec.to_string()
     }
+}
+
+fn default_objective() -> String {
+    papillon::explore::ObjectiveKind::default().name().into()
+}
+
+fn thesis_objective() -> String {
+    papillon::explore::ObjectiveKind::Thesis.name().into()
 }
 
 impl Sweep {
@@ -232,6 +247,7 @@ impl Sweep {
             populations,
             robots,
             runs,
+            objective: default_objective(),
             generations: default_generations(),
             battery_steps: None,
             base_seed: BASE_SEED,
@@ -281,6 +297,7 @@ impl Sweep {
                 return Err(format!("strategy must be short or long, got '{}'", s.name));
             }
         }
+        crate::scenario::objective_from_name(&self.objective)?;
         if !(self.resolution_m.is_finite() && self.resolution_m > 0.0) {
             return Err(format!(
                 "resolution_m must be a positive number, got {}",
@@ -326,6 +343,7 @@ impl Sweep {
                                     map_label: map_label(map),
                                     method: method.clone(),
                                     strategy: strategy.name.clone(),
+                                    objective: self.objective.clone(),
                                     targets: strategy.k(),
                                     population,
                                     generations: self.generations,

@@ -45,6 +45,9 @@ pub struct Args {
     /// Replace the sweep's battery (steps).
     #[arg(long)]
     pub battery: Option<f32>,
+    /// Replace the sweep's objective: efficient (the default) or thesis.
+    #[arg(long)]
+    pub objective: Option<String>,
     /// Directory with the thesis's map-empty.csv and map-house.csv, added to the named
     /// experiments' maps (default: ../shared/data/thesis-maps when it exists).
     #[arg(long, conflicts_with = "no_thesis_maps")]
@@ -93,6 +96,7 @@ pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
         runs: args.runs,
         maps: args.maps.clone(),
         battery_steps: args.battery,
+        objective: args.objective.clone(),
     };
     select(&source, &overrides).map_err(|e| match e {
         SelectError::UnknownExperiment(_) => format!("--experiment: {e}"),

@@ -11,7 +11,9 @@ use std::process::ExitCode;
 use papillon::geometry::Pose2;
 
 use crate::mission_run::{Failure, execute, json_report, summary};
-use crate::scenario::{ScenarioSpec, Setup, Slip, Strategy, selector_from_name};
+use crate::scenario::{
+    ScenarioSpec, Setup, Slip, Strategy, objective_from_name, selector_from_name,
+};
 
 /// Arguments of `papillon-sim mission` (kept as text and checked by [`setup_from_args`], so
 /// every problem is reported on one line naming the option).
@@ -27,6 +29,10 @@ pub struct Args {
     /// frontier-utility.
     #[arg(long, default_value = "xboa")]
     pub method: String,
+    /// What the optimizers maximise: efficient (reachable frontier viewpoints, gain
+    /// discounted by energy; the default) or thesis (the thesis's objective, for reproduction).
+    #[arg(long, default_value = "efficient")]
+    pub objective: String,
     /// Population of the optimizer.
     #[arg(long, default_value = "5")]
     pub pop: String,
@@ -83,6 +89,7 @@ fn number<T: std::str::FromStr>(option: &str, text: &str, what: &str) -> Result<
 pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
     let robots = number("--robots", &args.robots, "a whole number of robots")?;
     let selector = selector_from_name(&args.method)?;
+    let objective = objective_from_name(&args.objective)?;
     let population = number("--pop", &args.pop, "a whole number")?;
     let generations = number("--gens", &args.gens, "a whole number")?;
     let strategy = Strategy::from_name(&args.strategy)?;
@@ -121,6 +128,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         resolution_m,
         robots,
         selector,
+        objective,
         population,
         generations,
         strategy,
@@ -181,6 +189,7 @@ mod tests {
             map: "lab".into(),
             robots: "1".into(),
             method: "xboa".into(),
+            objective: "efficient".into(),
             pop: "5".into(),
             gens: "30".into(),
             strategy: "short".into(),
@@ -218,6 +227,19 @@ mod tests {
         assert_eq!(s.world.start(), Pose2::new(1.0, 1.0, 0.0));
         assert_eq!(m.battery_steps, MissionConfig::default().battery_steps);
         assert_eq!(s.run.body.slip, SlipConfig::thesis());
+        assert_eq!(
+            m.explore.objective,
+            papillon::explore::ObjectiveKind::Efficient
+        );
+        let thesis = setup_from_args(&Args {
+            objective: "thesis".into(),
+            ..args()
+        })
+        .unwrap();
+        assert_eq!(
+            thesis.run.mission.explore.objective,
+            papillon::explore::ObjectiveKind::Thesis
+        );
     }
 
     #[test]
@@ -250,6 +272,13 @@ mod tests {
                     ..args()
                 },
                 "--pop:",
+            ),
+            (
+                Args {
+                    objective: "thesys".into(),
+                    ..args()
+                },
+                "--objective:",
             ),
             (
                 Args {

@@ -567,6 +567,12 @@ impl Runner {
         self.report
             .coverage_time_curve
             .push((self.sim_time_s(), s.1));
+        let metres = self
+            .robots
+            .iter()
+            .map(|r| r.mission.stats().distance_m)
+            .sum();
+        self.report.coverage_distance_curve.push((metres, s.1));
     }
 
     fn check_end(&mut self) {

@@ -129,6 +129,8 @@ pub struct RunReport {
     pub coverage_curve: Vec<(f32, f32)>,
     /// Coverage over simulated time: (time \[s\], coverage), same samples.
     pub coverage_time_curve: Vec<(f64, f32)>,
+    /// Coverage over distance travelled: (metres summed over robots, coverage), same samples.
+    pub coverage_distance_curve: Vec<(f32, f32)>,
     /// Decisions, replans, yields, faults and ends, in order.
     pub events: Vec<LoggedEvent>,
     /// The final map against the truth.
