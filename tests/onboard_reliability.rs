@@ -1,0 +1,117 @@
+//! Reliability of `papillon` end to end (issue 20): start-up over a corrupting link, saved
+//! missions that are never overwritten by accident, bounded reads, permanent port errors and
+//! files that refuse planted symlinks. Each test failed before its fix.
+#![cfg(feature = "onboard")]
+
+mod e2e;
+
+use std::path::Path;
+use std::process::{Child, Output};
+use std::time::{Duration, Instant};
+
+use e2e::{Sim, papillon, signal, temp_dir, wait_bounded};
+use papillon::onboard::persist::StateStore;
+
+fn board() -> String {
+    format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `papillon run` on `boards/sim.json` against these endpoints, logging into `log`, plus
+/// `extra` flags.
+fn run(arcos: &str, laser: &str, log: &Path, extra: &[&str]) -> Child {
+    let board = board();
+    let mut args = vec![
+        "run",
+        "--board",
+        &board,
+        "--tcp",
+        arcos,
+        "--laser",
+        laser,
+        "--log-dir",
+        log.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    papillon(&args, log.parent().unwrap())
+}
+
+fn text(out: &Output) -> (String, String) {
+    (
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Waits until the mission in `log` has saved a state (its first periodic save).
+fn wait_for_a_save(log: &Path, limit: Duration) {
+    let deadline = Instant::now() + limit;
+    loop {
+        if let Ok(Some(_)) = StateStore::open(log).unwrap().load() {
+            return;
+        }
+        assert!(Instant::now() < deadline, "nothing saved in {log:?}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// Item 1: at 1 % of the robot's bytes corrupted, a CONFIG packet (about 130 bytes) arrives
+/// whole only about one time in three, and a SYNC reply may be lost: `probe` connects on every
+/// seed all the same (it failed on 5 of 5 before the CONFIG request and the handshake were
+/// retried).
+#[test]
+fn probe_connects_at_1_percent_corruption_on_5_seeds() {
+    for seed in 1..=5 {
+        let sim = Sim::start(
+            "lab",
+            None,
+            &["--faults", "corrupt=0.01", "--seed", &seed.to_string()],
+        );
+        let dir = temp_dir(&format!("probe-corrupt-{seed}"));
+        let out = wait_bounded(
+            papillon(&["probe", "--tcp", &sim.arcos_tcp()], &dir),
+            Duration::from_secs(60),
+        );
+        let (stdout, stderr) = text(&out);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "seed {seed}\nstdout:\n{stdout}\nstderr:\n{stderr}"
+        );
+        assert!(stdout.contains("config: firmware"), "seed {seed}: {stdout}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+/// Item 1: `run` connects at 0.2 % corruption (seed 2 lost its CONFIG packet and exited 1
+/// after 1 s before the fix) and at 1 %, starts the mission, and stops on SIGTERM.
+#[test]
+fn run_connects_at_0_2_and_1_percent_corruption() {
+    for (rate, seed) in [("0.002", "2"), ("0.01", "1")] {
+        let spec = format!("corrupt={rate}");
+        let sim = Sim::start("lab", None, &["--faults", &spec, "--seed", seed]);
+        let dir = temp_dir(&format!("run-corrupt-{rate}"));
+        let log = dir.join("log");
+        let mut child = run(&sim.arcos_tcp(), &sim.laser(), &log, &[]);
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            if let Ok(Some(status)) = child.try_wait() {
+                let out = wait_bounded(child, Duration::from_secs(1));
+                panic!(
+                    "corrupt={rate}: run exited early ({status}): {}",
+                    text(&out).1
+                );
+            }
+            if let Ok(Some(_)) = StateStore::open(&log).unwrap().load() {
+                break;
+            }
+            assert!(Instant::now() < deadline, "corrupt={rate}: nothing saved");
+            std::thread::sleep(Duration::from_millis(200));
+        }
+        signal(&child, libc::SIGTERM);
+        let out = wait_bounded(child, Duration::from_secs(20));
+        let (_, stderr) = text(&out);
+        assert_eq!(out.status.code(), Some(0), "corrupt={rate}: {stderr}");
+        assert!(stderr.contains("connected"), "{stderr}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
