@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use papillon::config::{Address, BoardConfig, ConfigError};
-use papillon::onboard::runtime::{self, ProbeOptions, RunOptions};
+use papillon::onboard::runtime::{self, ProbeOptions, RunOptions, Start};
 
 #[derive(Parser)]
 #[command(
@@ -78,6 +78,10 @@ struct RunArgs {
     /// Continue the mission saved in the log directory.
     #[arg(long)]
     resume: bool,
+    /// Start a new mission even if an unfinished one is saved in the log directory: its
+    /// files are first moved to `<log-dir>/previous-N/`.
+    #[arg(long, conflicts_with = "resume")]
+    fresh: bool,
 }
 
 /// Exit code for a missing or unreadable file.
@@ -258,7 +262,11 @@ fn run(args: RunArgs) -> ExitCode {
     let options = RunOptions {
         board,
         log_dir: args.log_dir,
-        resume: args.resume,
+        start: match (args.resume, args.fresh) {
+            (true, _) => Start::Resume,
+            (_, true) => Start::Fresh,
+            _ => Start::New,
+        },
     };
     let result = runtime().block_on(runtime::run_with(
         options,

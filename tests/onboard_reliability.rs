@@ -115,3 +115,89 @@ fn run_connects_at_0_2_and_1_percent_corruption() {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
+
+/// A saved, unfinished mission in `log`, as `kill -9` leaves it: a state and a map.
+fn plant_unfinished_mission(log: &Path) -> (Vec<u8>, Vec<u8>) {
+    use papillon::onboard::persist::{MapImage, MissionState, STATE_VERSION};
+    let store = StateStore::open(log).unwrap();
+    let state = MissionState {
+        version: STATE_VERSION,
+        mission_time_s: 42.0,
+        coverage: 0.4,
+        finished: false,
+        ..MissionState::default()
+    };
+    let map = MapImage {
+        width: 4,
+        height: 2,
+        resolution_m: 0.1,
+        origin_x_m: 0.0,
+        origin_y_m: 0.0,
+        pixels: vec![0, 254, 254, 205, 205, 254, 0, 0],
+    };
+    store.save(&state, Some(&map)).unwrap();
+    std::fs::write(
+        log.join("telemetry.jsonl"),
+        "{\"t_s\":1.0,\"kind\":\"pose\"}\n",
+    )
+    .unwrap();
+    (
+        std::fs::read(log.join("state.json")).unwrap(),
+        std::fs::read(log.join("map.pgm")).unwrap(),
+    )
+}
+
+/// Item 2: `run` without `--resume` on a log directory holding an unfinished mission is
+/// refused at once and the saved files are left as they were (before the fix it started a
+/// new mission and overwrote them); `--resume` and `--fresh` together are refused; `--fresh`
+/// moves the old files aside into `previous-1/` and starts anew.
+#[test]
+fn an_unfinished_saved_mission_is_never_overwritten_without_fresh() {
+    let sim = Sim::start("lab", None, &[]);
+    let dir = temp_dir("unfinished");
+    let log = dir.join("log");
+    let (state, map) = plant_unfinished_mission(&log);
+
+    let out = wait_bounded(
+        run(&sim.arcos_tcp(), &sim.laser(), &log, &[]),
+        Duration::from_secs(20),
+    );
+    let (_, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("unfinished mission")
+            && stderr.contains("--resume")
+            && stderr.contains("--fresh")
+            && stderr.contains(log.to_str().unwrap()),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(log.join("state.json")).unwrap(), state);
+    assert_eq!(std::fs::read(log.join("map.pgm")).unwrap(), map);
+
+    let out = wait_bounded(
+        run(
+            &sim.arcos_tcp(),
+            &sim.laser(),
+            &log,
+            &["--resume", "--fresh"],
+        ),
+        Duration::from_secs(20),
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out).1);
+    assert!(text(&out).1.contains("--fresh"), "{}", text(&out).1);
+
+    let child = run(&sim.arcos_tcp(), &sim.laser(), &log, &["--fresh"]);
+    wait_for_a_save(&log, Duration::from_secs(60));
+    signal(&child, libc::SIGTERM);
+    let out = wait_bounded(child, Duration::from_secs(20));
+    let (_, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("previous-1"), "{stderr}");
+    let aside = log.join("previous-1");
+    assert_eq!(std::fs::read(aside.join("state.json")).unwrap(), state);
+    assert_eq!(std::fs::read(aside.join("map.pgm")).unwrap(), map);
+    assert!(aside.join("map.yaml").exists());
+    assert!(aside.join("telemetry.jsonl").exists());
+    assert_ne!(std::fs::read(log.join("state.json")).unwrap(), state);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -311,6 +311,15 @@ impl From<io::Error> for PersistError {
     }
 }
 
+/// The files of one mission in its log directory.
+pub const MISSION_FILES: [&str; 5] = [
+    "state.json",
+    "map.pgm",
+    "map.yaml",
+    "map.png",
+    "telemetry.jsonl",
+];
+
 /// The mission state files of a log directory.
 #[derive(Clone, Debug)]
 pub struct StateStore {
@@ -348,6 +357,29 @@ impl StateStore {
             serde_json::to_vec_pretty(state).map_err(|e| PersistError::Io(io::Error::other(e)))?;
         write_atomic(&self.dir.join("state.json"), &json)?;
         Ok(())
+    }
+
+    /// Moves the files of the mission saved here (state, map, telemetry) into the first free
+    /// `previous-N/` subdirectory and returns it; `Ok(None)` when there was nothing to move.
+    pub fn set_aside(&self) -> io::Result<Option<PathBuf>> {
+        let present: Vec<&str> = MISSION_FILES
+            .iter()
+            .copied()
+            .filter(|f| fs::symlink_metadata(self.dir.join(f)).is_ok())
+            .collect();
+        if present.is_empty() {
+            return Ok(None);
+        }
+        let aside = (1u32..)
+            .map(|n| self.dir.join(format!("previous-{n}")))
+            .find(|d| fs::symlink_metadata(d).is_err())
+            .ok_or_else(|| io::Error::other("no free previous-N directory"))?;
+        fs::create_dir(&aside)?;
+        for f in present {
+            fs::rename(self.dir.join(f), aside.join(f))?;
+        }
+        File::open(&self.dir)?.sync_all()?;
+        Ok(Some(aside))
     }
 
     /// Loads the last saved state and map; `Ok(None)` when nothing was saved yet.
@@ -531,6 +563,22 @@ mod tests {
             .filter(|e| e.file_name().to_string_lossy().contains(".tmp."))
             .collect();
         assert!(leftovers.is_empty());
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn set_aside_moves_the_mission_into_the_next_free_previous_dir() {
+        let dir = temp_dir("aside");
+        let store = StateStore::open(&dir).unwrap();
+        assert_eq!(store.set_aside().unwrap(), None);
+        store.save(&sample_state(3), Some(&sample_map())).unwrap();
+        fs::create_dir(dir.join("previous-1")).unwrap();
+        let aside = store.set_aside().unwrap().unwrap();
+        assert_eq!(aside, dir.join("previous-2"));
+        assert!(store.load().unwrap().is_none());
+        let moved = StateStore::open(&aside).unwrap().load().unwrap().unwrap();
+        assert_eq!(moved.0, sample_state(3));
+        assert_eq!(moved.1.unwrap(), sample_map());
         fs::remove_dir_all(&dir).unwrap();
     }
 

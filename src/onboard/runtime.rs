@@ -56,6 +56,14 @@ pub enum RuntimeError {
     Persist(PersistError),
     /// `--resume` found no saved mission.
     NothingToResume(PathBuf),
+    /// A new mission would overwrite an unfinished (or unreadable) saved one: neither
+    /// `--resume` nor `--fresh` was given.
+    UnfinishedMission {
+        /// The log directory.
+        dir: PathBuf,
+        /// What is saved there (coverage and mission time, or why it does not load).
+        saved: String,
+    },
     /// The mission could not be set up (names the board field or the saved state).
     Mission(String),
 }
@@ -71,6 +79,13 @@ impl std::fmt::Display for RuntimeError {
             RuntimeError::NothingToResume(dir) => {
                 write!(f, "--resume: no saved mission in {}", dir.display())
             }
+            RuntimeError::UnfinishedMission { dir, saved } => write!(
+                f,
+                "{} holds an unfinished mission ({saved}); pass --resume to continue it, or \
+                 --fresh to start anew (its files are moved to {}/previous-N/)",
+                dir.display(),
+                dir.display()
+            ),
         }
     }
 }
@@ -102,8 +117,21 @@ pub struct RunOptions {
     pub board: BoardConfig,
     /// Log directory.
     pub log_dir: PathBuf,
-    /// Continue the mission saved in `log_dir`.
-    pub resume: bool,
+    /// What to do with a mission saved in `log_dir`.
+    pub start: Start,
+}
+
+/// What `run` does with a mission saved in the log directory.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Start {
+    /// A new mission; refused when an unfinished (or unreadable) one is saved there.
+    #[default]
+    New,
+    /// Continue the saved mission (`--resume`); refused when there is none.
+    Resume,
+    /// A new mission; the saved one's files are first moved to `previous-N/` (`--fresh`).
+    Fresh,
 }
 
 /// How a run ended.
@@ -296,8 +324,33 @@ pub async fn run_with(
 ) -> Result<RunOutcome, RuntimeError> {
     let board = &options.board;
     let store = StateStore::open(&options.log_dir)?;
+    match options.start {
+        Start::New => {
+            let saved = match store.load() {
+                Ok(Some((state, _))) if !state.finished => Some(format!(
+                    "coverage {:.0} % after {:.0} s",
+                    state.coverage * 100.0,
+                    state.mission_time_s
+                )),
+                Ok(_) => None,
+                Err(e) => Some(e.to_string()),
+            };
+            if let Some(saved) = saved {
+                return Err(RuntimeError::UnfinishedMission {
+                    dir: options.log_dir.clone(),
+                    saved,
+                });
+            }
+        }
+        Start::Fresh => {
+            if let Some(aside) = store.set_aside()? {
+                tracing::info!(to = %aside.display(), "the saved mission's files were moved aside");
+            }
+        }
+        Start::Resume => {}
+    }
     let mut telemetry = Telemetry::open(&options.log_dir)?;
-    let resumed = if options.resume {
+    let resumed = if options.start == Start::Resume {
         match store.load()? {
             Some(saved) => {
                 tracing::info!(
@@ -864,7 +917,7 @@ mod tests {
             RunOptions {
                 board,
                 log_dir: dir.clone(),
-                resume: false,
+                start: Start::New,
             },
             byte_codec,
             |_, _| Ok(Box::new(DoneAtOnce) as Box<dyn MissionDriver>),
@@ -907,7 +960,7 @@ mod tests {
             RunOptions {
                 board: BoardConfig::default(),
                 log_dir: dir.clone(),
-                resume: true,
+                start: Start::Resume,
             },
             byte_codec,
             |_, _| Ok(Box::new(DoneAtOnce) as Box<dyn MissionDriver>),
@@ -1299,7 +1352,7 @@ mod reconnect_tests {
             RunOptions {
                 board,
                 log_dir: dir.clone(),
-                resume: false,
+                start: Start::New,
             },
             || Box::new(ByteCodec::default()) as Box<dyn LaserCodec>,
             |_, _| {
