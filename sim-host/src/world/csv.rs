@@ -95,6 +95,7 @@ pub fn parse(text: &str, name: &str, resolution_m: f32) -> Result<World, WorldEr
         resolution_m,
         Point2::default(),
     )?;
+    super::check_size(name, &g, super::RESOLUTION_FLAG)?;
     let mut blocked = vec![false; g.cell_count()];
     for (i, b) in blocked.iter_mut().enumerate() {
         let c = g.cell_center(g.cell(i));

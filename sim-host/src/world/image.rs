@@ -43,6 +43,7 @@ pub fn decode(bytes: &[u8], name: &str, resolution_m: f32) -> Result<World, Worl
         });
     }
     let g = GridGeometry::new(w, h, resolution_m, Point2::default())?;
+    super::check_size(name, &g, "the image's width and height")?;
     let mut blocked = vec![false; w * h];
     for (x, y, p) in grey.enumerate_pixels() {
         let row = h - 1 - y as usize;

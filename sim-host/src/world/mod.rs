@@ -87,6 +87,45 @@ pub enum WorldError {
     },
     /// The grid geometry is invalid.
     Grid(GridError),
+    /// The world would have more than [`MAX_CELLS`] cells.
+    TooLarge {
+        /// The world (a built-in name or the file).
+        name: String,
+        /// Columns it would have (saturated).
+        width: usize,
+        /// Rows it would have (saturated).
+        height: usize,
+        /// The cell size \[m\].
+        resolution_m: f32,
+        /// Where the cell size came from: `--resolution` or the file's field.
+        resolution_from: &'static str,
+    },
+}
+
+/// Most cells a world may have (4096 x 4096): a mission at a finer cell size would need more
+/// memory and time than a simulation is worth.
+pub const MAX_CELLS: usize = 1 << 24;
+
+/// Where the cell size of a world comes from when it is not the file's own.
+pub const RESOLUTION_FLAG: &str = "--resolution";
+
+/// Checks that a world of this geometry has at most [`MAX_CELLS`] cells, before any of them
+/// is allocated.
+pub fn check_size(
+    name: &str,
+    g: &GridGeometry,
+    resolution_from: &'static str,
+) -> Result<(), WorldError> {
+    match g.width.checked_mul(g.height) {
+        Some(n) if n <= MAX_CELLS => Ok(()),
+        _ => Err(WorldError::TooLarge {
+            name: name.to_string(),
+            width: g.width,
+            height: g.height,
+            resolution_m: g.resolution_m,
+            resolution_from,
+        }),
+    }
 }
 
 impl fmt::Display for WorldError {
@@ -118,6 +157,16 @@ impl fmt::Display for WorldError {
                 "world bitmap has {found} cells but its geometry has {expected}"
             ),
             WorldError::Grid(e) => write!(f, "bad world geometry: {e}"),
+            WorldError::TooLarge {
+                name,
+                width,
+                height,
+                resolution_m,
+                resolution_from,
+            } => write!(
+                f,
+                "{name}: {width} x {height} cells of {resolution_m} m ({resolution_from}) is more than the {MAX_CELLS} cells a world may have; choose a larger cell size"
+            ),
         }
     }
 }
