@@ -112,7 +112,7 @@ fn init_logging() {
 
 /// Reads and parses a board file; prints one line and returns the exit code on failure.
 fn load_board(path: &Path) -> Result<BoardConfig, ExitCode> {
-    let bytes = match std::fs::read(path) {
+    let bytes = match papillon::files::read_limited(path, papillon::files::BOARD_MAX_BYTES) {
         Ok(b) => b,
         Err(e) => {
             eprintln!("papillon: cannot read board file {}: {e}", path.display());

@@ -296,7 +296,8 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), MapFileError> {
 
 /// Reads a ROS map (YAML and the image it names, relative to the YAML's folder).
 pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
-    let text = fs::read_to_string(yaml_path).map_err(io_err(yaml_path))?;
+    let text = crate::files::read_limited_to_string(yaml_path, crate::files::TEXT_MAX_BYTES)
+        .map_err(io_err(yaml_path))?;
     let path = || yaml_path.to_path_buf();
     let mut image: Option<String> = None;
     let mut resolution: Option<f32> = None;
@@ -406,7 +407,8 @@ pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
         Some(dir) if !Path::new(&image).is_absolute() => dir.join(&image),
         _ => PathBuf::from(&image),
     };
-    let bytes = fs::read(&image_path).map_err(io_err(&image_path))?;
+    let bytes = crate::files::read_limited(&image_path, crate::files::MAP_MAX_BYTES)
+        .map_err(io_err(&image_path))?;
     let pgm = parse_pgm(&image_path, &bytes)?;
     let geometry = GridGeometry::new(
         pgm.width,

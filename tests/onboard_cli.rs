@@ -91,3 +91,51 @@ fn ports_lists_or_says_none() {
         "{stdout}"
     );
 }
+
+/// Runs `papillon args` for at most `limit`; kills it and fails the test past that.
+fn bounded(args: &[&str], limit: std::time::Duration) -> std::process::Output {
+    use std::process::Stdio;
+    let mut child = Command::new(BIN)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + limit;
+    while child.try_wait().unwrap().is_none() {
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("papillon {args:?} still running after {limit:?}");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// Item 4 of issue 20: a board "file" that never ends is refused after a bounded read, on one
+/// line naming it (before: `check --board /dev/zero` read 2.4 GB in 5 s and went on); so is a
+/// board file larger than any board.
+#[test]
+fn a_board_file_that_never_ends_or_is_too_large_is_refused() {
+    let out = bounded(
+        &["check", "--board", "/dev/zero"],
+        std::time::Duration::from_secs(10),
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("/dev/zero") && stderr.contains("larger than"),
+        "{stderr}"
+    );
+    let p = temp_file("huge.json", &" ".repeat(1 << 20));
+    let out = bounded(
+        &["check", "--board", p.to_str().unwrap()],
+        std::time::Duration::from_secs(10),
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("larger than"), "{stderr}");
+    std::fs::remove_file(p).unwrap();
+}

@@ -21,6 +21,7 @@ use std::fs::{self, File, OpenOptions};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+use crate::files::{MAP_MAX_BYTES, TEXT_MAX_BYTES, read_limited, read_limited_to_string};
 use crate::grid::{CellClass, OccupancyGrid};
 
 /// Writes `bytes` to `path` atomically (temporary file, fsync, rename, fsync of the directory).
@@ -385,7 +386,7 @@ impl StateStore {
     /// Loads the last saved state and map; `Ok(None)` when nothing was saved yet.
     pub fn load(&self) -> Result<Option<(MissionState, Option<MapImage>)>, PersistError> {
         let state_path = self.dir.join("state.json");
-        let text = match fs::read(&state_path) {
+        let text = match read_limited(&state_path, MAP_MAX_BYTES) {
             Ok(t) => t,
             Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(e.into()),
@@ -400,8 +401,8 @@ impl StateStore {
             )));
         }
         let map = match (
-            fs::read(self.dir.join("map.pgm")),
-            fs::read_to_string(self.dir.join("map.yaml")),
+            read_limited(&self.dir.join("map.pgm"), MAP_MAX_BYTES),
+            read_limited_to_string(&self.dir.join("map.yaml"), TEXT_MAX_BYTES),
         ) {
             (Ok(pgm), Ok(yaml)) => Some(MapImage::from_pgm_yaml(&pgm, &yaml)?),
             _ => None,

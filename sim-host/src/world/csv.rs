@@ -29,10 +29,11 @@ pub const CSV_START: Pose2 = Pose2 {
 
 /// Reads a CSV map file.
 pub fn load(path: &Path, resolution_m: f32) -> Result<World, WorldError> {
-    let text = std::fs::read_to_string(path).map_err(|e| WorldError::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })?;
+    let text = papillon::files::read_limited_to_string(path, papillon::files::MAP_MAX_BYTES)
+        .map_err(|e| WorldError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
     parse(&text, &path.display().to_string(), resolution_m)
 }
 
