@@ -125,6 +125,10 @@ fn load_board(path: &Path) -> Result<BoardConfig, ExitCode> {
                 println!("{key}: missing")
             }
             ConfigError::UnknownKey { path: key, .. } => println!("{key}: unknown key ({e})"),
+            ConfigError::DuplicateKey { path: key, .. } => println!("{key}: duplicate key ({e})"),
+            ConfigError::Value {
+                path: key, message, ..
+            } if !key.is_empty() => println!("{key}: {message}"),
             _ => {}
         }
         eprintln!("{}: {e}", path.display());
