@@ -28,6 +28,15 @@ pub const PIXEL_OCCUPIED: u8 = 0;
 /// Pixel value written for an unknown cell.
 pub const PIXEL_UNKNOWN: u8 = 205;
 
+/// Finest cell size a map file may give \[m\].
+pub const MIN_RESOLUTION_M: f32 = 0.001;
+/// Coarsest cell size a map file may give \[m\]: a cell wider than 1 m is coarser than the
+/// robot itself (0.5 m).
+pub const MAX_RESOLUTION_M: f32 = 1.0;
+/// Farthest a map's origin may lie from the map frame's \[m\] (beyond, a 32-bit float no longer
+/// resolves centimetres).
+pub const MAX_ORIGIN_M: f32 = 100_000.0;
+
 /// A map read from (or to be written to) a file: geometry and one class per cell, in flat-index
 /// order (row 0 south).
 #[derive(Clone, Debug, PartialEq)]
@@ -335,7 +344,13 @@ pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
                 }
                 image = Some(v.to_string());
             }
-            "resolution" => resolution = Some(number(value).ok_or_else(|| bad("a number"))?),
+            "resolution" => {
+                resolution = Some(
+                    number(value)
+                        .filter(|r| (MIN_RESOLUTION_M..=MAX_RESOLUTION_M).contains(r))
+                        .ok_or_else(|| bad("a number from 0.001 to 1 (the cell size in metres)"))?,
+                )
+            }
             "occupied_thresh" => {
                 occupied_thresh = Some(number(value).ok_or_else(|| bad("a number"))?)
             }
@@ -358,7 +373,8 @@ pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
                     *slot = parts
                         .next()
                         .and_then(number)
-                        .ok_or_else(|| bad("[x, y, yaw]"))?;
+                        .filter(|v| v.abs() <= MAX_ORIGIN_M)
+                        .ok_or_else(|| bad("[x, y, yaw], each within ±100 km"))?;
                 }
                 if parts.next().is_some() {
                     return Err(bad("[x, y, yaw]"));

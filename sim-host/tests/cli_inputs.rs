@@ -175,3 +175,92 @@ fn a_map_file_that_never_ends_is_refused_after_a_bounded_read() {
     assert_refused(&out, &["zero.pgm", "larger than"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Item 6: a ROS map whose YAML says `resolution: 1e30` is refused naming the file and the
+/// field (before: a mission ran on it and exited 0 with "0 of 0 observable cells").
+#[test]
+fn a_map_yaml_with_a_nonsense_resolution_is_refused() {
+    let dir = temp_dir("yaml-res");
+    std::fs::write(
+        dir.join("m.pgm"),
+        b"P2\n3 2\n255\n254 254 254\n254 254 254\n",
+    )
+    .unwrap();
+    for resolution in ["1e30", "0", "-0.1", "1e-9"] {
+        let yaml = dir.join("m.yaml");
+        std::fs::write(
+            &yaml,
+            format!(
+                "image: m.pgm\nresolution: {resolution}\norigin: [0.0, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+            ),
+        )
+        .unwrap();
+        let out = sim(
+            &["mission", "--map", yaml.to_str().unwrap()],
+            Duration::from_secs(20),
+        );
+        assert_refused(&out, &[yaml.to_str().unwrap(), "resolution"]);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Item 6: a start pose outside the map is refused naming `--start` (before: `mission --start
+/// 1e9 1e9` ran and exited 0 with "0 of 0 observable cells"); so is a cell size coarser than
+/// the robot.
+#[test]
+fn a_start_outside_the_map_and_a_cell_coarser_than_the_robot_are_refused() {
+    let limit = Duration::from_secs(20);
+    for start in [["1e9", "1e9"], ["-3", "2"], ["2", "8.5"]] {
+        let out = sim(
+            &["mission", "--map", "lab", "--start", start[0], start[1]],
+            limit,
+        );
+        assert_refused(&out, &["--start", "outside", "lab"]);
+        let out = sim(
+            &[
+                "score",
+                "--map",
+                "lab",
+                "--start",
+                start[0],
+                start[1],
+                "--robot-map",
+                "nowhere.yaml",
+            ],
+            limit,
+        );
+        assert_refused(&out, &["--start", "outside", "lab"]);
+    }
+    for res in ["5", "100", "1e30"] {
+        let out = sim(&["mission", "--map", "lab", "--resolution", res], limit);
+        assert_refused(&out, &["--resolution"]);
+    }
+}
+
+/// Item 6: `serve --faults latency=1e12` (31 years) is refused naming the item (before: the
+/// server started).
+#[test]
+fn serve_refuses_a_latency_or_jitter_of_years() {
+    for spec in ["latency=1e12", "jitter=1e9", "latency=100000"] {
+        let out = sim(
+            &[
+                "serve",
+                "--map",
+                "lab",
+                "--tcp",
+                "127.0.0.1:0",
+                "--laser",
+                "127.0.0.1:0",
+                "--faults",
+                spec,
+            ],
+            Duration::from_secs(10),
+        );
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(2), "{spec}: {stderr}");
+        assert!(
+            stderr.contains("--faults") && stderr.contains(spec),
+            "{spec}: {stderr}"
+        );
+    }
+}
