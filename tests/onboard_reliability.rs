@@ -201,3 +201,53 @@ fn an_unfinished_saved_mission_is_never_overwritten_without_fresh() {
     assert_ne!(std::fs::read(log.join("state.json")).unwrap(), state);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Item 7: a serial port that does not exist (ENOENT) or is not a serial port (`/dev/null`,
+/// ENOTTY; a plain file) fails at once with one line naming the port and the flag (before:
+/// retried like a lost link for 31 s).
+#[test]
+fn a_port_that_does_not_exist_or_is_no_serial_port_fails_at_once() {
+    let dir = temp_dir("badport");
+    let log = dir.join("log");
+    let plain = dir.join("plain-file");
+    std::fs::write(&plain, b"").unwrap();
+    let board = board();
+    for (port, what) in [
+        ("/dev/nonexistent", "no such device"),
+        ("/dev/null", "not a serial port"),
+        (plain.to_str().unwrap(), "not a serial port"),
+    ] {
+        let began = Instant::now();
+        let args = [
+            "run",
+            "--board",
+            &board,
+            "--port",
+            port,
+            "--log-dir",
+            log.to_str().unwrap(),
+        ];
+        let out = wait_bounded(papillon(&args, &dir), Duration::from_secs(10));
+        let (_, stderr) = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{port}: {stderr}");
+        assert!(
+            began.elapsed() < Duration::from_secs(3),
+            "{port}: {:?}",
+            began.elapsed()
+        );
+        let last = stderr.lines().last().unwrap_or("");
+        assert!(
+            last.contains(port) && last.contains(what) && last.contains("--port"),
+            "{port}: {stderr}"
+        );
+        assert!(!stderr.contains("retrying"), "{port}: {stderr}");
+        let out = wait_bounded(
+            papillon(&["probe", "--port", port], &dir),
+            Duration::from_secs(10),
+        );
+        let (_, stderr) = text(&out);
+        assert_eq!(out.status.code(), Some(1), "{port}: {stderr}");
+        assert!(stderr.contains(port) && stderr.contains(what), "{stderr}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

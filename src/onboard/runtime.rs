@@ -17,7 +17,9 @@ use tokio::time::Instant;
 
 use super::driver::{MissionCommand, MissionDriver};
 use super::laser::{LaserCodec, Lms1xxClient};
-use super::link::{Backoff, TcpLink, connect_with_backoff, open_robot_link};
+use super::link::{
+    Backoff, TcpLink, connect_with_backoff, open_robot_link, permanent_always, permanent_at_start,
+};
 use super::lms200::Lms200Client;
 use super::persist::{MapImage, MissionState, PersistError, STATE_VERSION, StateStore, Telemetry};
 use super::robot::{ArcosClient, Fault, MotionLimits, SessionError, SessionOptions};
@@ -167,15 +169,39 @@ pub async fn shutdown_signal() {
     }
 }
 
+/// Whether a link is opened for the first time or reopened after a loss: a missing serial
+/// device is an error at once at start-up, and waited for (with back-off) after a loss.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Opening {
+    /// At start-up.
+    First,
+    /// After the link was lost.
+    Again,
+}
+
+impl Opening {
+    fn permanent(self) -> fn(&io::Error) -> bool {
+        match self {
+            Opening::First => permanent_at_start,
+            Opening::Again => permanent_always,
+        }
+    }
+}
+
 /// Opens the robot link with back-off and runs the ARCOS start-up (handshake, CONFIG check,
 /// HOSTBAUD, ENABLE, limits).
-pub async fn connect_robot(board: &BoardConfig) -> Result<ArcosClient, RuntimeError> {
+pub async fn connect_robot(
+    board: &BoardConfig,
+    opening: Opening,
+) -> Result<ArcosClient, RuntimeError> {
     let tcp = board.link.tcp.as_ref().map(|a| a.as_str().to_string());
     let port = board.link.port.as_str().to_string();
     let baud = board.link.baud;
     let link = connect_with_backoff(
         Backoff::default(),
         || open_robot_link(tcp.as_deref(), &port, baud),
+        opening.permanent(),
         |attempt, e| tracing::warn!(attempt, error = %e, "robot link not available, retrying"),
     )
     .await?;
@@ -220,6 +246,7 @@ impl LaserClient {
 pub async fn connect_laser(
     board: &BoardConfig,
     codec: Box<dyn LaserCodec>,
+    opening: Opening,
 ) -> Result<LaserClient, RuntimeError> {
     match board.laser_model() {
         Some(LaserModel::Lms1xx) => {
@@ -232,6 +259,7 @@ pub async fn connect_laser(
             let link = connect_with_backoff(
                 Backoff::default(),
                 || TcpLink::connect(&addr),
+                opening.permanent(),
                 |attempt, e| tracing::warn!(attempt, error = %e, "laser not available, retrying"),
             )
             .await?;
@@ -255,6 +283,7 @@ pub async fn connect_laser(
             let link = connect_with_backoff(
                 Backoff::default(),
                 || open_robot_link(None, &port, super::lms200::POWER_UP_BAUD),
+                opening.permanent(),
                 |attempt, e| tracing::warn!(attempt, error = %e, "laser not available, retrying"),
             )
             .await?;
@@ -270,7 +299,8 @@ pub async fn connect_laser(
 /// broke, as opposed to a robot or a board that does not fit.
 fn worth_retrying(e: &RuntimeError) -> bool {
     match e {
-        RuntimeError::Link(_) | RuntimeError::Laser(_) => true,
+        RuntimeError::Link(e) => !permanent_always(e),
+        RuntimeError::Laser(_) => true,
         RuntimeError::Session(s) => matches!(
             s,
             SessionError::Io(_)
@@ -366,7 +396,7 @@ pub async fn run_with(
         None
     };
     let mut shutdown = std::pin::pin!(shutdown);
-    let mut client = connect_robot(board).await?;
+    let mut client = connect_robot(board, Opening::First).await?;
     let mut mission = match make_mission(board, resumed.as_ref()) {
         Ok(m) => m,
         Err(e) => {
@@ -375,7 +405,7 @@ pub async fn run_with(
         }
     };
     let outcome = {
-        let mut laser_client = connect_laser(board, laser()).await?;
+        let mut laser_client = connect_laser(board, laser(), Opening::First).await?;
         // Mission time runs on across reconnections, and across a `--resume` from where the
         // saved mission stopped.
         let resumed_s = resumed
@@ -429,12 +459,15 @@ pub async fn run_with(
             )?;
             let reconnect = async {
                 if robot_lost {
-                    client = retry_session("robot", || connect_robot(board)).await?;
+                    client =
+                        retry_session("robot", || connect_robot(board, Opening::Again)).await?;
                     // Motion stays refused until the mission has re-planned.
                     client.halt(Fault::Link).await?;
                 } else {
                     let _ = client.halt(Fault::Link).await;
-                    laser_client = retry_session("laser", || connect_laser(board, laser())).await?;
+                    laser_client =
+                        retry_session("laser", || connect_laser(board, laser(), Opening::Again))
+                            .await?;
                 }
                 Ok::<(), RuntimeError>(())
             };
