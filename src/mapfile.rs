@@ -284,7 +284,7 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), MapFileError> {
     let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
     tmp_name.push(".tmp");
     let tmp = path.with_file_name(tmp_name);
-    let mut file = fs::File::create(&tmp).map_err(io_err(&tmp))?;
+    let mut file = crate::files::create_temporary(&tmp).map_err(io_err(&tmp))?;
     file.write_all(bytes).map_err(io_err(&tmp))?;
     file.sync_all().map_err(io_err(&tmp))?;
     drop(file);

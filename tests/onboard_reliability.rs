@@ -251,3 +251,56 @@ fn a_port_that_does_not_exist_or_is_no_serial_port_fails_at_once() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Item 8: a symbolic link planted as `telemetry.jsonl` is refused before anything is written
+/// through it (before: the telemetry was appended to whatever it pointed to).
+#[test]
+fn a_symlink_planted_as_the_telemetry_log_is_refused() {
+    let sim = Sim::start("lab", None, &[]);
+    let dir = temp_dir("telemetry-link");
+    let log = dir.join("log");
+    std::fs::create_dir_all(&log).unwrap();
+    let victim = dir.join("victim.txt");
+    std::fs::write(&victim, "precious\n").unwrap();
+    std::os::unix::fs::symlink(&victim, log.join("telemetry.jsonl")).unwrap();
+    let out = wait_bounded(
+        run(&sim.arcos_tcp(), &sim.laser(), &log, &[]),
+        Duration::from_secs(20),
+    );
+    let (_, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("telemetry.jsonl") && stderr.contains("symbolic link"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious\n");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Item 8: a symbolic link planted where the running program writes its temporary state
+/// file (`.state.json.tmp.<pid>`) is not followed: the saves go on, and what it points to is
+/// left alone (before: the save truncated and overwrote it).
+#[test]
+fn a_symlink_planted_as_the_temporary_state_file_is_not_followed() {
+    let sim = Sim::start("lab", None, &[]);
+    let dir = temp_dir("state-link");
+    let log = dir.join("log");
+    std::fs::create_dir_all(&log).unwrap();
+    let victim = dir.join("victim.txt");
+    std::fs::write(&victim, "precious\n").unwrap();
+    let child = run(&sim.arcos_tcp(), &sim.laser(), &log, &[]);
+    // Planted as soon as the pid is known, well before the first save (after connecting).
+    for name in ["state.json", "map.pgm", "map.yaml"] {
+        let tmp = log.join(format!(".{name}.tmp.{}", child.id()));
+        std::os::unix::fs::symlink(&victim, &tmp).unwrap();
+    }
+    wait_for_a_save(&log, Duration::from_secs(60));
+    std::thread::sleep(Duration::from_secs(2));
+    signal(&child, libc::SIGTERM);
+    let out = wait_bounded(child, Duration::from_secs(20));
+    let (_, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious\n");
+    assert!(StateStore::open(&log).unwrap().load().unwrap().is_some());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -264,3 +264,31 @@ fn serve_refuses_a_latency_or_jitter_of_years() {
         );
     }
 }
+
+/// Item 8: `serve --truth-log` refuses a symbolic link in the log's place (before: it
+/// truncated what the link pointed to).
+#[test]
+fn serve_refuses_a_truth_log_that_is_a_symlink() {
+    let dir = temp_dir("truth-link");
+    let victim = dir.join("victim.txt");
+    std::fs::write(&victim, "precious\n").unwrap();
+    let log = dir.join("truth.jsonl");
+    std::os::unix::fs::symlink(&victim, &log).unwrap();
+    let out = sim(
+        &[
+            "serve",
+            "--map",
+            "lab",
+            "--tcp",
+            "127.0.0.1:0",
+            "--laser",
+            "127.0.0.1:0",
+            "--truth-log",
+            log.to_str().unwrap(),
+        ],
+        Duration::from_secs(10),
+    );
+    assert_refused(&out, &[log.to_str().unwrap(), "symbolic link"]);
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious\n");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,7 +1,9 @@
 //! Saving and loading the mission state, and the telemetry log.
 //!
-//! Every file is written atomically: a temporary file in the same directory, write, fsync the
-//! file, rename over the old one, fsync the directory. A power cut or `kill -9` therefore
+//! Every file is written atomically: a temporary file in the same directory (created
+//! exclusively: a symbolic link planted in its place is removed, never followed), write, fsync
+//! the file, rename over the old one, fsync the directory. The telemetry log refuses a
+//! symbolic link in its place. A power cut or `kill -9` therefore
 //! leaves either the previous or the new version of each file, never a mix, and a leftover
 //! temporary file is ignored by [`StateStore::load`].
 //!
@@ -17,11 +19,14 @@
 //! [`MapImage::from_grid`]; when `papillon::mapfile` lands on main, [`StateStore::save`]'s map
 //! write (`write_map`) becomes one call to it.
 
-use std::fs::{self, File, OpenOptions};
+use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use crate::files::{MAP_MAX_BYTES, TEXT_MAX_BYTES, read_limited, read_limited_to_string};
+use crate::files::{
+    Existing, MAP_MAX_BYTES, TEXT_MAX_BYTES, create_temporary, open_log, read_limited,
+    read_limited_to_string,
+};
 use crate::grid::{CellClass, OccupancyGrid};
 
 /// Writes `bytes` to `path` atomically (temporary file, fsync, rename, fsync of the directory).
@@ -39,11 +44,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
         std::process::id()
     ));
     let result = (|| {
-        let mut f = OpenOptions::new()
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&tmp)?;
+        let mut f = create_temporary(&tmp)?;
         f.write_all(bytes)?;
         f.sync_all()?;
         drop(f);
@@ -420,10 +421,7 @@ impl Telemetry {
     /// Opens (appends to) `telemetry.jsonl` in `dir`.
     pub fn open(dir: &Path) -> io::Result<Self> {
         fs::create_dir_all(dir)?;
-        let f = OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(dir.join("telemetry.jsonl"))?;
+        let f = open_log(&dir.join("telemetry.jsonl"), Existing::Append)?;
         Ok(Self {
             out: BufWriter::new(f),
         })
