@@ -307,6 +307,19 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), MapFileError> {
 pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
     let text = crate::files::read_limited_to_string(yaml_path, crate::files::TEXT_MAX_BYTES)
         .map_err(io_err(yaml_path))?;
+    parse_map(yaml_path, &text, |image_path| {
+        crate::files::read_limited(image_path, crate::files::MAP_MAX_BYTES)
+            .map_err(io_err(image_path))
+    })
+}
+
+/// Parses a ROS map from its YAML `text` (read from `yaml_path`, which errors name and image
+/// paths are relative to); `load_image` reads the image the YAML names.
+pub fn parse_map(
+    yaml_path: &Path,
+    text: &str,
+    load_image: impl FnOnce(&Path) -> Result<Vec<u8>, MapFileError>,
+) -> Result<MapImage, MapFileError> {
     let path = || yaml_path.to_path_buf();
     let mut image: Option<String> = None;
     let mut resolution: Option<f32> = None;
@@ -423,8 +436,7 @@ pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
         Some(dir) if !Path::new(&image).is_absolute() => dir.join(&image),
         _ => PathBuf::from(&image),
     };
-    let bytes = crate::files::read_limited(&image_path, crate::files::MAP_MAX_BYTES)
-        .map_err(io_err(&image_path))?;
+    let bytes = load_image(&image_path)?;
     let pgm = parse_pgm(&image_path, &bytes)?;
     let geometry = GridGeometry::new(
         pgm.width,
