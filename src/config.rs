@@ -477,13 +477,16 @@ pub enum ConfigError {
     Value {
         /// JSON path of the value, such as `$.mission.population` (empty if the parser could
         /// not tell).
-        path: heapless::String<96>,
+        path: &'static str,
         /// Line of the value (1-based; 0 if unknown).
         line: usize,
         /// Column of its first byte (1-based, in bytes; 0 if unknown).
         column: usize,
-        /// What was expected and what was found, or the parser's description.
-        message: heapless::String<96>,
+        /// What the field holds (`a whole number from 0 to 65535`); empty if unknown.
+        expected: &'static str,
+        /// What was found (the value's first bytes, or a string's length), or the parser's
+        /// description when `path` is empty.
+        found: heapless::String<48>,
     },
 }
 
@@ -510,13 +513,15 @@ impl fmt::Display for ConfigError {
                 path,
                 line,
                 column,
-                message,
-            } if !path.is_empty() => {
-                write!(f, "{path} at line {line}, column {column}: {message}")
-            }
-            ConfigError::Value { message, .. } => write!(
+                expected,
+                found,
+            } if !path.is_empty() => write!(
                 f,
-                "a value has the wrong type or is too long for its field ({message}); see docs/user-guide.md for the types"
+                "{path} at line {line}, column {column}: expected {expected}, found {found}"
+            ),
+            ConfigError::Value { found, .. } => write!(
+                f,
+                "a value has the wrong type or is too long for its field ({found}); see docs/user-guide.md for the types"
             ),
         }
     }
@@ -544,10 +549,11 @@ impl BoardConfig {
                 let mut message = heapless::String::new();
                 let _ = fmt::write(&mut message, format_args!("{e}"));
                 Err(ConfigError::Value {
-                    path: heapless::String::new(),
+                    path: "",
                     line: 0,
                     column: 0,
-                    message,
+                    expected: "",
+                    found: message,
                 })
             }
         }

@@ -127,8 +127,11 @@ fn load_board(path: &Path) -> Result<BoardConfig, ExitCode> {
             ConfigError::UnknownKey { path: key, .. } => println!("{key}: unknown key ({e})"),
             ConfigError::DuplicateKey { path: key, .. } => println!("{key}: duplicate key ({e})"),
             ConfigError::Value {
-                path: key, message, ..
-            } if !key.is_empty() => println!("{key}: {message}"),
+                path: key,
+                expected,
+                found,
+                ..
+            } if !key.is_empty() => println!("{key}: expected {expected}, found {found}"),
             _ => {}
         }
         eprintln!("{}: {e}", path.display());

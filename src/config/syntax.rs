@@ -163,16 +163,15 @@ impl Scanner<'_> {
             .iter()
             .position(|(p, ..)| fits && *p == self.path.as_str());
         match entry {
-            Some(i) if self.seen & (1u128 << i) != 0 => {
-                if self.unknown.is_none() {
-                    let (line, column) = self.line_column(start);
-                    self.unknown = Some(ConfigError::DuplicateKey {
-                        path: SCHEMA[i].0,
-                        line,
-                        column,
-                    });
-                }
+            Some(i) if self.seen & (1u128 << i) != 0 && self.unknown.is_none() => {
+                let (line, column) = self.line_column(start);
+                self.unknown = Some(ConfigError::DuplicateKey {
+                    path: SCHEMA[i].0,
+                    line,
+                    column,
+                });
             }
+            Some(i) if self.seen & (1u128 << i) != 0 => {}
             Some(i) => self.seen |= 1u128 << i,
             None if self.unknown.is_none() => {
                 let (line, column) = self.line_column(start);
@@ -195,30 +194,31 @@ impl Scanner<'_> {
         }
         let (path, _, kind) = SCHEMA[entry];
         let token = &self.json[start..self.pos];
-        if let Some(expected) = mismatch(kind, token) {
+        if let Some(mismatch) = mismatch(kind, token) {
             let (line, column) = self.line_column(start);
-            let mut message = heapless::String::new();
-            let shown = core::str::from_utf8(&token[..token.len().min(40)]).unwrap_or("?");
-            let more = if token.len() > 40 { "…" } else { "" };
-            let _ = match expected {
-                Expected::Length { found, max } => fmt::write(
-                    &mut message,
-                    format_args!("expected a string of at most {max} bytes, found {found}"),
+            let mut found = heapless::String::new();
+            let (expected, _) = match mismatch {
+                Expected::Length { found: n, max } => (
+                    if max <= 32 {
+                        "a string of at most 32 bytes"
+                    } else {
+                        "a string of at most 64 bytes"
+                    },
+                    fmt::write(&mut found, format_args!("{n}")),
                 ),
-                Expected::Kind(what) => fmt::write(
-                    &mut message,
-                    format_args!("expected {what}, found {shown}{more}"),
-                ),
+                Expected::Kind(what) => {
+                    let cut = token.len().min(FOUND_SHOWN);
+                    let shown = core::str::from_utf8(&token[..cut]).unwrap_or("?");
+                    let more = if token.len() > cut { "…" } else { "" };
+                    (what, fmt::write(&mut found, format_args!("{shown}{more}")))
+                }
             };
             self.unknown = Some(ConfigError::Value {
-                path: {
-                    let mut p = heapless::String::new();
-                    let _ = p.push_str(path);
-                    p
-                },
+                path,
                 line,
                 column,
-                message,
+                expected,
+                found,
             });
         }
     }
@@ -397,6 +397,9 @@ impl Scanner<'_> {
         Ok(())
     }
 }
+
+/// Bytes of a wrong value shown in its error (its first ones).
+const FOUND_SHOWN: usize = 40;
 
 /// Why a value does not fit its schema entry.
 enum Expected {

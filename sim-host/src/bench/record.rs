@@ -186,7 +186,7 @@ pub fn read_jsonl(path: &Path) -> Result<Vec<RunRecord>, String> {
         if line.trim().is_empty() {
             continue;
         }
-        let r: RunRecord = serde_json::from_str(&line)
+        let r: RunRecord = serde_json::from_str(line)
             .map_err(|e| format!("{} line {}: not a run record: {e}", path.display(), n + 1))?;
         out.push(r);
     }
