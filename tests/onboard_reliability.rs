@@ -187,6 +187,12 @@ fn an_unfinished_saved_mission_is_never_overwritten_without_fresh() {
     assert!(text(&out).1.contains("--fresh"), "{}", text(&out).1);
 
     let child = run(&sim.arcos_tcp(), &sim.laser(), &log, &["--fresh"]);
+    // The planted state is moved aside first, then the new mission saves its own.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !log.join("previous-1").join("state.json").exists() {
+        assert!(Instant::now() < deadline, "nothing moved aside");
+        std::thread::sleep(Duration::from_millis(100));
+    }
     wait_for_a_save(&log, Duration::from_secs(60));
     signal(&child, libc::SIGTERM);
     let out = wait_bounded(child, Duration::from_secs(20));
