@@ -467,11 +467,31 @@ pub enum ConfigError {
         /// JSON path of the key, such as `$.mission.population`.
         path: &'static str,
     },
+    /// A key given twice in the same object.
+    DuplicateKey {
+        /// JSON path of the key, such as `$.mission.seed`.
+        path: &'static str,
+        /// Line of the second occurrence (1-based).
+        line: usize,
+        /// Column of its opening quote (1-based, in bytes).
+        column: usize,
+    },
     /// Well-formed JSON with every key in place, but a value of the wrong type (a string
-    /// where a number belongs, a negative count) or a string too long for its field.
+    /// where a number belongs, a negative count, a fraction for a count) or a string too long
+    /// for its field.
     Value {
-        /// The parser's description of the mismatch.
-        message: heapless::String<96>,
+        /// JSON path of the value, such as `$.mission.population` (empty if the parser could
+        /// not tell).
+        path: &'static str,
+        /// Line of the value (1-based; 0 if unknown).
+        line: usize,
+        /// Column of its first byte (1-based, in bytes; 0 if unknown).
+        column: usize,
+        /// What the field holds (`a whole number from 0 to 65535`); empty if unknown.
+        expected: &'static str,
+        /// What was found (the value's first bytes, or a string's length), or the parser's
+        /// description when `path` is empty.
+        found: heapless::String<48>,
     },
 }
 
@@ -491,9 +511,22 @@ impl fmt::Display for ConfigError {
                 write!(f, "unknown key {path} at line {line}, column {column}")
             }
             ConfigError::MissingKey { path } => write!(f, "missing key {path}"),
-            ConfigError::Value { message } => write!(
+            ConfigError::DuplicateKey { path, line, column } => {
+                write!(f, "duplicate key {path} at line {line}, column {column}")
+            }
+            ConfigError::Value {
+                path,
+                line,
+                column,
+                expected,
+                found,
+            } if !path.is_empty() => write!(
                 f,
-                "a value has the wrong type or is too long for its field ({message}); see docs/user-guide.md for the types"
+                "{path} at line {line}, column {column}: expected {expected}, found {found}"
+            ),
+            ConfigError::Value { found, .. } => write!(
+                f,
+                "a value has the wrong type or is too long for its field ({found}); see docs/user-guide.md for the types"
             ),
         }
     }
@@ -510,8 +543,8 @@ impl BoardConfig {
         if let Some(path) = syntax::SCHEMA
             .iter()
             .enumerate()
-            .find(|(i, (_, required))| *required && seen & (1u128 << i) == 0)
-            .map(|(_, (path, _))| *path)
+            .find(|(i, (_, required, _))| *required && seen & (1u128 << i) == 0)
+            .map(|(_, (path, ..))| *path)
         {
             return Err(ConfigError::MissingKey { path });
         }
@@ -520,7 +553,13 @@ impl BoardConfig {
             Err(e) => {
                 let mut message = heapless::String::new();
                 let _ = fmt::write(&mut message, format_args!("{e}"));
-                Err(ConfigError::Value { message })
+                Err(ConfigError::Value {
+                    path: "",
+                    line: 0,
+                    column: 0,
+                    expected: "",
+                    found: message,
+                })
             }
         }
     }

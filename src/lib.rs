@@ -15,7 +15,8 @@
 //! - [`localize`]: scan-to-map matching that corrects the odometry.
 //! - [`mission`]: the mission state machine, one or several robots.
 //! - [`config`]: the board file (robot, link, laser, grid, mission, PID, safety), parsed
-//!   without an allocator; [`mapfile`] (host only): map files read into an occupancy grid.
+//!   without an allocator; [`mapfile`] (host only): map files read into an occupancy grid;
+//!   [`files`] (host only): bounded reads of every input file.
 //! - [`wire`]: ARCOS, SICK LMS1xx (CoLa-A) and LMS200 wire formats.
 //! - `onboard` (feature `onboard`): the runtime around the core on the robot.
 #![cfg_attr(not(feature = "std"), no_std)]
@@ -24,6 +25,8 @@
 pub mod config;
 pub mod control;
 pub mod explore;
+#[cfg(feature = "std")]
+pub mod files;
 pub mod frontier;
 pub mod geometry;
 pub mod grid;

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use papillon::config::{Address, BoardConfig, ConfigError};
-use papillon::onboard::runtime::{self, ProbeOptions, RunOptions};
+use papillon::onboard::runtime::{self, ProbeOptions, RunOptions, Start};
 
 #[derive(Parser)]
 #[command(
@@ -78,6 +78,10 @@ struct RunArgs {
     /// Continue the mission saved in the log directory.
     #[arg(long)]
     resume: bool,
+    /// Start a new mission even if an unfinished one is saved in the log directory: its
+    /// files are first moved to `<log-dir>/previous-N/`.
+    #[arg(long, conflicts_with = "resume")]
+    fresh: bool,
 }
 
 /// Exit code for a missing or unreadable file.
@@ -108,7 +112,7 @@ fn init_logging() {
 
 /// Reads and parses a board file; prints one line and returns the exit code on failure.
 fn load_board(path: &Path) -> Result<BoardConfig, ExitCode> {
-    let bytes = match std::fs::read(path) {
+    let bytes = match papillon::files::read_limited(path, papillon::files::BOARD_MAX_BYTES) {
         Ok(b) => b,
         Err(e) => {
             eprintln!("papillon: cannot read board file {}: {e}", path.display());
@@ -121,6 +125,13 @@ fn load_board(path: &Path) -> Result<BoardConfig, ExitCode> {
                 println!("{key}: missing")
             }
             ConfigError::UnknownKey { path: key, .. } => println!("{key}: unknown key ({e})"),
+            ConfigError::DuplicateKey { path: key, .. } => println!("{key}: duplicate key ({e})"),
+            ConfigError::Value {
+                path: key,
+                expected,
+                found,
+                ..
+            } if !key.is_empty() => println!("{key}: expected {expected}, found {found}"),
             _ => {}
         }
         eprintln!("{}: {e}", path.display());
@@ -258,7 +269,11 @@ fn run(args: RunArgs) -> ExitCode {
     let options = RunOptions {
         board,
         log_dir: args.log_dir,
-        resume: args.resume,
+        start: match (args.resume, args.fresh) {
+            (true, _) => Start::Resume,
+            (_, true) => Start::Fresh,
+            _ => Start::New,
+        },
     };
     let result = runtime().block_on(runtime::run_with(
         options,

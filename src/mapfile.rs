@@ -28,6 +28,15 @@ pub const PIXEL_OCCUPIED: u8 = 0;
 /// Pixel value written for an unknown cell.
 pub const PIXEL_UNKNOWN: u8 = 205;
 
+/// Finest cell size a map file may give \[m\].
+pub const MIN_RESOLUTION_M: f32 = 0.001;
+/// Coarsest cell size a map file may give \[m\]: a cell wider than 1 m is coarser than the
+/// robot itself (0.5 m).
+pub const MAX_RESOLUTION_M: f32 = 1.0;
+/// Farthest a map's origin may lie from the map frame's \[m\] (beyond, a 32-bit float no longer
+/// resolves centimetres).
+pub const MAX_ORIGIN_M: f32 = 100_000.0;
+
 /// A map read from (or to be written to) a file: geometry and one class per cell, in flat-index
 /// order (row 0 south).
 #[derive(Clone, Debug, PartialEq)]
@@ -275,7 +284,7 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), MapFileError> {
     let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
     tmp_name.push(".tmp");
     let tmp = path.with_file_name(tmp_name);
-    let mut file = fs::File::create(&tmp).map_err(io_err(&tmp))?;
+    let mut file = crate::files::create_temporary(&tmp).map_err(io_err(&tmp))?;
     file.write_all(bytes).map_err(io_err(&tmp))?;
     file.sync_all().map_err(io_err(&tmp))?;
     drop(file);
@@ -296,7 +305,21 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), MapFileError> {
 
 /// Reads a ROS map (YAML and the image it names, relative to the YAML's folder).
 pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
-    let text = fs::read_to_string(yaml_path).map_err(io_err(yaml_path))?;
+    let text = crate::files::read_limited_to_string(yaml_path, crate::files::TEXT_MAX_BYTES)
+        .map_err(io_err(yaml_path))?;
+    parse_map(yaml_path, &text, |image_path| {
+        crate::files::read_limited(image_path, crate::files::MAP_MAX_BYTES)
+            .map_err(io_err(image_path))
+    })
+}
+
+/// Parses a ROS map from its YAML `text` (read from `yaml_path`, which errors name and image
+/// paths are relative to); `load_image` reads the image the YAML names.
+pub fn parse_map(
+    yaml_path: &Path,
+    text: &str,
+    load_image: impl FnOnce(&Path) -> Result<Vec<u8>, MapFileError>,
+) -> Result<MapImage, MapFileError> {
     let path = || yaml_path.to_path_buf();
     let mut image: Option<String> = None;
     let mut resolution: Option<f32> = None;
@@ -334,7 +357,13 @@ pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
                 }
                 image = Some(v.to_string());
             }
-            "resolution" => resolution = Some(number(value).ok_or_else(|| bad("a number"))?),
+            "resolution" => {
+                resolution = Some(
+                    number(value)
+                        .filter(|r| (MIN_RESOLUTION_M..=MAX_RESOLUTION_M).contains(r))
+                        .ok_or_else(|| bad("a number from 0.001 to 1 (the cell size in metres)"))?,
+                )
+            }
             "occupied_thresh" => {
                 occupied_thresh = Some(number(value).ok_or_else(|| bad("a number"))?)
             }
@@ -357,7 +386,8 @@ pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
                     *slot = parts
                         .next()
                         .and_then(number)
-                        .ok_or_else(|| bad("[x, y, yaw]"))?;
+                        .filter(|v| v.abs() <= MAX_ORIGIN_M)
+                        .ok_or_else(|| bad("[x, y, yaw], each within ±100 km"))?;
                 }
                 if parts.next().is_some() {
                     return Err(bad("[x, y, yaw]"));
@@ -406,7 +436,7 @@ pub fn read_map(yaml_path: &Path) -> Result<MapImage, MapFileError> {
         Some(dir) if !Path::new(&image).is_absolute() => dir.join(&image),
         _ => PathBuf::from(&image),
     };
-    let bytes = fs::read(&image_path).map_err(io_err(&image_path))?;
+    let bytes = load_image(&image_path)?;
     let pgm = parse_pgm(&image_path, &bytes)?;
     let geometry = GridGeometry::new(
         pgm.width,

@@ -190,5 +190,27 @@ fn main() {
         s.extend_from_slice(g);
         write(&root.join("lms200_stream"), &format!("golden{i}"), &s);
     }
+
+    // Board files: the shipped boards.
+    let boards = Path::new(env!("CARGO_MANIFEST_DIR")).join("../boards");
+    for name in ["sim.json", "p3dx-lms1xx.json", "p3dx-lms200.json"] {
+        let text = fs::read(boards.join(name)).unwrap();
+        write(&root.join("board_json"), name, &text);
+    }
+
+    // Map files: split byte, YAML, image (a P5 and a P2 PGM of 3 x 2 pixels).
+    let yaml = b"image: map.pgm\nresolution: 0.05\norigin: [-1.0, 2.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n";
+    for (name, image) in [
+        ("p5", &b"P5\n3 2\n255\n\x00\xfe\xcd\xcd\xfe\x00"[..]),
+        ("p2", &b"P2\n# a comment\n3 2\n255\n0 254 205\n205 254 0\n"[..]),
+    ] {
+        let total = 1 + yaml.len() + image.len();
+        // k * (total - 1) / 256 == yaml.len(), rounded up.
+        let k = (yaml.len() * 256).div_ceil(total - 1) as u8;
+        let mut s = vec![k];
+        s.extend_from_slice(yaml);
+        s.extend_from_slice(image);
+        write(&root.join("map_file"), name, &s);
+    }
     println!("seeds written under {}", root.display());
 }

@@ -85,7 +85,16 @@ pub enum FaultSpecError {
         /// The item seen.
         item: String,
     },
+    /// A latency or jitter longer than [`MAX_DELAY_MS`].
+    TooLong {
+        /// The item seen.
+        item: String,
+    },
 }
+
+/// Longest `latency` or `jitter` \[ms\]: a link silent for longer is a cut (`cut=T+D`), and
+/// the firmware's watchdog (2 s) has long stopped the robot.
+pub const MAX_DELAY_MS: u32 = 10_000;
 
 impl std::fmt::Display for FaultSpecError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -101,6 +110,10 @@ impl std::fmt::Display for FaultSpecError {
             FaultSpecError::BadNumber { item } => {
                 write!(f, "in {item:?}: expected a non-negative number")
             }
+            FaultSpecError::TooLong { item } => write!(
+                f,
+                "in {item:?}: expected at most {MAX_DELAY_MS} ms (a longer silence is a cut: cut=T+D)"
+            ),
             FaultSpecError::BadWindow { item } => write!(
                 f,
                 "in {item:?}: expected START+DURATION in seconds, e.g. 10+3"
@@ -129,6 +142,16 @@ impl std::str::FromStr for Faults {
                     .filter(|v| v.is_finite() && *v >= 0.0)
                     .ok_or_else(|| FaultSpecError::BadNumber { item: owned() })
             };
+            // A delay longer than a few seconds is a cut (`cut=T+D`), not a latency.
+            let delay_ms = || {
+                number().and_then(|v| {
+                    if v <= MAX_DELAY_MS as f32 {
+                        Ok(v.round() as u32)
+                    } else {
+                        Err(FaultSpecError::TooLong { item: owned() })
+                    }
+                })
+            };
             let probability = || {
                 value
                     .parse::<f32>()
@@ -153,8 +176,8 @@ impl std::str::FromStr for Faults {
             match name.trim() {
                 "corrupt" => faults.corrupt = probability()?,
                 "drop" => faults.drop = probability()?,
-                "latency" => faults.latency_ms = number()?.round() as u32,
-                "jitter" => faults.jitter_ms = number()?.round() as u32,
+                "latency" => faults.latency_ms = delay_ms()?,
+                "jitter" => faults.jitter_ms = delay_ms()?,
                 "cut" => faults.cuts.push(window()?),
                 "laser-drop" => faults.laser_dropouts.push(window()?),
                 "slip" => faults.slip = Some(number()?),

@@ -95,10 +95,12 @@ fn malformed(path: &Path, line: usize, expected: impl Into<String>, found: &str)
 }
 
 fn read(path: &Path) -> Result<String, MovingAiError> {
-    std::fs::read_to_string(path).map_err(|source| MovingAiError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    papillon::files::read_limited_to_string(path, papillon::files::MAP_MAX_BYTES).map_err(
+        |source| MovingAiError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+    )
 }
 
 /// A Moving AI grid: which cells are blocked, in the file's order (row 0 = north, the first
@@ -154,7 +156,8 @@ impl MovingAiMap {
         if l.trim() != "map" {
             return Err(malformed(path, n, "`map`", l));
         }
-        let mut blocked = Vec::with_capacity(width * height);
+        // The header may promise more cells than the text holds: the rows are counted below.
+        let mut blocked = Vec::with_capacity(width.saturating_mul(height).min(text.len()));
         for y in 0..height {
             let expected = format!("map row {y} of {width} characters from `.GS@OTW`");
             let (n, l) = next(&expected)?;

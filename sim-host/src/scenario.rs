@@ -264,6 +264,9 @@ impl Setup {
                 return Err("--start: expected finite numbers".into());
             }
             world.set_start(pose);
+            if let Some(why) = world.start_outside() {
+                return Err(format!("--start: {why}"));
+            }
         }
         let mut run = RunConfig::new(mission, robots, spec.seed);
         run.body.slip = spec.slip.config();

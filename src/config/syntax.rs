@@ -1,71 +1,94 @@
 //! The syntax and shape check of a board file, before `serde-json-core` reads it: a small
 //! scanner that reports the line and column of a syntax error, rejects keys the schema does not
-//! know and duplicate keys, and records which known keys were present.
+//! know and duplicate keys, checks each value against its field's kind (object, string of at
+//! most N bytes, whole number in the field's range, number) so that a wrong one is reported
+//! with its JSON path, and records which known keys were present.
 
 use super::*;
 
-/// Every key a board file may hold, as a JSON path, and whether it is required.
-pub(super) const SCHEMA: &[(&str, bool)] = &[
-    ("$.robot", true),
-    ("$.robot.name", true),
-    ("$.robot.subclass", true),
-    ("$.robot.radius_m", true),
-    ("$.robot.max_speed_mm_s", true),
-    ("$.robot.max_turn_rate_deg_s", true),
-    ("$.robot.accel_mm_s2", true),
-    ("$.robot.decel_mm_s2", true),
-    ("$.robot.rot_accel_deg_s2", true),
-    ("$.link", true),
-    ("$.link.port", true),
-    ("$.link.tcp", false),
-    ("$.link.baud", true),
-    ("$.link.switch_to_baud", true),
-    ("$.laser", true),
-    ("$.laser.model", true),
-    ("$.laser.address", false),
-    ("$.laser.port", false),
-    ("$.laser.baud", false),
-    ("$.laser.beam_count", true),
-    ("$.laser.first_angle_deg", true),
-    ("$.laser.step_deg", true),
-    ("$.laser.max_range_m", true),
-    ("$.laser.min_range_m", true),
-    ("$.laser.noise_fraction", true),
-    ("$.laser.rate_hz", true),
-    ("$.laser.mount", true),
-    ("$.laser.mount.x_m", true),
-    ("$.laser.mount.y_m", true),
-    ("$.laser.mount.theta_deg", true),
-    ("$.grid", true),
-    ("$.grid.width_m", true),
-    ("$.grid.height_m", true),
-    ("$.grid.resolution_m", true),
-    ("$.grid.origin_x_m", true),
-    ("$.grid.origin_y_m", true),
-    ("$.mission", true),
-    ("$.mission.method", true),
-    ("$.mission.population", true),
-    ("$.mission.generations", true),
-    ("$.mission.strategy", true),
-    ("$.mission.objective", false),
-    ("$.mission.targets", true),
-    ("$.mission.battery_steps", true),
-    ("$.mission.reserve_steps", true),
-    ("$.mission.coverage_target", true),
-    ("$.mission.seed", true),
-    ("$.pid", true),
-    ("$.pid.heading_kp", true),
-    ("$.pid.heading_ki", true),
-    ("$.pid.heading_kd", true),
-    ("$.pid.distance_kp", true),
-    ("$.pid.distance_ki", true),
-    ("$.pid.distance_kd", true),
-    ("$.safety", true),
-    ("$.safety.obstacle_stop_m", true),
-    ("$.safety.stale_timeout_s", true),
-    ("$.safety.back_off_m", true),
-    ("$.persistence", true),
-    ("$.persistence.save_every_s", true),
+/// What a key's value must be.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Kind {
+    /// An object (its keys have their own entries).
+    Object,
+    /// A string of at most this many bytes.
+    Str(usize),
+    /// A whole number from 0 to this.
+    Whole(u64),
+    /// Any number.
+    Number,
+    /// `null` or the inner kind.
+    Optional(&'static Kind),
+}
+
+/// Every key a board file may hold, as a JSON path, whether it is required, and what its value
+/// must be (the field types of [`BoardConfig`]: `Name` 32 bytes, `Address` 64, `u16`, `u32`,
+/// `u64`, `f32`).
+pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
+    ("$.robot", true, Kind::Object),
+    ("$.robot.name", true, Kind::Str(32)),
+    ("$.robot.subclass", true, Kind::Str(32)),
+    ("$.robot.radius_m", true, Kind::Number),
+    ("$.robot.max_speed_mm_s", true, Kind::Number),
+    ("$.robot.max_turn_rate_deg_s", true, Kind::Number),
+    ("$.robot.accel_mm_s2", true, Kind::Number),
+    ("$.robot.decel_mm_s2", true, Kind::Number),
+    ("$.robot.rot_accel_deg_s2", true, Kind::Number),
+    ("$.link", true, Kind::Object),
+    ("$.link.port", true, Kind::Str(64)),
+    ("$.link.tcp", false, Kind::Optional(&Kind::Str(64))),
+    ("$.link.baud", true, Kind::Whole(u32::MAX as u64)),
+    ("$.link.switch_to_baud", true, Kind::Whole(u32::MAX as u64)),
+    ("$.laser", true, Kind::Object),
+    ("$.laser.model", true, Kind::Str(32)),
+    ("$.laser.address", false, Kind::Optional(&Kind::Str(64))),
+    ("$.laser.port", false, Kind::Optional(&Kind::Str(64))),
+    (
+        "$.laser.baud",
+        false,
+        Kind::Optional(&Kind::Whole(u32::MAX as u64)),
+    ),
+    ("$.laser.beam_count", true, Kind::Whole(u16::MAX as u64)),
+    ("$.laser.first_angle_deg", true, Kind::Number),
+    ("$.laser.step_deg", true, Kind::Number),
+    ("$.laser.max_range_m", true, Kind::Number),
+    ("$.laser.min_range_m", true, Kind::Number),
+    ("$.laser.noise_fraction", true, Kind::Number),
+    ("$.laser.rate_hz", true, Kind::Number),
+    ("$.laser.mount", true, Kind::Object),
+    ("$.laser.mount.x_m", true, Kind::Number),
+    ("$.laser.mount.y_m", true, Kind::Number),
+    ("$.laser.mount.theta_deg", true, Kind::Number),
+    ("$.grid", true, Kind::Object),
+    ("$.grid.width_m", true, Kind::Number),
+    ("$.grid.height_m", true, Kind::Number),
+    ("$.grid.resolution_m", true, Kind::Number),
+    ("$.grid.origin_x_m", true, Kind::Number),
+    ("$.grid.origin_y_m", true, Kind::Number),
+    ("$.mission", true, Kind::Object),
+    ("$.mission.method", true, Kind::Str(32)),
+    ("$.mission.population", true, Kind::Whole(u16::MAX as u64)),
+    ("$.mission.generations", true, Kind::Whole(u16::MAX as u64)),
+    ("$.mission.strategy", true, Kind::Str(32)),
+    ("$.mission.objective", false, Kind::Optional(&Kind::Str(32))),
+    ("$.mission.targets", true, Kind::Whole(u16::MAX as u64)),
+    ("$.mission.battery_steps", true, Kind::Number),
+    ("$.mission.reserve_steps", true, Kind::Number),
+    ("$.mission.coverage_target", true, Kind::Number),
+    ("$.mission.seed", true, Kind::Whole(u64::MAX)),
+    ("$.pid", true, Kind::Object),
+    ("$.pid.heading_kp", true, Kind::Number),
+    ("$.pid.heading_ki", true, Kind::Number),
+    ("$.pid.heading_kd", true, Kind::Number),
+    ("$.pid.distance_kp", true, Kind::Number),
+    ("$.pid.distance_ki", true, Kind::Number),
+    ("$.pid.distance_kd", true, Kind::Number),
+    ("$.safety", true, Kind::Object),
+    ("$.safety.obstacle_stop_m", true, Kind::Number),
+    ("$.safety.stale_timeout_s", true, Kind::Number),
+    ("$.safety.back_off_m", true, Kind::Number),
+    ("$.persistence", true, Kind::Object),
+    ("$.persistence.save_every_s", true, Kind::Number),
 ];
 
 // The seen-set is a `u128`.
@@ -104,7 +127,8 @@ struct Scanner<'a> {
     path: heapless::String<96>,
     /// Schema entries seen so far.
     seen: u128,
-    /// The first unknown key.
+    /// The first unknown or duplicate key, or value of the wrong kind, in document order
+    /// (reported once the whole text is known to be well-formed).
     unknown: Option<ConfigError>,
 }
 
@@ -126,8 +150,9 @@ impl Scanner<'_> {
         }
     }
 
-    /// Records the key spanning `start..end` (quotes included) of the current object.
-    fn key(&mut self, start: usize, end: usize) -> usize {
+    /// Records the key spanning `start..end` (quotes included) of the current object; returns
+    /// the path length to restore afterwards and the key's schema entry, if it has one.
+    fn key(&mut self, start: usize, end: usize) -> (usize, Option<usize>) {
         let restore = self.path.len();
         let key = core::str::from_utf8(&self.json[start + 1..end - 1]).unwrap_or("?");
         let fits = self.path.push('.').is_ok() && self.path.push_str(key).is_ok();
@@ -135,10 +160,19 @@ impl Scanner<'_> {
             // Deeper than any schema path: unknown for sure; keep the prefix readable.
             self.path.truncate(restore);
         }
-        match SCHEMA
+        let entry = SCHEMA
             .iter()
-            .position(|(p, _)| fits && *p == self.path.as_str())
-        {
+            .position(|(p, ..)| fits && *p == self.path.as_str());
+        match entry {
+            Some(i) if self.seen & (1u128 << i) != 0 && self.unknown.is_none() => {
+                let (line, column) = self.line_column(start);
+                self.unknown = Some(ConfigError::DuplicateKey {
+                    path: SCHEMA[i].0,
+                    line,
+                    column,
+                });
+            }
+            Some(i) if self.seen & (1u128 << i) != 0 => {}
             Some(i) => self.seen |= 1u128 << i,
             None if self.unknown.is_none() => {
                 let (line, column) = self.line_column(start);
@@ -150,7 +184,44 @@ impl Scanner<'_> {
             }
             None => {}
         }
-        restore
+        (restore, entry)
+    }
+
+    /// Checks the value spanning `start..self.pos` against the schema entry `entry`; the
+    /// first mismatch is kept for the end of the scan.
+    fn check_kind(&mut self, entry: usize, start: usize) {
+        if self.unknown.is_some() {
+            return;
+        }
+        let (path, _, kind) = SCHEMA[entry];
+        let token = &self.json[start..self.pos];
+        if let Some(mismatch) = mismatch(kind, token) {
+            let (line, column) = self.line_column(start);
+            let mut found = heapless::String::new();
+            let (expected, _) = match mismatch {
+                Expected::Length { found: n, max } => (
+                    if max <= 32 {
+                        "a string of at most 32 bytes"
+                    } else {
+                        "a string of at most 64 bytes"
+                    },
+                    fmt::write(&mut found, format_args!("{n}")),
+                ),
+                Expected::Kind(what) => {
+                    let cut = token.len().min(FOUND_SHOWN);
+                    let shown = core::str::from_utf8(&token[..cut]).unwrap_or("?");
+                    let more = if token.len() > cut { "…" } else { "" };
+                    (what, fmt::write(&mut found, format_args!("{shown}{more}")))
+                }
+            };
+            self.unknown = Some(ConfigError::Value {
+                path,
+                line,
+                column,
+                expected,
+                found,
+            });
+        }
     }
 
     fn peek(&self) -> Option<u8> {
@@ -207,14 +278,18 @@ impl Scanner<'_> {
             }
             let start = self.pos;
             self.string()?;
-            let restore = self.key(start, self.pos);
+            let (restore, entry) = self.key(start, self.pos);
             self.ws();
             if self.peek() != Some(b':') {
                 return Err(self.error("':' after the key"));
             }
             self.pos += 1;
             self.ws();
+            let value_start = self.pos;
             self.value(depth + 1)?;
+            if let Some(entry) = entry {
+                self.check_kind(entry, value_start);
+            }
             self.path.truncate(restore);
             self.ws();
             match self.peek() {
@@ -322,4 +397,82 @@ impl Scanner<'_> {
         }
         Ok(())
     }
+}
+
+/// Bytes of a wrong value shown in its error (its first ones).
+const FOUND_SHOWN: usize = 40;
+
+/// Why a value does not fit its schema entry.
+enum Expected {
+    /// Not of the kind: what was expected.
+    Kind(&'static str),
+    /// A string longer than the entry allows.
+    Length {
+        /// Its length \[bytes\].
+        found: usize,
+        /// The most the entry allows \[bytes\].
+        max: usize,
+    },
+}
+
+/// How `token` (a well-formed JSON value) fails to be of `kind`; `None` if it fits.
+fn mismatch(kind: Kind, token: &[u8]) -> Option<Expected> {
+    let text = core::str::from_utf8(token).unwrap_or("");
+    match kind {
+        Kind::Optional(_) if token == b"null" => None,
+        Kind::Optional(inner) => mismatch(*inner, token),
+        Kind::Object => (token.first() != Some(&b'{')).then_some(Expected::Kind("an object")),
+        Kind::Str(max) => {
+            if token.first() != Some(&b'"') {
+                return Some(Expected::Kind("a string"));
+            }
+            let n = unescaped_len(&token[1..token.len() - 1]);
+            (n > max).then_some(Expected::Length { found: n, max })
+        }
+        Kind::Whole(max) => {
+            let fits =
+                token.iter().all(u8::is_ascii_digit) && text.parse::<u64>().is_ok_and(|v| v <= max);
+            let what = match max {
+                m if m == u64::from(u16::MAX) => "a whole number from 0 to 65535",
+                m if m == u64::from(u32::MAX) => "a whole number from 0 to 4294967295",
+                _ => "a whole number from 0 to 18446744073709551615",
+            };
+            (!fits).then_some(Expected::Kind(what))
+        }
+        Kind::Number => {
+            let fits = matches!(token.first(), Some(b'-' | b'0'..=b'9'))
+                && text
+                    .parse::<f64>()
+                    .is_ok_and(|v| v.is_finite() && v.abs() <= f64::from(f32::MAX));
+            (!fits).then_some(Expected::Kind(
+                "a number (within ±3.4e38, the range of a 32-bit float)",
+            ))
+        }
+    }
+}
+
+/// Bytes of a JSON string's contents (between the quotes, well-formed) once unescaped.
+fn unescaped_len(raw: &[u8]) -> usize {
+    let mut n = 0;
+    let mut i = 0;
+    while i < raw.len() {
+        if raw[i] == b'\\' {
+            if raw.get(i + 1) == Some(&b'u') {
+                let hex = core::str::from_utf8(raw.get(i + 2..i + 6).unwrap_or(b""))
+                    .ok()
+                    .and_then(|h| u32::from_str_radix(h, 16).ok())
+                    .unwrap_or(0);
+                // A surrogate half: its pair makes 4 bytes in all.
+                n += char::from_u32(hex).map_or(2, char::len_utf8);
+                i += 6;
+            } else {
+                n += 1;
+                i += 2;
+            }
+        } else {
+            n += 1;
+            i += 1;
+        }
+    }
+    n
 }

@@ -45,6 +45,81 @@ pub trait RobotLink: AsyncRead + AsyncWrite + Unpin + Send {
     fn describe(&self) -> String;
 }
 
+/// Why a serial port could not be opened, as an [`io::Error`] whose kind tells a permanent
+/// error from a passing one ([`permanent_at_start`], [`permanent_always`]): `NotFound` (no
+/// such device), `InvalidInput` (not a serial port: `/dev/null`, a plain file),
+/// `PermissionDenied`, or another kind.
+fn open_error(path: &str, e: tokio_serial::Error) -> io::Error {
+    use io::ErrorKind as K;
+    let flag = "check --port (or the board's $.link.port)";
+    let kind = match e.kind() {
+        tokio_serial::ErrorKind::Io(kind) => kind,
+        _ => K::Other,
+    };
+    match std::fs::symlink_metadata(path).and_then(|_| std::fs::metadata(path)) {
+        Err(m) if m.kind() == K::NotFound => {
+            return io::Error::new(
+                K::NotFound,
+                format!(
+                    "serial port {path}: no such device; {flag}; `papillon ports` lists this machine's"
+                ),
+            );
+        }
+        Ok(_) if !is_terminal_device(path) => {
+            return io::Error::new(
+                K::InvalidInput,
+                format!("{path} is not a serial port (not a terminal device); {flag}"),
+            );
+        }
+        _ => {}
+    }
+    if kind == K::PermissionDenied {
+        return io::Error::new(
+            K::PermissionDenied,
+            format!("serial port {path}: permission denied (is this user in the `dialout` group?)"),
+        );
+    }
+    io::Error::new(kind, format!("cannot open serial port {path}: {e}"))
+}
+
+/// Whether `path` opens (without waiting for a carrier and without becoming this process's
+/// controlling terminal) as a terminal device, which a serial port is.
+#[cfg(unix)]
+fn is_terminal_device(path: &str) -> bool {
+    use std::io::IsTerminal;
+    use std::os::unix::fs::OpenOptionsExt;
+    std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY)
+        .open(path)
+        .is_ok_and(|f| f.is_terminal())
+}
+
+#[cfg(not(unix))]
+fn is_terminal_device(_path: &str) -> bool {
+    true
+}
+
+/// Whether a link that failed to open with `e` at start-up should be given up at once: the
+/// device does not exist, is not a serial port, or may not be opened. Only a refused or
+/// timed-out connection (a robot still booting, a bridge not yet up) is worth the back-off.
+pub fn permanent_at_start(e: &io::Error) -> bool {
+    matches!(
+        e.kind(),
+        io::ErrorKind::NotFound | io::ErrorKind::InvalidInput | io::ErrorKind::PermissionDenied
+    )
+}
+
+/// Whether a link that failed to reopen with `e` after a loss should be given up: as
+/// [`permanent_at_start`], except that a missing device is waited for (a USB serial adapter
+/// disappears while it re-enumerates).
+pub fn permanent_always(e: &io::Error) -> bool {
+    matches!(
+        e.kind(),
+        io::ErrorKind::InvalidInput | io::ErrorKind::PermissionDenied
+    )
+}
+
 /// A serial port.
 pub struct SerialLink {
     stream: SerialStream,
@@ -61,7 +136,7 @@ impl SerialLink {
             .stop_bits(tokio_serial::StopBits::One)
             .flow_control(tokio_serial::FlowControl::None)
             .open_native_async()
-            .map_err(|e| io::Error::other(format!("cannot open serial port {path}: {e}")))?;
+            .map_err(|e| open_error(path, e))?;
         Ok(Self {
             stream,
             path: path.to_string(),
@@ -314,11 +389,12 @@ impl Backoff {
 }
 
 /// Calls `open` until it succeeds, waiting [`Backoff::delay`] between attempts; returns the
-/// last error after `policy.max_attempts` failures. `on_failure(attempt, error)` is called for
-/// each failure (for logs).
+/// last error after `policy.max_attempts` failures, or at once for an error `permanent` says
+/// will not pass. `on_failure(attempt, error)` is called for each other failure (for logs).
 pub async fn connect_with_backoff<T, F, Fut>(
     policy: Backoff,
     mut open: F,
+    permanent: fn(&io::Error) -> bool,
     mut on_failure: impl FnMut(u32, &io::Error),
 ) -> io::Result<T>
 where
@@ -331,6 +407,9 @@ where
         match open().await {
             Ok(link) => return Ok(link),
             Err(e) => {
+                if permanent(&e) {
+                    return Err(e);
+                }
                 on_failure(attempt, &e);
                 if attempt >= attempts {
                     return Err(e);
@@ -416,6 +495,7 @@ mod tests {
                     }
                 }
             },
+            |_| false,
             |attempt, _| failures.push(attempt),
         )
         .await
@@ -437,12 +517,51 @@ mod tests {
                 calls += 1;
                 async { Err::<(), _>(io::Error::other("refused")) }
             },
+            |_| false,
             |_, _| {},
         )
         .await
         .unwrap_err();
         assert_eq!(calls, 4);
         assert_eq!(err.to_string(), "refused");
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn connect_with_backoff_gives_up_at_once_on_a_permanent_error() {
+        let mut calls = 0u32;
+        let mut logged = 0u32;
+        let err = connect_with_backoff(
+            Backoff::default(),
+            || {
+                calls += 1;
+                async { Err::<(), _>(io::Error::new(io::ErrorKind::NotFound, "gone")) }
+            },
+            permanent_at_start,
+            |_, _| logged += 1,
+        )
+        .await
+        .unwrap_err();
+        assert_eq!((calls, logged), (1, 0));
+        assert_eq!(err.kind(), io::ErrorKind::NotFound);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_missing_device_and_a_device_that_is_no_serial_port_are_told_apart() {
+        let missing = match SerialLink::open("/dev/papillon-no-such-port", 9600) {
+            Err(e) => e,
+            Ok(_) => panic!("opened a missing device"),
+        };
+        assert_eq!(missing.kind(), io::ErrorKind::NotFound);
+        assert!(missing.to_string().contains("no such device"), "{missing}");
+        assert!(permanent_at_start(&missing) && !permanent_always(&missing));
+        let null = match SerialLink::open("/dev/null", 9600) {
+            Err(e) => e,
+            Ok(_) => panic!("opened /dev/null as a serial port"),
+        };
+        assert_eq!(null.kind(), io::ErrorKind::InvalidInput);
+        assert!(null.to_string().contains("not a serial port"), "{null}");
+        assert!(permanent_at_start(&null) && permanent_always(&null));
     }
 
     #[tokio::test]

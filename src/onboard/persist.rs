@@ -1,7 +1,9 @@
 //! Saving and loading the mission state, and the telemetry log.
 //!
-//! Every file is written atomically: a temporary file in the same directory, write, fsync the
-//! file, rename over the old one, fsync the directory. A power cut or `kill -9` therefore
+//! Every file is written atomically: a temporary file in the same directory (created
+//! exclusively: a symbolic link planted in its place is removed, never followed), write, fsync
+//! the file, rename over the old one, fsync the directory. The telemetry log refuses a
+//! symbolic link in its place. A power cut or `kill -9` therefore
 //! leaves either the previous or the new version of each file, never a mix, and a leftover
 //! temporary file is ignored by [`StateStore::load`].
 //!
@@ -17,10 +19,14 @@
 //! [`MapImage::from_grid`]; when `papillon::mapfile` lands on main, [`StateStore::save`]'s map
 //! write (`write_map`) becomes one call to it.
 
-use std::fs::{self, File, OpenOptions};
+use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+use crate::files::{
+    Existing, MAP_MAX_BYTES, TEXT_MAX_BYTES, create_temporary, open_log, read_limited,
+    read_limited_to_string,
+};
 use crate::grid::{CellClass, OccupancyGrid};
 
 /// Writes `bytes` to `path` atomically (temporary file, fsync, rename, fsync of the directory).
@@ -38,11 +44,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
         std::process::id()
     ));
     let result = (|| {
-        let mut f = OpenOptions::new()
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&tmp)?;
+        let mut f = create_temporary(&tmp)?;
         f.write_all(bytes)?;
         f.sync_all()?;
         drop(f);
@@ -311,6 +313,15 @@ impl From<io::Error> for PersistError {
     }
 }
 
+/// The files of one mission in its log directory.
+pub const MISSION_FILES: [&str; 5] = [
+    "state.json",
+    "map.pgm",
+    "map.yaml",
+    "map.png",
+    "telemetry.jsonl",
+];
+
 /// The mission state files of a log directory.
 #[derive(Clone, Debug)]
 pub struct StateStore {
@@ -350,10 +361,33 @@ impl StateStore {
         Ok(())
     }
 
+    /// Moves the files of the mission saved here (state, map, telemetry) into the first free
+    /// `previous-N/` subdirectory and returns it; `Ok(None)` when there was nothing to move.
+    pub fn set_aside(&self) -> io::Result<Option<PathBuf>> {
+        let present: Vec<&str> = MISSION_FILES
+            .iter()
+            .copied()
+            .filter(|f| fs::symlink_metadata(self.dir.join(f)).is_ok())
+            .collect();
+        if present.is_empty() {
+            return Ok(None);
+        }
+        let aside = (1u32..)
+            .map(|n| self.dir.join(format!("previous-{n}")))
+            .find(|d| fs::symlink_metadata(d).is_err())
+            .ok_or_else(|| io::Error::other("no free previous-N directory"))?;
+        fs::create_dir(&aside)?;
+        for f in present {
+            fs::rename(self.dir.join(f), aside.join(f))?;
+        }
+        File::open(&self.dir)?.sync_all()?;
+        Ok(Some(aside))
+    }
+
     /// Loads the last saved state and map; `Ok(None)` when nothing was saved yet.
     pub fn load(&self) -> Result<Option<(MissionState, Option<MapImage>)>, PersistError> {
         let state_path = self.dir.join("state.json");
-        let text = match fs::read(&state_path) {
+        let text = match read_limited(&state_path, MAP_MAX_BYTES) {
             Ok(t) => t,
             Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(e.into()),
@@ -368,8 +402,8 @@ impl StateStore {
             )));
         }
         let map = match (
-            fs::read(self.dir.join("map.pgm")),
-            fs::read_to_string(self.dir.join("map.yaml")),
+            read_limited(&self.dir.join("map.pgm"), MAP_MAX_BYTES),
+            read_limited_to_string(&self.dir.join("map.yaml"), TEXT_MAX_BYTES),
         ) {
             (Ok(pgm), Ok(yaml)) => Some(MapImage::from_pgm_yaml(&pgm, &yaml)?),
             _ => None,
@@ -387,10 +421,7 @@ impl Telemetry {
     /// Opens (appends to) `telemetry.jsonl` in `dir`.
     pub fn open(dir: &Path) -> io::Result<Self> {
         fs::create_dir_all(dir)?;
-        let f = OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(dir.join("telemetry.jsonl"))?;
+        let f = open_log(&dir.join("telemetry.jsonl"), Existing::Append)?;
         Ok(Self {
             out: BufWriter::new(f),
         })
@@ -531,6 +562,22 @@ mod tests {
             .filter(|e| e.file_name().to_string_lossy().contains(".tmp."))
             .collect();
         assert!(leftovers.is_empty());
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn set_aside_moves_the_mission_into_the_next_free_previous_dir() {
+        let dir = temp_dir("aside");
+        let store = StateStore::open(&dir).unwrap();
+        assert_eq!(store.set_aside().unwrap(), None);
+        store.save(&sample_state(3), Some(&sample_map())).unwrap();
+        fs::create_dir(dir.join("previous-1")).unwrap();
+        let aside = store.set_aside().unwrap().unwrap();
+        assert_eq!(aside, dir.join("previous-2"));
+        assert!(store.load().unwrap().is_none());
+        let moved = StateStore::open(&aside).unwrap().load().unwrap().unwrap();
+        assert_eq!(moved.0, sample_state(3));
+        assert_eq!(moved.1.unwrap(), sample_map());
         fs::remove_dir_all(&dir).unwrap();
     }
 

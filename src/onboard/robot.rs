@@ -70,8 +70,12 @@ pub struct SessionOptions {
     pub sync_timeout: Duration,
     /// Handshake attempts (each from SYNC0) before giving up.
     pub sync_attempts: u32,
-    /// Wait for the CONFIG packet.
+    /// Wait for the CONFIG packet after each request.
     pub config_timeout: Duration,
+    /// CONFIG requests before giving up: a request is sent again when no whole CONFIG packet
+    /// came within `config_timeout` (a byte corrupted on the line loses the whole packet: at
+    /// 1 % of bytes corrupted, about two CONFIG packets in three).
+    pub config_attempts: u32,
     /// Wait for any packet after a HOSTBAUD switch before reverting.
     pub baud_probe_timeout: Duration,
     /// Send PULSE when nothing else was sent for this long.
@@ -89,6 +93,7 @@ impl Default for SessionOptions {
             sync_timeout: Duration::from_millis(1000),
             sync_attempts: 6,
             config_timeout: Duration::from_millis(1000),
+            config_attempts: 16,
             baud_probe_timeout: Duration::from_millis(900),
             keepalive: Duration::from_millis(500),
             command_spacing: Duration::from_millis(5),
@@ -275,7 +280,10 @@ impl fmt::Display for SessionError {
                 f,
                 "{command} {value} does not fit the command's 16-bit argument in the robot's units"
             ),
-            SessionError::NoConfig => write!(f, "the robot sent no CONFIG packet"),
+            SessionError::NoConfig => write!(
+                f,
+                "the robot sent no whole CONFIG packet (asked several times); is the line very noisy?"
+            ),
             SessionError::MicrocontrollerReset { id } => {
                 write!(f, "the microcontroller reset (packet 0x{id:02X})")
             }
@@ -392,8 +400,7 @@ impl ArcosClient {
         client.check_identity(&client.identity.class, &client.identity.subclass)?;
         client.send(&Command::Open(Some(1))).await?;
         client.keepalive_on = true;
-        client.send(&Command::Config(Some(1))).await?;
-        let config = client.await_config().await?;
+        let config = client.request_config().await?;
         client.check_identity(&config.robot_type, &config.subtype)?;
         // check_identity refused a subclass without factors.
         if let Some(factors) = ConversionFactors::for_subclass(&config.subtype) {
@@ -417,6 +424,10 @@ impl ArcosClient {
     async fn handshake(&mut self) -> Result<(), SessionError> {
         let mut last_id = None;
         for _attempt in 0..self.options.sync_attempts {
+            // A corrupted length byte leaves the decoder waiting for a frame that never
+            // ends, which would swallow the next replies: start each attempt afresh.
+            self.codec.reset();
+            self.pending.clear();
             let mut step = 0u8;
             while step <= 2 {
                 let sync = match step {
@@ -492,6 +503,21 @@ impl ArcosClient {
             });
         }
         Ok(())
+    }
+
+    /// Sends the CONFIG request until a CONFIG packet comes back, at most
+    /// `config_attempts` times.
+    async fn request_config(&mut self) -> Result<ConfigPacket, SessionError> {
+        for attempt in 1..=self.options.config_attempts.max(1) {
+            self.send(&Command::Config(Some(1))).await?;
+            match self.await_config().await {
+                Err(SessionError::NoConfig) => {
+                    tracing::debug!(attempt, "no whole CONFIG packet; asking again");
+                }
+                other => return other,
+            }
+        }
+        Err(SessionError::NoConfig)
     }
 
     async fn await_config(&mut self) -> Result<ConfigPacket, SessionError> {

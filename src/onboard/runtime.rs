@@ -17,7 +17,9 @@ use tokio::time::Instant;
 
 use super::driver::{MissionCommand, MissionDriver};
 use super::laser::{LaserCodec, Lms1xxClient};
-use super::link::{Backoff, TcpLink, connect_with_backoff, open_robot_link};
+use super::link::{
+    Backoff, TcpLink, connect_with_backoff, open_robot_link, permanent_always, permanent_at_start,
+};
 use super::lms200::Lms200Client;
 use super::persist::{MapImage, MissionState, PersistError, STATE_VERSION, StateStore, Telemetry};
 use super::robot::{ArcosClient, Fault, MotionLimits, SessionError, SessionOptions};
@@ -56,6 +58,14 @@ pub enum RuntimeError {
     Persist(PersistError),
     /// `--resume` found no saved mission.
     NothingToResume(PathBuf),
+    /// A new mission would overwrite an unfinished (or unreadable) saved one: neither
+    /// `--resume` nor `--fresh` was given.
+    UnfinishedMission {
+        /// The log directory.
+        dir: PathBuf,
+        /// What is saved there (coverage and mission time, or why it does not load).
+        saved: String,
+    },
     /// The mission could not be set up (names the board field or the saved state).
     Mission(String),
 }
@@ -71,6 +81,13 @@ impl std::fmt::Display for RuntimeError {
             RuntimeError::NothingToResume(dir) => {
                 write!(f, "--resume: no saved mission in {}", dir.display())
             }
+            RuntimeError::UnfinishedMission { dir, saved } => write!(
+                f,
+                "{} holds an unfinished mission ({saved}); pass --resume to continue it, or \
+                 --fresh to start anew (its files are moved to {}/previous-N/)",
+                dir.display(),
+                dir.display()
+            ),
         }
     }
 }
@@ -102,8 +119,21 @@ pub struct RunOptions {
     pub board: BoardConfig,
     /// Log directory.
     pub log_dir: PathBuf,
-    /// Continue the mission saved in `log_dir`.
-    pub resume: bool,
+    /// What to do with a mission saved in `log_dir`.
+    pub start: Start,
+}
+
+/// What `run` does with a mission saved in the log directory.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Start {
+    /// A new mission; refused when an unfinished (or unreadable) one is saved there.
+    #[default]
+    New,
+    /// Continue the saved mission (`--resume`); refused when there is none.
+    Resume,
+    /// A new mission; the saved one's files are first moved to `previous-N/` (`--fresh`).
+    Fresh,
 }
 
 /// How a run ended.
@@ -139,15 +169,39 @@ pub async fn shutdown_signal() {
     }
 }
 
+/// Whether a link is opened for the first time or reopened after a loss: a missing serial
+/// device is an error at once at start-up, and waited for (with back-off) after a loss.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Opening {
+    /// At start-up.
+    First,
+    /// After the link was lost.
+    Again,
+}
+
+impl Opening {
+    fn permanent(self) -> fn(&io::Error) -> bool {
+        match self {
+            Opening::First => permanent_at_start,
+            Opening::Again => permanent_always,
+        }
+    }
+}
+
 /// Opens the robot link with back-off and runs the ARCOS start-up (handshake, CONFIG check,
 /// HOSTBAUD, ENABLE, limits).
-pub async fn connect_robot(board: &BoardConfig) -> Result<ArcosClient, RuntimeError> {
+pub async fn connect_robot(
+    board: &BoardConfig,
+    opening: Opening,
+) -> Result<ArcosClient, RuntimeError> {
     let tcp = board.link.tcp.as_ref().map(|a| a.as_str().to_string());
     let port = board.link.port.as_str().to_string();
     let baud = board.link.baud;
     let link = connect_with_backoff(
         Backoff::default(),
         || open_robot_link(tcp.as_deref(), &port, baud),
+        opening.permanent(),
         |attempt, e| tracing::warn!(attempt, error = %e, "robot link not available, retrying"),
     )
     .await?;
@@ -192,6 +246,7 @@ impl LaserClient {
 pub async fn connect_laser(
     board: &BoardConfig,
     codec: Box<dyn LaserCodec>,
+    opening: Opening,
 ) -> Result<LaserClient, RuntimeError> {
     match board.laser_model() {
         Some(LaserModel::Lms1xx) => {
@@ -204,6 +259,7 @@ pub async fn connect_laser(
             let link = connect_with_backoff(
                 Backoff::default(),
                 || TcpLink::connect(&addr),
+                opening.permanent(),
                 |attempt, e| tracing::warn!(attempt, error = %e, "laser not available, retrying"),
             )
             .await?;
@@ -227,6 +283,7 @@ pub async fn connect_laser(
             let link = connect_with_backoff(
                 Backoff::default(),
                 || open_robot_link(None, &port, super::lms200::POWER_UP_BAUD),
+                opening.permanent(),
                 |attempt, e| tracing::warn!(attempt, error = %e, "laser not available, retrying"),
             )
             .await?;
@@ -242,7 +299,8 @@ pub async fn connect_laser(
 /// broke, as opposed to a robot or a board that does not fit.
 fn worth_retrying(e: &RuntimeError) -> bool {
     match e {
-        RuntimeError::Link(_) | RuntimeError::Laser(_) => true,
+        RuntimeError::Link(e) => !permanent_always(e),
+        RuntimeError::Laser(_) => true,
         RuntimeError::Session(s) => matches!(
             s,
             SessionError::Io(_)
@@ -296,8 +354,33 @@ pub async fn run_with(
 ) -> Result<RunOutcome, RuntimeError> {
     let board = &options.board;
     let store = StateStore::open(&options.log_dir)?;
+    match options.start {
+        Start::New => {
+            let saved = match store.load() {
+                Ok(Some((state, _))) if !state.finished => Some(format!(
+                    "coverage {:.0} % after {:.0} s",
+                    state.coverage * 100.0,
+                    state.mission_time_s
+                )),
+                Ok(_) => None,
+                Err(e) => Some(e.to_string()),
+            };
+            if let Some(saved) = saved {
+                return Err(RuntimeError::UnfinishedMission {
+                    dir: options.log_dir.clone(),
+                    saved,
+                });
+            }
+        }
+        Start::Fresh => {
+            if let Some(aside) = store.set_aside()? {
+                tracing::info!(to = %aside.display(), "the saved mission's files were moved aside");
+            }
+        }
+        Start::Resume => {}
+    }
     let mut telemetry = Telemetry::open(&options.log_dir)?;
-    let resumed = if options.resume {
+    let resumed = if options.start == Start::Resume {
         match store.load()? {
             Some(saved) => {
                 tracing::info!(
@@ -313,7 +396,7 @@ pub async fn run_with(
         None
     };
     let mut shutdown = std::pin::pin!(shutdown);
-    let mut client = connect_robot(board).await?;
+    let mut client = connect_robot(board, Opening::First).await?;
     let mut mission = match make_mission(board, resumed.as_ref()) {
         Ok(m) => m,
         Err(e) => {
@@ -322,7 +405,7 @@ pub async fn run_with(
         }
     };
     let outcome = {
-        let mut laser_client = connect_laser(board, laser()).await?;
+        let mut laser_client = connect_laser(board, laser(), Opening::First).await?;
         // Mission time runs on across reconnections, and across a `--resume` from where the
         // saved mission stopped.
         let resumed_s = resumed
@@ -376,12 +459,15 @@ pub async fn run_with(
             )?;
             let reconnect = async {
                 if robot_lost {
-                    client = retry_session("robot", || connect_robot(board)).await?;
+                    client =
+                        retry_session("robot", || connect_robot(board, Opening::Again)).await?;
                     // Motion stays refused until the mission has re-planned.
                     client.halt(Fault::Link).await?;
                 } else {
                     let _ = client.halt(Fault::Link).await;
-                    laser_client = retry_session("laser", || connect_laser(board, laser())).await?;
+                    laser_client =
+                        retry_session("laser", || connect_laser(board, laser(), Opening::Again))
+                            .await?;
                 }
                 Ok::<(), RuntimeError>(())
             };
@@ -864,7 +950,7 @@ mod tests {
             RunOptions {
                 board,
                 log_dir: dir.clone(),
-                resume: false,
+                start: Start::New,
             },
             byte_codec,
             |_, _| Ok(Box::new(DoneAtOnce) as Box<dyn MissionDriver>),
@@ -907,7 +993,7 @@ mod tests {
             RunOptions {
                 board: BoardConfig::default(),
                 log_dir: dir.clone(),
-                resume: true,
+                start: Start::Resume,
             },
             byte_codec,
             |_, _| Ok(Box::new(DoneAtOnce) as Box<dyn MissionDriver>),
@@ -1299,7 +1385,7 @@ mod reconnect_tests {
             RunOptions {
                 board,
                 log_dir: dir.clone(),
-                resume: false,
+                start: Start::New,
             },
             || Box::new(ByteCodec::default()) as Box<dyn LaserCodec>,
             |_, _| {

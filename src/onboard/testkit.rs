@@ -126,6 +126,8 @@ pub struct FakeRobotScript {
     pub already_open: bool,
     /// Whether a CONFIG request is answered.
     pub answers_config: bool,
+    /// CONFIG requests to ignore before answering (as if their replies were corrupted).
+    pub lost_configs: u32,
     /// Status packet period.
     pub sip_period: Duration,
     /// Stop sending status packets after this many (None: never stop).
@@ -144,6 +146,7 @@ impl Default for FakeRobotScript {
             baud_switch_works: true,
             already_open: false,
             answers_config: true,
+            lost_configs: 0,
             sip_period: Duration::from_millis(100),
             sip_limit: None,
             watchdog_ms: 2000,
@@ -169,6 +172,7 @@ pub async fn run_fake_robot(mut stream: DuplexStream, script: FakeRobotScript, l
     let mut buf = [0u8; 256];
     let mut sync_state = 0u8;
     let mut silent_left = script.silent_syncs;
+    let mut configs_to_lose = script.lost_configs;
     let mut open = script.already_open;
     let mut connected = false;
     let mut status = StatusPacket {
@@ -216,6 +220,7 @@ pub async fn run_fake_robot(mut stream: DuplexStream, script: FakeRobotScript, l
                             2 => { let _ = stream.shutdown().await; return; }
                             4 => { if arg == Some(1) { status.flags |= 1 } else { status.flags &= !1 } }
                             11 => status.left_vel_mm_s = arg.unwrap_or(0),
+                            18 if configs_to_lose > 0 => configs_to_lose -= 1,
                             18 if script.answers_config => {
                                 reply = Some(packet(&ServerPacket::Config(config_packet(&script))));
                             }

@@ -104,8 +104,8 @@ pub fn run_sweep(
 /// Reads a directory's `sweep.json`.
 pub fn read_sweep_file(dir: &Path) -> Result<SweepFile, String> {
     let path = dir.join(SWEEP_FILE);
-    let text =
-        fs::read_to_string(&path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let text = papillon::files::read_limited_to_string(&path, papillon::files::TEXT_MAX_BYTES)
+        .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     serde_json::from_str(&text).map_err(|e| format!("{}: not a sweep file: {e}", path.display()))
 }
 

@@ -4,7 +4,6 @@
 
 use std::fmt::Write as _;
 use std::fs;
-use std::io::{BufRead, BufReader};
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -180,14 +179,14 @@ pub fn append_jsonl(file: &mut fs::File, record: &RunRecord) -> Result<(), Strin
 
 /// Reads `runs.jsonl`; an error names the file and line.
 pub fn read_jsonl(path: &Path) -> Result<Vec<RunRecord>, String> {
-    let file = fs::File::open(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let text = papillon::files::read_limited_to_string(path, papillon::files::MAP_MAX_BYTES)
+        .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     let mut out = Vec::new();
-    for (n, line) in BufReader::new(file).lines().enumerate() {
-        let line = line.map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    for (n, line) in text.lines().enumerate() {
         if line.trim().is_empty() {
             continue;
         }
-        let r: RunRecord = serde_json::from_str(&line)
+        let r: RunRecord = serde_json::from_str(line)
             .map_err(|e| format!("{} line {}: not a run record: {e}", path.display(), n + 1))?;
         out.push(r);
     }

@@ -257,7 +257,7 @@ impl Sweep {
 
     /// Reads a sweep file; a sweep without a name takes the file's stem.
     pub fn from_file(path: &Path) -> Result<Self, String> {
-        let text = std::fs::read_to_string(path)
+        let text = papillon::files::read_limited_to_string(path, papillon::files::TEXT_MAX_BYTES)
             .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
         let mut s = Sweep::from_json(&text, &path.display().to_string())?;
         if s.name.is_empty() {

@@ -23,7 +23,7 @@ pub struct Args {
     #[arg(long, default_value = "house")]
     pub map: String,
     /// Number of robots sharing the map (1 to 8).
-    #[arg(long, default_value = "1")]
+    #[arg(long, default_value = "1", allow_negative_numbers = true)]
     pub robots: String,
     /// Target selector: xboa boa mboa aboa saboa ga pso gwo abc cmaes nearest-frontier
     /// frontier-utility.
@@ -34,23 +34,23 @@ pub struct Args {
     #[arg(long, default_value = "efficient")]
     pub objective: String,
     /// Population of the optimizer.
-    #[arg(long, default_value = "5")]
+    #[arg(long, default_value = "5", allow_negative_numbers = true)]
     pub pop: String,
     /// Generations of the optimizer.
-    #[arg(long, default_value = "30")]
+    #[arg(long, default_value = "30", allow_negative_numbers = true)]
     pub gens: String,
     /// Strategy: short (one target per decision) or long (several, see --targets).
     #[arg(long, default_value = "short")]
     pub strategy: String,
     /// Targets per decision, k (short: 1; long: default 3, at most 8).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub targets: Option<String>,
     /// Seed of every random choice (slip, laser noise, decisions).
-    #[arg(long, default_value = "25")]
+    #[arg(long, default_value = "25", allow_negative_numbers = true)]
     pub seed: String,
     /// Energy at the start [steps: 1 m of travel or 45° of rotation] (default: the core
     /// mission's, 500).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub battery: Option<String>,
     /// Start pose in the map frame: X Y, optionally THETA (m, m, rad; default 1 m east and 1 m north of
     /// the map's south-west corner, heading east).
@@ -66,7 +66,7 @@ pub struct Args {
     #[arg(long, default_value = "off")]
     pub localize: String,
     /// Cell size in metres (the map file's own for .yaml).
-    #[arg(long, default_value = "0.1")]
+    #[arg(long, default_value = "0.1", allow_negative_numbers = true)]
     pub resolution: String,
     /// Print one JSON object instead of the summary.
     #[arg(long)]

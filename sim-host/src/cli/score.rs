@@ -41,6 +41,9 @@ fn execute(args: &Args) -> Result<Score, String> {
     let mut world = World::load(&args.map, args.resolution).map_err(|e| e.to_string())?;
     if let Some(v) = &args.start {
         world.set_start(parse_pose("--start", v)?);
+        if let Some(why) = world.start_outside() {
+            return Err(format!("--start: {why}"));
+        }
     }
     let robot_start = match &args.robot_start {
         Some(v) => parse_pose("--robot-start", v)?,

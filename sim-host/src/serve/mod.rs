@@ -224,8 +224,8 @@ impl Server {
         });
         let truth = match &config.truth_log {
             Some(path) => Some(io::BufWriter::new(
-                std::fs::File::create(path)
-                    .map_err(|e| format!("cannot create truth log {}: {e}", path.display()))?,
+                papillon::files::open_log(path, papillon::files::Existing::Truncate)
+                    .map_err(|e| format!("--truth-log: {e}"))?,
             )),
             None => None,
         };

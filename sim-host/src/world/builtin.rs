@@ -36,6 +36,7 @@ pub fn by_name(name: &str, resolution_m: f32) -> Option<Result<World, WorldError
 fn blank(name: &str, width_m: f32, height_m: f32, resolution_m: f32) -> Result<World, WorldError> {
     let resolution_m = super::check_resolution(resolution_m)?;
     let g = GridGeometry::from_extent(width_m, height_m, resolution_m, Point2::default())?;
+    super::check_size(name, &g, super::RESOLUTION_FLAG)?;
     Ok(World::new(name, g))
 }
 

@@ -29,10 +29,11 @@ pub const CSV_START: Pose2 = Pose2 {
 
 /// Reads a CSV map file.
 pub fn load(path: &Path, resolution_m: f32) -> Result<World, WorldError> {
-    let text = std::fs::read_to_string(path).map_err(|e| WorldError::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })?;
+    let text = papillon::files::read_limited_to_string(path, papillon::files::MAP_MAX_BYTES)
+        .map_err(|e| WorldError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
     parse(&text, &path.display().to_string(), resolution_m)
 }
 
@@ -95,6 +96,7 @@ pub fn parse(text: &str, name: &str, resolution_m: f32) -> Result<World, WorldEr
         resolution_m,
         Point2::default(),
     )?;
+    super::check_size(name, &g, super::RESOLUTION_FLAG)?;
     let mut blocked = vec![false; g.cell_count()];
     for (i, b) in blocked.iter_mut().enumerate() {
         let c = g.cell_center(g.cell(i));

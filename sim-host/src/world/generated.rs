@@ -1039,6 +1039,7 @@ impl Plan {
             resolution_m,
             Point2::default(),
         )?;
+        super::check_size(&self.name, &g, super::RESOLUTION_FLAG)?;
         let mut w = World::new(self.name.clone(), g);
         let m = |v: i32| v as f32 * LATTICE_M;
         for &(r, blocked) in &self.ops {

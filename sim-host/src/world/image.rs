@@ -19,10 +19,13 @@ pub const BLOCKED_BELOW: u8 = 128;
 /// Reads an image map file.
 pub fn load(path: &Path, resolution_m: f32) -> Result<World, WorldError> {
     let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| WorldError::Io {
-        path: name.clone(),
-        message: e.to_string(),
-    })?;
+    let bytes =
+        papillon::files::read_limited(path, papillon::files::MAP_MAX_BYTES).map_err(|e| {
+            WorldError::Io {
+                path: name.clone(),
+                message: e.to_string(),
+            }
+        })?;
     decode(&bytes, &name, resolution_m)
 }
 
@@ -30,12 +33,18 @@ pub fn load(path: &Path, resolution_m: f32) -> Result<World, WorldError> {
 /// world's name.
 pub fn decode(bytes: &[u8], name: &str, resolution_m: f32) -> Result<World, WorldError> {
     let resolution_m = super::check_resolution(resolution_m)?;
-    let img = ::image::load_from_memory(bytes).map_err(|e| WorldError::Image {
+    let unreadable = |e: ::image::ImageError| WorldError::Image {
         path: name.to_string(),
         message: format!("not a readable PGM or PNG image: {e}"),
-    })?;
-    let grey = img.to_luma8();
-    let (w, h) = (grey.width() as usize, grey.height() as usize);
+    };
+    let reader = || {
+        ::image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| unreadable(e.into()))
+    };
+    // The header's size first: a small file may decode to gigabytes.
+    let (w, h) = reader()?.into_dimensions().map_err(unreadable)?;
+    let (w, h) = (w as usize, h as usize);
     if w == 0 || h == 0 {
         return Err(WorldError::Image {
             path: name.to_string(),
@@ -43,6 +52,14 @@ pub fn decode(bytes: &[u8], name: &str, resolution_m: f32) -> Result<World, Worl
         });
     }
     let g = GridGeometry::new(w, h, resolution_m, Point2::default())?;
+    super::check_size(name, &g, "the image's width and height")?;
+    let grey = reader()?.decode().map_err(unreadable)?.to_luma8();
+    if (grey.width() as usize, grey.height() as usize) != (w, h) {
+        return Err(WorldError::Image {
+            path: name.to_string(),
+            message: "the decoded image's size differs from its header's".into(),
+        });
+    }
     let mut blocked = vec![false; w * h];
     for (x, y, p) in grey.enumerate_pixels() {
         let row = h - 1 - y as usize;

@@ -76,7 +76,7 @@ pub enum WorldError {
         /// What was wrong.
         message: String,
     },
-    /// The cell size is not a positive finite number of metres.
+    /// The cell size is not a positive finite number of metres up to [`MAX_RESOLUTION_M`].
     BadResolution(f32),
     /// The blocked-cell bitmap does not match the geometry.
     SizeMismatch {
@@ -87,6 +87,48 @@ pub enum WorldError {
     },
     /// The grid geometry is invalid.
     Grid(GridError),
+    /// The world would have more than [`MAX_CELLS`] cells.
+    TooLarge {
+        /// The world (a built-in name or the file).
+        name: String,
+        /// Columns it would have (saturated).
+        width: usize,
+        /// Rows it would have (saturated).
+        height: usize,
+        /// The cell size \[m\].
+        resolution_m: f32,
+        /// Where the cell size came from: `--resolution` or the file's field.
+        resolution_from: &'static str,
+    },
+}
+
+/// Coarsest cell size of a world \[m\] (the robot is 0.5 m wide).
+pub const MAX_RESOLUTION_M: f32 = 1.0;
+
+/// Most cells a world may have (4096 x 4096): a mission at a finer cell size would need more
+/// memory and time than a simulation is worth.
+pub const MAX_CELLS: usize = 1 << 24;
+
+/// Where the cell size of a world comes from when it is not the file's own.
+pub const RESOLUTION_FLAG: &str = "--resolution";
+
+/// Checks that a world of this geometry has at most [`MAX_CELLS`] cells, before any of them
+/// is allocated.
+pub fn check_size(
+    name: &str,
+    g: &GridGeometry,
+    resolution_from: &'static str,
+) -> Result<(), WorldError> {
+    match g.width.checked_mul(g.height) {
+        Some(n) if n <= MAX_CELLS => Ok(()),
+        _ => Err(WorldError::TooLarge {
+            name: name.to_string(),
+            width: g.width,
+            height: g.height,
+            resolution_m: g.resolution_m,
+            resolution_from,
+        }),
+    }
 }
 
 impl fmt::Display for WorldError {
@@ -111,13 +153,23 @@ impl fmt::Display for WorldError {
             WorldError::Image { path, message } => write!(f, "{path}: {message}"),
             WorldError::BadResolution(r) => write!(
                 f,
-                "resolution must be a positive number of metres per cell, got {r}"
+                "--resolution: expected a cell size of more than 0 and at most {MAX_RESOLUTION_M} m (coarser cells than the robot make no map), got {r}"
             ),
             WorldError::SizeMismatch { expected, found } => write!(
                 f,
                 "world bitmap has {found} cells but its geometry has {expected}"
             ),
             WorldError::Grid(e) => write!(f, "bad world geometry: {e}"),
+            WorldError::TooLarge {
+                name,
+                width,
+                height,
+                resolution_m,
+                resolution_from,
+            } => write!(
+                f,
+                "{name}: {width} x {height} cells of {resolution_m} m ({resolution_from}) is more than the {MAX_CELLS} cells a world may have; choose a larger cell size"
+            ),
         }
     }
 }
@@ -132,7 +184,7 @@ impl From<GridError> for WorldError {
 
 /// Checks a cell size \[m\].
 pub(crate) fn check_resolution(resolution_m: f32) -> Result<f32, WorldError> {
-    if resolution_m.is_finite() && resolution_m > 0.0 {
+    if resolution_m.is_finite() && resolution_m > 0.0 && resolution_m <= MAX_RESOLUTION_M {
         Ok(resolution_m)
     } else {
         Err(WorldError::BadResolution(resolution_m))
@@ -231,6 +283,22 @@ impl World {
     /// Moves the start pose.
     pub fn set_start(&mut self, start: Pose2) {
         self.start = start;
+    }
+
+    /// `None` when the start lies inside the world's grid; else why not, as
+    /// `(x, y) is outside NAME, which spans X0..X1 m east and Y0..Y1 m north`.
+    pub fn start_outside(&self) -> Option<String> {
+        let g = self.geometry;
+        let (x0, y0) = (g.origin.x, g.origin.y);
+        let (x1, y1) = (x0 + g.width_m(), y0 + g.height_m());
+        let p = self.start;
+        let inside = p.x >= x0 && p.x < x1 && p.y >= y0 && p.y < y1;
+        (!inside).then(|| {
+            format!(
+                "({}, {}) is outside {}, which spans {x0}..{x1} m east and {y0}..{y1} m north",
+                p.x, p.y, self.name
+            )
+        })
     }
 
     /// The start pose with the start moved.

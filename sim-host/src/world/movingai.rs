@@ -25,6 +25,7 @@ pub fn load(path: &Path, resolution_m: f32) -> Result<World, WorldError> {
 /// A world from a parsed Moving AI map.
 pub fn from_map(map: &MovingAiMap, name: &str, resolution_m: f32) -> Result<World, WorldError> {
     let g = GridGeometry::new(map.width, map.height, resolution_m, Point2::default())?;
+    super::check_size(name, &g, "the map's width and height")?;
     let mut blocked = vec![false; g.cell_count()];
     for row in 0..map.height {
         for col in 0..map.width {

@@ -25,6 +25,11 @@ pub fn load(path: &Path) -> Result<World, WorldError> {
         message: e.to_string(),
     })?;
     let g = map.geometry;
+    super::check_size(
+        &path.display().to_string(),
+        &g,
+        "the image's width and height",
+    )?;
     let blocked = map.cells.iter().map(|&c| c != CellClass::Free).collect();
     let world = World::from_blocked(path.display().to_string(), g, blocked)?;
     Ok(world.with_start(Pose2::new(g.origin.x + 1.0, g.origin.y + 1.0, 0.0)))

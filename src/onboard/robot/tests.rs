@@ -173,6 +173,39 @@ async fn missing_config_is_an_error() {
 }
 
 #[tokio::test(start_paused = true)]
+async fn a_lost_config_packet_is_asked_for_again() {
+    let script = FakeRobotScript {
+        lost_configs: 3,
+        ..FakeRobotScript::default()
+    };
+    let (link, log) = spawn_robot(script, None);
+    let client = ArcosClient::connect(link, options("p3dx-sh"))
+        .await
+        .unwrap();
+    assert!(client.config().is_some());
+    let requests = numbers(&log).iter().filter(|c| c.0 == 18).count();
+    assert_eq!(requests, 4, "three lost CONFIG packets, then one answered");
+}
+
+#[tokio::test(start_paused = true)]
+async fn config_requests_stop_after_config_attempts() {
+    let script = FakeRobotScript {
+        answers_config: false,
+        ..FakeRobotScript::default()
+    };
+    let (link, log) = spawn_robot(script, None);
+    let opts = SessionOptions {
+        config_attempts: 5,
+        ..options("p3dx-sh")
+    };
+    assert!(matches!(
+        ArcosClient::connect(link, opts).await,
+        Err(SessionError::NoConfig)
+    ));
+    assert_eq!(numbers(&log).iter().filter(|c| c.0 == 18).count(), 5);
+}
+
+#[tokio::test(start_paused = true)]
 async fn hostbaud_switch_on_a_serial_link() {
     let (link, peer) = DuplexLink::pair(4096, Some(9600));
     let log = CommandLog::default();
