@@ -10,7 +10,7 @@ use super::*;
 use crate::control::Time;
 use crate::control::command::{Limits, RobotCommand};
 use crate::control::odometry::MapFromOdom;
-use crate::control::safety::RobotFlags;
+use crate::control::safety::{RobotFlags, RobotFootprint};
 use crate::control::sim_double::{Slip, Unicycle};
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{CellClass, GridGeometry};
@@ -1191,9 +1191,9 @@ fn two_robots_explore_one_shared_map_to_done() {
     }
 }
 
-/// The robot's outline (P3-DX box) at `pose` touches a wall of `world`.
-fn touches(world: &World, pose: Pose2) -> bool {
-    let (front, rear, half) = (0.21f32, -0.301f32, 0.2125f32);
+/// The outline of `body` at `pose` touches a wall of `world`.
+fn touches(world: &World, body: &RobotFootprint, pose: Pose2) -> bool {
+    let (front, rear, half) = (body.front_m, -body.rear_m, body.width_m / 2.0);
     let n = 30;
     (0..=n).any(|k| {
         let t = k as f32 / n as f32;
@@ -1224,13 +1224,16 @@ fn a_robot_facing_a_wall_too_close_to_turn_backs_away_and_explores() {
     ];
     for (seed, heading, corner) in cases {
         let config = MissionConfig::default();
+        // The body the mission is configured for (the datasheet P3-DX, without bumpers).
+        let body = config.safety.footprint;
         let mut sim = Sim::new(two_rooms(), &config, seed);
         // How far the outline reaches west and south of the centre at this heading.
+        let half = body.width_m / 2.0;
         let corners = [
-            (0.21f32, 0.2125f32),
-            (0.21, -0.2125),
-            (-0.301, 0.2125),
-            (-0.301, -0.2125),
+            (body.front_m, half),
+            (body.front_m, -half),
+            (-body.rear_m, half),
+            (-body.rear_m, -half),
         ];
         let reach = |f: fn(Point2) -> f32| {
             corners
@@ -1243,7 +1246,7 @@ fn a_robot_facing_a_wall_too_close_to_turn_backs_away_and_explores() {
         let gap = 0.02;
         let y = if corner { 0.1 + south + gap } else { 2.5 };
         let start = Pose2::new(0.1 + west + gap, y, heading);
-        assert!(!touches(&sim.world, start));
+        assert!(!touches(&sim.world, &body, start));
         sim.add(config, start, Slip::thesis());
         // Too close to turn in place: the turning circle (0.25 m + 0.05 m) holds the wall.
         assert!(sim.world.clearance(start.position()) < 0.3);
@@ -1251,7 +1254,7 @@ fn a_robot_facing_a_wall_too_close_to_turn_backs_away_and_explores() {
             sim.period();
             let pose = sim.bots[0].true_pose();
             assert!(
-                !touches(&sim.world, pose),
+                !touches(&sim.world, &body, pose),
                 "seed {seed}: touched a wall at {pose:?} at {} s",
                 sim.secs()
             );
