@@ -5,6 +5,7 @@
 
 use std::process::Command;
 
+use papillon::explore::ObjectiveKind;
 use papillon::geometry::Point2;
 use papillon::mission::{MissionConfig, MissionEvent, SelectorKind};
 use papillon::optim::Method;
@@ -121,10 +122,22 @@ fn door_centre() -> Point2 {
     Point2::new(0.5 * (x0 + x1), 0.5 * (y0 + y1))
 }
 
+/// The door of the lab closes as the robot heads for it. The thesis's objective aims at
+/// unknown space beyond the doorway, so the path being followed crosses the door when it
+/// closes and must be re-planned. The default (efficient) objective stops at viewpoints short
+/// of the doorway in this lab, so no path it follows crosses the door as it closes: it sees the
+/// closed door and decides anew; for it the test checks only that nothing is hit.
 #[test]
 fn a_door_closing_ahead_of_the_robot_causes_a_replan_not_a_collision() {
+    door_closing_ahead(ObjectiveKind::Thesis, true);
+    door_closing_ahead(ObjectiveKind::Efficient, false);
+}
+
+fn door_closing_ahead(objective: ObjectiveKind, path_crosses_door: bool) {
     let world = builtin::lab(0.1).unwrap();
-    let config = || RunConfig::new(MissionConfig::default(), 1, SEED);
+    let mut mission = MissionConfig::default();
+    mission.explore.objective = objective;
+    let config = || RunConfig::new(mission.clone(), 1, SEED);
     let door = door_centre();
     // First run, door open: when does the robot first drive through it, and when was it last
     // 2 m or more away before that?
@@ -151,23 +164,29 @@ fn a_door_closing_ahead_of_the_robot_causes_a_replan_not_a_collision() {
     );
     let mut runner = Runner::new(world, dynamics, config()).unwrap();
     let report = runner.run().unwrap();
-    let replans_after: Vec<_> = report
-        .events
-        .iter()
-        .filter(|e| e.time_s >= close_at && matches!(e.event, MissionEvent::Replanned { .. }))
-        .collect();
-    assert!(
-        !replans_after.is_empty(),
-        "no replan after the door closed at {close_at} s: {:?}",
-        report.events
+    if path_crosses_door {
+        let replans_after: Vec<_> = report
+            .events
+            .iter()
+            .filter(|e| e.time_s >= close_at && matches!(e.event, MissionEvent::Replanned { .. }))
+            .collect();
+        assert!(
+            !replans_after.is_empty(),
+            "{objective:?}: no replan after the door closed at {close_at} s: {:?}",
+            report.events
+        );
+        // Seen as soon as the laser shows the closed door across the path.
+        assert!(
+            replans_after[0].time_s <= close_at + 5.0,
+            "{objective:?}: first replan {:?}, door closed at {close_at} s",
+            replans_after[0]
+        );
+    }
+    assert_eq!(
+        report.collisions(),
+        0,
+        "{objective:?}: the robot hit something"
     );
-    // Seen as soon as the laser shows the closed door across the path.
-    assert!(
-        replans_after[0].time_s <= close_at + 5.0,
-        "first replan {:?}, door closed at {close_at} s",
-        replans_after[0]
-    );
-    assert_eq!(report.collisions(), 0, "the robot hit something");
     let blocked_door = runner.world().is_blocked_at(door);
     assert!(blocked_door, "the door did close");
     assert!(report.reason.is_some());
