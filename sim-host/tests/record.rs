@@ -128,7 +128,7 @@ fn a_mission_recorded_as_mcap_reads_back_with_every_channel() {
         .decode(data)
         .unwrap();
     assert_eq!(cells.len() % columns, 0);
-    assert!(cells.iter().any(|&c| c == 0) && cells.iter().any(|&c| c == 100));
+    assert!(cells.contains(&0) && cells.contains(&100));
     let scan = &topics["/scan"].3[0];
     assert!(scan["ranges"].as_array().unwrap().len() > 100);
     let decision = &topics["/decisions"].3[0];
