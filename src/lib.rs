@@ -18,6 +18,8 @@
 //!   without an allocator; [`mapfile`] (host only): map files read into an occupancy grid;
 //!   [`files`] (host only): bounded reads of every input file.
 //! - [`wire`]: ARCOS, SICK LMS1xx (CoLa-A) and LMS200 wire formats.
+//! - `record` (feature `record`, host only): mission recordings as MCAP with Foxglove's
+//!   schemas.
 //! - `onboard` (feature `onboard`): the runtime around the core on the robot.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![warn(missing_docs)]
@@ -41,6 +43,8 @@ pub mod optim;
 pub mod planner;
 pub mod random;
 pub mod raycast;
+#[cfg(feature = "record")]
+pub mod record;
 pub mod sensor;
 pub mod units;
 pub mod wire;

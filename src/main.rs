@@ -275,10 +275,11 @@ fn run(args: RunArgs) -> ExitCode {
             _ => Start::New,
         },
     };
+    let mission = runtime::recording_mission_driver(options.log_dir.clone());
     let result = runtime().block_on(runtime::run_with(
         options,
         runtime::laser_codec,
-        runtime::mission_driver,
+        mission,
         runtime::shutdown_signal(),
     ));
     match result {

@@ -15,6 +15,7 @@ pub mod odometry_error;
 pub mod optimize;
 pub mod physics;
 pub mod placement;
+pub mod record;
 pub mod render;
 pub mod runner;
 pub mod scenario;

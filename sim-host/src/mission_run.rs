@@ -1,10 +1,12 @@
 //! A mission run the way `papillon-sim mission` does it: a checked [`Setup`] run by the fast
 //! runner ([`crate::runner`]), with a picture per decision and a final one
-//! ([`crate::render`]), and its report as JSON or as a human summary.
+//! ([`crate::render`]), an MCAP recording ([`crate::record`]), and its report as JSON or as a
+//! human summary.
 
 use std::path::{Path, PathBuf};
 
 use crate::dynamic::Dynamics;
+use crate::record::RunRecorder;
 use crate::render::{self, Track};
 use crate::runner::{self, RunReport, Runner};
 use crate::scenario::Setup;
@@ -157,7 +159,7 @@ fn frame_path(dir: &Path, n: usize) -> PathBuf {
 pub enum Failure {
     /// The runner refused the set-up.
     Setup(String),
-    /// A picture could not be written.
+    /// A picture or the recording could not be written.
     Output(String),
 }
 
@@ -168,6 +170,17 @@ pub fn execute(
     frames: Option<&Path>,
     png: Option<&Path>,
 ) -> Result<RunReport, Failure> {
+    execute_recorded(setup, frames, png, None)
+}
+
+/// [`execute`], also recording the mission as MCAP into `mcap` when given
+/// ([`crate::record`]).
+pub fn execute_recorded(
+    setup: &Setup,
+    frames: Option<&Path>,
+    png: Option<&Path>,
+    mcap: Option<&Path>,
+) -> Result<RunReport, Failure> {
     let scale = picture_scale(&setup.world);
     let mut runner = Runner::new(setup.world.clone(), Dynamics::new(), setup.run.clone())
         .map_err(|e| Failure::Setup(e.to_string()))?;
@@ -176,10 +189,20 @@ pub fn execute(
             Failure::Output(format!("--frames: {}: cannot create: {e}", dir.display()))
         })?;
     }
+    let mut recorder = match mcap {
+        Some(path) => Some(
+            RunRecorder::create(path, setup.run.robots)
+                .map_err(|e| Failure::Output(format!("--mcap: {e}")))?,
+        ),
+        None => None,
+    };
     let mut frame = 0usize;
     let mut frame_error: Option<String> = None;
     let report = runner
         .run_with(|r, progress| {
+            if let Some(rec) = &mut recorder {
+                rec.observe(r, progress);
+            }
             let Some(dir) = frames else { return };
             if frame_error.is_some() || !matches!(progress, runner::Progress::Decided { .. }) {
                 return;
@@ -193,6 +216,10 @@ pub fn execute(
         .map_err(|e| Failure::Setup(e.to_string()))?;
     if let Some(e) = frame_error {
         return Err(Failure::Output(e));
+    }
+    if let Some(rec) = recorder {
+        rec.finish()
+            .map_err(|e| Failure::Output(format!("--mcap: {e}")))?;
     }
     if let Some(path) = png {
         let tracks: Vec<Track> = runner.tracks();

@@ -29,7 +29,10 @@
 //!   is true once the core reported that re-plan (`FaultCleared`, `Replanned` or `Decided`)
 //!   for a period after the fault;
 //! - the state to save (map image, poses, trajectory, counters) is published by the thread
-//!   every [`PUBLISH_EVERY_S`] of mission time and at the end.
+//!   every [`PUBLISH_EVERY_S`] of mission time and at the end;
+//! - with a recording ([`CoreMission::recorded`], what `papillon run` uses), the thread also
+//!   writes the poses, scans, path, decisions and map to an MCAP file
+//!   ([`super::record`]), finished when the mission ends or the runtime drops the mission.
 //!
 //! Resuming (`--resume`): the saved map is loaded into the grid; the first odometry reading
 //! after the restart is placed with the saved odometry-to-map transform when the robot's
@@ -44,6 +47,7 @@ use std::time::Instant as WallInstant;
 use super::driver::{MissionCommand, MissionDriver, TelemetryRecord};
 use super::persist::{Counters, MapImage, MissionState as SavedState, PoseRecord, STATE_VERSION};
 use super::pose_history::{PoseAt, PoseHistory};
+use super::record::MissionRecording;
 use super::robot::Fault;
 use crate::config::{BoardConfig, Strategy};
 use crate::control::Time;
@@ -180,6 +184,8 @@ enum Input {
     Fault,
     Reconnected,
     Step(f64),
+    /// The runtime is done with the mission: finish the recording and end the thread.
+    Close,
 }
 
 /// What the mission thread publishes.
@@ -213,6 +219,28 @@ pub struct CoreMission {
     /// The latest time `step` was called with \[s\].
     last_step_s: f64,
     done: bool,
+    /// The mission thread (joined, for a bounded time, when the mission is dropped).
+    worker: Option<std::thread::JoinHandle<()>>,
+}
+
+/// How long dropping a [`CoreMission`] waits for its thread to finish the recording \[s\].
+pub const CLOSE_WAIT_S: f64 = 5.0;
+
+impl Drop for CoreMission {
+    fn drop(&mut self) {
+        let _ = self.tx.send(Input::Close);
+        let Some(worker) = self.worker.take() else {
+            return;
+        };
+        // A decision in progress is finished first; never wait for ever.
+        let began = WallInstant::now();
+        while !worker.is_finished() && began.elapsed().as_secs_f64() < CLOSE_WAIT_S {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        if worker.is_finished() {
+            let _ = worker.join();
+        }
+    }
 }
 
 fn lock(m: &Mutex<Published>) -> MutexGuard<'_, Published> {
@@ -224,6 +252,15 @@ impl CoreMission {
     pub fn new(
         board: &BoardConfig,
         resume: Option<&(SavedState, Option<MapImage>)>,
+    ) -> Result<Self, String> {
+        Self::recorded(board, resume, None)
+    }
+
+    /// [`Self::new`], the mission thread writing `recording` ([`super::record`]).
+    pub fn recorded(
+        board: &BoardConfig,
+        resume: Option<&(SavedState, Option<MapImage>)>,
+        recording: Option<MissionRecording>,
     ) -> Result<Self, String> {
         let mut config = mission_config(board)?;
         if let Some((state, _)) = resume {
@@ -277,8 +314,9 @@ impl CoreMission {
             scans_unmapped: 0,
             scans_dropped: 0,
             reconnects: 0,
+            recording,
         };
-        std::thread::Builder::new()
+        let worker = std::thread::Builder::new()
             .name("mission".into())
             .spawn(move || worker.run(rx))
             .map_err(|e| format!("cannot start the mission thread: {e}"))?;
@@ -293,6 +331,7 @@ impl CoreMission {
             fault_at_s: None,
             last_step_s: 0.0,
             done: false,
+            worker: Some(worker),
         })
     }
 }
@@ -411,6 +450,16 @@ struct Worker {
     scans_dropped: u64,
     /// Link reconnections in this run.
     reconnects: u64,
+    /// The MCAP recording, if any.
+    recording: Option<MissionRecording>,
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        if let Some(rec) = &mut self.recording {
+            rec.finish(self.last_status_s, &self.map.grid);
+        }
+    }
 }
 
 impl Worker {
@@ -419,6 +468,9 @@ impl Worker {
             let mut batch = vec![first];
             batch.extend(rx.try_iter());
             for input in batch {
+                if matches!(input, Input::Close) {
+                    return;
+                }
                 if let Err(e) = self.handle(input) {
                     lock(&self.out).error = Some(e);
                     return;
@@ -452,6 +504,9 @@ impl Worker {
                 self.integrate_pending(flags)?;
                 if let Some(m) = &mut self.mission {
                     m.on_odometry(time(t_s), pose_odom, flags);
+                    if let Some(rec) = &mut self.recording {
+                        rec.status(t_s, pose_odom, m.pose_map(), m.path(), &self.map.grid);
+                    }
                 }
             }
             Input::Scan(t_s, scan) => {
@@ -476,6 +531,7 @@ impl Worker {
                 self.pending.clear();
             }
             Input::Step(t_s) => self.step(t_s),
+            Input::Close => {}
         }
         Ok(())
     }
@@ -516,6 +572,10 @@ impl Worker {
                     .on_scan(time(t_scan), &scan, &mut self.map)
                     .map_err(|e| format!("scan integration: {e}"))?;
                 self.scans_integrated += 1;
+                if let Some(rec) = &mut self.recording {
+                    let laser = mission.pose_map().compose(self.config.laser.mount);
+                    rec.scan(t_scan, laser, &scan);
+                }
             }
         }
         Ok(())
@@ -580,6 +640,16 @@ impl Worker {
                             "compute_ms": compute_ms,
                         }),
                     });
+                    if let Some(rec) = &mut self.recording {
+                        let fields = serde_json::json!({
+                            "path_length_m": path_length_m,
+                            "predicted_gain_cells": predicted_gain_cells,
+                            "evaluations": evaluations,
+                            "compute_ms": compute_ms,
+                            "battery_steps": mission.battery_steps(),
+                        });
+                        rec.decision(t_s, targets, fields, mission.path(), &self.map.grid);
+                    }
                 }
                 MissionEvent::Replanned { cause } => {
                     out.last_plan_s = Some(t_s);

@@ -11,6 +11,7 @@
 //! - [`driver`]: the seam between the pump and a mission ([`driver::MissionDriver`]);
 //! - [`mission`]: the core mission on its own thread, as the runtime's mission driver;
 //! - [`persist`]: atomic saving and loading of the mission state, telemetry;
+//! - [`record`]: the mission's MCAP recording (`mission.mcap`, see `crate::record`);
 //! - [`pose_history`]: odometry readings with their times, interpolated to a scan's time;
 //! - [`runtime`]: `papillon run` and `papillon probe`.
 
@@ -22,6 +23,7 @@ pub mod lms200;
 pub mod mission;
 pub mod persist;
 pub mod pose_history;
+pub mod record;
 pub mod robot;
 pub mod runtime;
 

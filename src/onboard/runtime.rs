@@ -44,6 +44,24 @@ pub fn mission_driver(
     Ok(Box::new(mission))
 }
 
+/// A saved mission and its map, as `--resume` loads them.
+pub type Saved = (MissionState, Option<MapImage>);
+
+/// [`mission_driver`], the mission recorded into `log_dir` ([`super::record`]: `mission.mcap`,
+/// or the next free `mission-N.mcap` when resuming): what the binary passes to [`run_with`].
+/// A recording that cannot be created refuses the run, naming the file.
+pub fn recording_mission_driver(
+    log_dir: PathBuf,
+) -> impl FnOnce(&BoardConfig, Option<&Saved>) -> Result<Box<dyn MissionDriver>, String> {
+    move |board, resume| {
+        let path = super::record::recording_path(&log_dir, resume.is_some());
+        let mission_time_s = resume.map_or(0.0, |(s, _)| s.mission_time_s);
+        let recording = super::record::MissionRecording::create(&path, mission_time_s)?;
+        let mission = super::mission::CoreMission::recorded(board, resume, Some(recording))?;
+        Ok(Box::new(mission))
+    }
+}
+
 /// Errors of `papillon run` / `probe`.
 #[derive(Debug)]
 #[non_exhaustive]

@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use papillon::geometry::Pose2;
 
-use crate::mission_run::{Failure, execute, json_report, summary};
+use crate::mission_run::{Failure, execute_recorded, json_report, summary};
 use crate::scenario::{
     ScenarioSpec, Setup, Slip, Strategy, objective_from_name, selector_from_name,
 };
@@ -77,6 +77,10 @@ pub struct Args {
     /// Write one PNG per decision into this directory (created if needed).
     #[arg(long)]
     pub frames: Option<PathBuf>,
+    /// Record the mission as MCAP with Foxglove's schemas (map, scans, poses, path, targets,
+    /// decisions; see docs/simulator.md).
+    #[arg(long)]
+    pub mcap: Option<PathBuf>,
 }
 
 fn number<T: std::str::FromStr>(option: &str, text: &str, what: &str) -> Result<T, String> {
@@ -155,7 +159,12 @@ pub fn run(args: Args) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    match execute(&setup, args.frames.as_deref(), args.png.as_deref()) {
+    match execute_recorded(
+        &setup,
+        args.frames.as_deref(),
+        args.png.as_deref(),
+        args.mcap.as_deref(),
+    ) {
         Ok(report) => {
             let text = if args.json {
                 json_report(&setup, &report).to_string()
@@ -203,6 +212,7 @@ mod tests {
             json: false,
             png: None,
             frames: None,
+            mcap: None,
         }
     }
 

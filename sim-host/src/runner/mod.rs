@@ -142,6 +142,13 @@ pub enum Progress {
         /// Robot index.
         robot: usize,
     },
+    /// Robot `robot`'s laser took a scan ([`Runner::last_scan`]), mapped or not.
+    Scanned {
+        /// Robot index.
+        robot: usize,
+    },
+    /// A control period ran (every robot got its odometry and, unless deciding, a step).
+    Controlled,
     /// The run ended.
     Finished,
 }
@@ -162,7 +169,10 @@ pub struct Runner {
     scan_period_us: u64,
     periods: u64,
     report: RunReport,
-    scan: Scan,
+    /// Each robot's latest scan.
+    scans: Vec<Scan>,
+    /// What the latest [`Runner::advance`] did: scanned, ran a control period.
+    last_event: (bool, bool),
     last_sample: Option<(f32, f32)>,
 }
 
@@ -270,7 +280,8 @@ impl Runner {
             scan_period_us,
             periods: 0,
             report,
-            scan: Scan::new(),
+            scans: vec![Scan::new(); starts.len()],
+            last_event: (false, false),
             last_sample: None,
         })
     }
@@ -321,6 +332,16 @@ impl Runner {
             .collect()
     }
 
+    /// Robot `k`'s latest scan (empty before the first).
+    pub fn last_scan(&self, k: usize) -> &Scan {
+        &self.scans[k]
+    }
+
+    /// The events logged so far, in order.
+    pub fn events(&self) -> &[LoggedEvent] {
+        &self.report.events
+    }
+
     /// Whether the run has ended.
     pub fn finished(&self) -> bool {
         self.report.reason.is_some()
@@ -331,7 +352,9 @@ impl Runner {
         self.run_with(|_, _| {})
     }
 
-    /// Runs to the end, calling `observer` after each decision and at the end.
+    /// Runs to the end, calling `observer` after each scan ([`Progress::Scanned`], robot by
+    /// robot), each control period ([`Progress::Controlled`]), each decision and at the end.
+    /// The time spent in `observer` is left out of the report's wall time.
     pub fn run_with(
         &mut self,
         mut observer: impl FnMut(&Runner, Progress),
@@ -340,13 +363,20 @@ impl Runner {
         let mut observing_s = 0.0;
         while !self.finished() {
             let decided = self.advance()?;
-            if !decided.is_empty() {
-                let t = Instant::now();
-                for robot in decided {
-                    observer(self, Progress::Decided { robot });
+            let t = Instant::now();
+            let (scanned, controlled) = self.last_event;
+            if scanned {
+                for robot in 0..self.robots.len() {
+                    observer(self, Progress::Scanned { robot });
                 }
-                observing_s += t.elapsed().as_secs_f64();
             }
+            if controlled {
+                observer(self, Progress::Controlled);
+            }
+            for robot in decided {
+                observer(self, Progress::Decided { robot });
+            }
+            observing_s += t.elapsed().as_secs_f64();
             self.report.wall_time_s = wall.elapsed().as_secs_f64() - observing_s;
         }
         observer(self, Progress::Finished);
@@ -402,6 +432,10 @@ impl Runner {
             self.now_us = next;
         }
         let now = Time::from_micros(self.now_us);
+        self.last_event = (
+            self.next_scan_us == self.now_us,
+            self.next_control_us == self.now_us,
+        );
         if self.next_scan_us == self.now_us {
             self.scan_all(now)?;
             self.next_scan_us += self.scan_period_us;
@@ -421,10 +455,15 @@ impl Runner {
     fn scan_all(&mut self, now: Time) -> Result<(), RunError> {
         let mut discs = self.robot_discs();
         discs.extend(self.dynamics.people_discs(self.sim_time_s()));
-        for (r, body) in self.robots.iter_mut().zip(&self.bodies) {
+        for ((r, body), scan) in self
+            .robots
+            .iter_mut()
+            .zip(&self.bodies)
+            .zip(&mut self.scans)
+        {
             let pose = body.true_pose();
             // A laser with more beams than a scan holds keeps the first ones.
-            let _ = r.laser.scan_into(&self.world, pose, &discs, &mut self.scan);
+            let _ = r.laser.scan_into(&self.world, pose, &discs, scan);
             r.feed_odometry(now, body);
             let turning = self
                 .config
@@ -432,15 +471,15 @@ impl Runner {
                 .unmapped_turn_deg_s
                 .is_some_and(|limit| body.turn_deg_s().abs() > limit);
             if turning {
-                r.mission.on_scan_unmapped(now, &self.scan);
+                r.mission.on_scan_unmapped(now, scan);
                 continue;
             }
-            r.mission.on_scan(now, &self.scan, &mut self.map)?;
+            r.mission.on_scan(now, scan, &mut self.map)?;
             self.coverage.update_after_scan(
                 &self.map.grid,
                 r.mission.pose_map(),
                 &self.config.mission.laser,
-                &self.scan,
+                scan,
             );
         }
         Ok(())
