@@ -10,7 +10,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Output};
 use std::time::{Duration, Instant};
 
-use e2e::{Relay, Sim, papillon, read_truth, signal, temp_dir, unix_now_s, wait_bounded};
+use e2e::{
+    Relay, Sim, papillon, read_truth, run_on_sim_board, signal, sim_board, temp_dir, unix_now_s,
+    wait_bounded,
+};
 use papillon::onboard::persist::{MapImage, MissionState, PGM_UNKNOWN, StateStore};
 use papillon_sim::serve::MAP_RESOLUTION_M;
 use papillon_sim::world::World;
@@ -19,28 +22,12 @@ use papillon_sim::world::World;
 const MISSION_LIMIT: Duration = Duration::from_secs(360);
 
 fn board() -> String {
-    format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"))
+    sim_board()
 }
 
 /// `papillon run` on `boards/sim.json` against these endpoints, logging into `log`.
 fn run(arcos: &str, laser: &str, log: &Path, resume: bool) -> Child {
-    let board = board();
-    let mut args = vec![
-        "run",
-        "--board",
-        &board,
-        "--tcp",
-        arcos,
-        "--laser",
-        laser,
-        "--log-dir",
-        log.to_str().unwrap(),
-    ];
-    if resume {
-        args.push("--resume");
-    }
-    // The working directory is the log's parent: nothing may be written there but the log.
-    papillon(&args, log.parent().unwrap())
+    run_on_sim_board(arcos, laser, log, if resume { &["--resume"] } else { &[] })
 }
 
 fn assert_exit_0(out: &Output) -> String {

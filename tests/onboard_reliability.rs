@@ -9,30 +9,17 @@ use std::path::Path;
 use std::process::{Child, Output};
 use std::time::{Duration, Instant};
 
-use e2e::{Sim, papillon, signal, temp_dir, wait_bounded};
+use e2e::{Sim, papillon, run_on_sim_board, signal, sim_board, temp_dir, wait_bounded};
 use papillon::onboard::persist::StateStore;
 
 fn board() -> String {
-    format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"))
+    sim_board()
 }
 
 /// `papillon run` on `boards/sim.json` against these endpoints, logging into `log`, plus
 /// `extra` flags.
 fn run(arcos: &str, laser: &str, log: &Path, extra: &[&str]) -> Child {
-    let board = board();
-    let mut args = vec![
-        "run",
-        "--board",
-        &board,
-        "--tcp",
-        arcos,
-        "--laser",
-        laser,
-        "--log-dir",
-        log.to_str().unwrap(),
-    ];
-    args.extend_from_slice(extra);
-    papillon(&args, log.parent().unwrap())
+    run_on_sim_board(arcos, laser, log, extra)
 }
 
 fn text(out: &Output) -> (String, String) {

@@ -200,6 +200,31 @@ pub fn papillon(args: &[&str], cwd: &Path) -> Child {
         .expect("start papillon")
 }
 
+/// The project's board for the simulator, `boards/sim.json`.
+pub fn sim_board() -> String {
+    format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `papillon run` on `boards/sim.json` against these endpoints, logging into `log`, plus
+/// `extra` flags. The working directory is the log's parent: nothing may be written there but
+/// the log.
+pub fn run_on_sim_board(arcos: &str, laser: &str, log: &Path, extra: &[&str]) -> Child {
+    let board = sim_board();
+    let mut args = vec![
+        "run",
+        "--board",
+        &board,
+        "--tcp",
+        arcos,
+        "--laser",
+        laser,
+        "--log-dir",
+        log.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    papillon(&args, log.parent().unwrap())
+}
+
 /// A loopback TCP relay between `papillon` and an endpoint of the simulator, to cut a link or
 /// pause one direction, and to watch the robot's status packets on their way.
 pub struct Relay {
