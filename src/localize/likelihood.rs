@@ -8,12 +8,22 @@
 //! cell to where returns land", so a return a few centimetres off still scores, and the score
 //! falls smoothly with the offset. Here the value of a cell is
 //! `max over cells c' within 2σ of  s(c') · exp(-d(c, c')² / 2σ²)`, with `s(c')` the weight of
-//! the returns in `c'` (the metres of surface they stand for, [`super::hits`]) divided by the
-//! largest weight within the same reach (at least [`FLOOR_M_PER_CELL`]). The range noise
-//! spreads a wall's returns over a band across it; the normalised weight is 1 in the middle of
-//! the band however often the wall was seen and smaller on its edges, so the field's ridge is
-//! the middle of the band, which is the surface. A maximum, as Olson's, not a sum: a sum
-//! fades at the end of a wall seen so far and pulls the returns near it inward. Both passes
+//! the returns in `c'` (the metres of surface they stand for, [`super::hits`]) divided by
+//! [`WALL_FRACTION`] of the largest weight within the same reach (at least
+//! [`FLOOR_M_PER_CELL`]), capped at 1. The range noise spreads a wall's returns over a band
+//! across it; every cell of the band at half its height or more is a wall cell (`s = 1`),
+//! however often it was seen, and the cells on the band's edges count in proportion (so the
+//! ridge keeps sub-cell position). Where all of `s` is 0 or 1 this is the likelihood-field
+//! model of Thrun, Burgard & Fox (*Probabilistic Robotics*, 2005, §6.4),
+//! `exp(-d²/2σ²)` of the distance `d` to the nearest wall cell (the Gaussian max-convolution
+//! of a binary image is that distance transform, bounded at 2σ).
+//!
+//! The cap matters: the weight itself (first version: the weight over the local largest,
+//! uncapped) varies along a wall with how many scans saw each part of it, and that slope
+//! along the wall pulled a robot driving a corridor back toward where it had been
+//! (`sim-host/tests/localize_corridor.rs`: 5.6 m behind after 40 m, now within the
+//! odometry's own error). A maximum, as Olson's, not a sum: a sum fades at the end of a wall
+//! seen so far and pulls the returns near it inward. Both passes
 //! are separable: one along the rows, one along the columns, each with a short line buffer.
 //!
 //! The same field, read with bilinear interpolation between cell centres
@@ -36,6 +46,11 @@ pub const MAX_LINE: usize = 512;
 /// wall seen once by a scan (one metre of surface per metre, half of it in each of two cells
 /// when it runs along a cell border) reaches 1, a few stray returns stay faint.
 pub const FLOOR_M_PER_CELL: f32 = 0.5;
+
+/// A cell is a wall (scores 1) when its weight is at least this fraction of the largest
+/// within the kernel's reach (the band of a wall's returns at half its height); below it
+/// scores in proportion.
+pub const WALL_FRACTION: f32 = 0.5;
 
 /// Kernel half-width limit \[cells\].
 const MAX_KERNEL: usize = 8;
@@ -158,8 +173,9 @@ impl<const T: usize> LikelihoodField<T> {
         let reach =
             (math::ceil(2.0 * sigma_m / geom.resolution_m).max(0.0) as usize).min(MAX_KERNEL);
 
-        // Each cell's weight relative to the largest within the reach: 1 in the middle of a
-        // wall's band of returns however often it was seen, less on the band's edges.
+        // Each cell's weight relative to half the largest within the reach, capped: 1 over
+        // a wall's band of returns however often each part of it was seen (no slope along
+        // the wall), less on the band's edges.
         let flat = [1.0f32; MAX_KERNEL + 1];
         let flat = &flat[..=reach];
         for r in 0..height {
@@ -177,7 +193,7 @@ impl<const T: usize> LikelihoodField<T> {
             .iter_mut()
             .zip(&self.peak[..width * height])
         {
-            *v /= p.max(floor);
+            *v = (*v / (WALL_FRACTION * p.max(floor))).min(1.0);
         }
 
         // The separable max-convolution with a Gaussian of σ, cut at 2σ.
