@@ -327,7 +327,12 @@ fn start_takes_two_or_three_numbers_and_leaves_the_next_option_alone() {
     let out = sim(&["mission", "--map", "lab", "--start", "-1", "2", "0.5"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("(-1.00 m, 2.00 m)"), "{err}");
+    // One line naming the option, the pose and the map's extent.
+    assert!(
+        err.contains("--start") && err.contains("(-1, 2)") && err.contains("outside lab"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
 
 #[test]
