@@ -72,7 +72,7 @@ pub const STALL_DECISIONS: usize = 5;
 /// See [`PumpModel::nothing_observable_end`].
 pub const STALL_NEW_CELLS: usize = 100;
 /// See [`PumpModel::nothing_observable_end`] \[steps\].
-pub const STALL_STEPS: f32 = 5.0;
+pub const STALL_STEPS: f32 = 15.0;
 
 impl PumpModel {
     /// The runner's pump: the coverage is known, decisions take no simulated time.
