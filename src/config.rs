@@ -23,8 +23,9 @@ use crate::math;
 use crate::sensor::{LaserConfig, MAX_BEAMS};
 use crate::units::deg_to_rad;
 
-/// Largest optimizer population a board may ask for.
-pub const MAX_POPULATION: u16 = 64;
+/// Largest optimizer population a board may ask for: what every optimizer holds
+/// ([`crate::optim::MAX_POP`]), so that a population the board accepts also runs.
+pub const MAX_POPULATION: u16 = crate::optim::MAX_POP as u16;
 
 /// Target-selection methods a board may name in `mission.method`.
 pub const KNOWN_METHODS: [&str; 12] = [

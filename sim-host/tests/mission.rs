@@ -387,3 +387,35 @@ fn score_reads_a_saved_map_and_reports_its_coverage() {
     assert!(err.contains("/no/such/map.yaml"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Issue 24: a population the board accepts runs. Population 50 (the optimizers held 32, and a
+/// board with 50 failed at its first decision with `PopulationFull`); the largest, 64, makes
+/// its decisions too; one more is refused before the mission starts.
+#[test]
+fn large_populations_explore_and_one_beyond_the_limit_is_refused() {
+    for population in [50, papillon::optim::MAX_POP] {
+        let mut m = MissionConfig {
+            coverage_target: 0.9,
+            ..MissionConfig::default()
+        };
+        m.explore.population = population;
+        m.explore.max_generations = 5;
+        let r = run("lab", 1, m);
+        assert_eq!(
+            r.reason,
+            Some(EndReason::CoverageReached),
+            "population {population}: ended {:?} at coverage {}",
+            r.reason,
+            r.coverage
+        );
+        assert!(r.robots[0].decisions >= 1);
+    }
+    let mut m = MissionConfig::default();
+    m.explore.population = papillon::optim::MAX_POP + 1;
+    let cfg = RunConfig::new(m, 1, SEED);
+    let err = Runner::new(World::load("lab", 0.1).unwrap(), Dynamics::new(), cfg).unwrap_err();
+    assert!(
+        err.to_string().contains("population"),
+        "the error names the population: {err}"
+    );
+}

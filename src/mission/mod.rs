@@ -242,7 +242,9 @@ impl MissionConfig {
         if self.explore.targets == 0 || self.explore.targets > MAX_TARGETS {
             return bad("explore.targets", self.explore.targets as f32);
         }
-        if self.explore.population < 2 {
+        if self.explore.population < crate::optim::MIN_POP
+            || self.explore.population > crate::optim::MAX_POP
+        {
             return bad("explore.population", self.explore.population as f32);
         }
         self.sensor.validate().map_err(MissionError::Sensor)?;

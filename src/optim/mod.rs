@@ -55,7 +55,7 @@ pub mod xboa;
 pub use method::{AnyOptimizer, Method, Preset, UnknownMethod, UnknownPreset};
 
 /// Largest population any method holds.
-pub const MAX_POP: usize = 32;
+pub const MAX_POP: usize = 64;
 /// Largest number of genes in a genome.
 pub const MAX_DIM: usize = 16;
 /// Capacity of the best-fitness history (initial best + one entry per generation).
