@@ -85,16 +85,18 @@ impl Method {
         max_generations: u32,
     ) -> AnyOptimizer {
         let t = max_generations;
-        let (ga, pso, gwo) = match preset {
+        let (ga, pso, gwo, abc) = match preset {
             Preset::Thesis => (
                 ga::GaParams::thesis(),
                 pso::PsoParams::thesis(),
                 gwo::Schedule::Started,
+                abc::AbcParams::karaboga(),
             ),
             Preset::Standard => (
                 ga::GaParams::standard(),
                 pso::PsoParams::standard(),
                 gwo::Schedule::Paper,
+                abc::AbcParams::standard(),
             ),
         };
         match self {
@@ -113,7 +115,7 @@ impl Method {
             Method::Ga => AnyOptimizer::Ga(ga::Ga::new(ga, t)),
             Method::Pso => AnyOptimizer::Pso(pso::Pso::new(pso, t)),
             Method::Gwo => AnyOptimizer::Gwo(gwo::Gwo::with_schedule(gwo, t)),
-            Method::Abc => AnyOptimizer::Abc(abc::Abc::new(abc::AbcParams::default(), t)),
+            Method::Abc => AnyOptimizer::Abc(abc::Abc::new(abc, t)),
             Method::CmaEs => AnyOptimizer::CmaEs(cmaes::CmaEs::new(t)),
             Method::Random => AnyOptimizer::Random(random_search::RandomSearch::new(t)),
         }
