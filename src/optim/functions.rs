@@ -302,7 +302,10 @@ mod tests {
                     })
                     .sum::<f64>();
             let ours = Function::Rastrigin.value(&x) as f64;
-            assert!((ours - cosine).abs() <= 1e-6 * cosine, "{x:?}: {ours} vs {cosine}");
+            assert!(
+                (ours - cosine).abs() <= 1e-6 * cosine,
+                "{x:?}: {ours} vs {cosine}"
+            );
         }
         // Near the optimum the sine form keeps the precision the cosine form loses.
         let tiny = Function::Rastrigin.value(&[1e-5; 10]) as f64;
