@@ -84,7 +84,7 @@ fn cholesky(c: &Mat, a: &mut Mat, n: usize) -> bool {
                 sum -= l[i][k] * l[j][k];
             }
             if i == j {
-                if !(sum > 0.0) || !sum.is_finite() {
+                if sum.is_nan() || sum <= 0.0 || sum.is_infinite() {
                     return false;
                 }
                 l[i][i] = libm::sqrt(sum);
