@@ -2,14 +2,19 @@
 """pygmo's same-named methods on the issue-23 protocol, for docs/optimizers.md.
 
 Dimension 10, bounds [-5.12, 5.12], population 20, 100 generations, 25 runs, each method with
-pygmo's defaults; median, min and max of the best fitness and the mean wall time per run
-(population creation + evolve), wall and CPU (process time; the machine may be shared). `--shift S` moves the optimum to x_i = S (f(x - S)).
+pygmo's defaults; median, min and max of the best fitness. `--shift S` moves the optimum to
+x_i = S (f(x - S)).
+
+Time per run: `ms/run` is the mean wall-clock time and `cpu_ms/run` the mean CPU time of the
+process (`time.process_time()`), each around `pg.population(prob, 20, seed)` (20 evaluations)
+plus `algorithm.evolve(pop)`, i.e. everything one run needs, measured from Python. With the
+Python problem below every evaluation is a call from pygmo's C++ into Python and numpy, and
+that call is most of the time; `--native-rastrigin` uses pygmo's own C++ rastrigin (unshifted
+only) to show pygmo's algorithms without it. On a shared machine the wall-clock time includes
+the waits for a core; the CPU time does not.
 
     python3 -m venv venv && venv/bin/pip install pygmo==2.20.0
     venv/bin/python scripts/pygmo_baseline.py [--shift 1.7] [--native-rastrigin]
-
-`--native-rastrigin` uses pygmo's own C++ rastrigin (unshifted only) instead of the Python
-problem below, to show how much of pygmo's time per run is the Python call per evaluation.
 """
 import argparse
 import statistics

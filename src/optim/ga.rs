@@ -35,7 +35,15 @@ use rand_core::Rng;
 use super::{
     Engine, Genome, MAX_DIM, MAX_POP, OptimError, Optimizer, Population, Problem, engine_accessors,
 };
-use crate::{math, random};
+use crate::random;
+
+/// `x^e` for `x >= 0` as `2^(e log2 x)`: libm's `log2f` and `exp2f` are table-driven and
+/// several times faster than its general `powf`, which was most of a run's time; the result
+/// differs from `powf` by a few units in the last place.
+#[inline]
+fn pow_pos(x: f32, e: f32) -> f32 {
+    libm::exp2f(e * libm::log2f(x))
+}
 
 /// How two parents are crossed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -149,9 +157,9 @@ fn sbx<R: Rng>(c1: &mut Genome, c2: &mut Genome, dim: usize, eta_c: f32, rng: &m
         if random::chance(rng, 0.5) {
             let u = random::unit_f32(rng);
             let beta = if u <= 0.5 {
-                math::powf(2.0 * u, ex)
+                pow_pos(2.0 * u, ex)
             } else {
-                math::powf(1.0 / (2.0 * (1.0 - u)), ex)
+                pow_pos(1.0 / (2.0 * (1.0 - u)), ex)
             };
             let (p1, p2) = (c1[d], c2[d]);
             c1[d] = 0.5 * ((1.0 + beta) * p1 + (1.0 - beta) * p2);
@@ -204,13 +212,26 @@ fn polynomial<R: Rng>(y: f32, lo: f32, hi: f32, eta: f32, rng: &mut R) -> f32 {
     let r = random::unit_f32(rng);
     let pow = 1.0 / (eta + 1.0);
     let dq = if r < 0.5 {
-        let v = 2.0 * r + (1.0 - 2.0 * r) * math::powf(1.0 - d1, eta + 1.0);
-        math::powf(v, pow) - 1.0
+        let v = 2.0 * r + (1.0 - 2.0 * r) * pow_pos(1.0 - d1, eta + 1.0);
+        pow_pos(v, pow) - 1.0
     } else {
-        let v = 2.0 * (1.0 - r) + 2.0 * (r - 0.5) * math::powf(1.0 - d2, eta + 1.0);
-        1.0 - math::powf(v, pow)
+        let v = 2.0 * (1.0 - r) + 2.0 * (r - 0.5) * pow_pos(1.0 - d2, eta + 1.0);
+        1.0 - pow_pos(v, pow)
     };
     y + dq * width
+}
+
+/// Sorts `v` by `cmp` (a total order), fast when `v` is nearly sorted.
+fn insertion_sort(v: &mut [usize], cmp: impl Fn(usize, usize) -> core::cmp::Ordering) {
+    for i in 1..v.len() {
+        let x = v[i];
+        let mut j = i;
+        while j > 0 && cmp(x, v[j - 1]) == core::cmp::Ordering::Less {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = x;
+    }
 }
 
 impl Optimizer for Ga {
@@ -306,12 +327,31 @@ impl Optimizer for Ga {
                         self.child_fitness[k - n]
                     }
                 };
-                let mut order = [0usize; 2 * MAX_POP];
-                for (k, o) in order[..2 * n].iter_mut().enumerate() {
-                    *o = k;
+                // Ordered by (fitness, candidate): parents and children sorted apart by
+                // insertion (the parents come sorted from the previous generation), then
+                // merged; the same order a full sort gives, in a fraction of the comparisons.
+                let before = |a: usize, b: usize| fitness(a).total_cmp(&fitness(b)).then(a.cmp(&b));
+                let mut parents = [0usize; MAX_POP];
+                let mut kids = [0usize; MAX_POP];
+                for k in 0..n {
+                    parents[k] = k;
+                    kids[k] = n + k;
                 }
-                order[..2 * n]
-                    .sort_unstable_by(|&a, &b| fitness(a).total_cmp(&fitness(b)).then(a.cmp(&b)));
+                insertion_sort(&mut parents[..n], before);
+                insertion_sort(&mut kids[..n], before);
+                let mut order = [0usize; 2 * MAX_POP];
+                let (mut a, mut b) = (0, 0);
+                for o in order[..n].iter_mut() {
+                    let take_parent = b == n
+                        || (a < n && before(parents[a], kids[b]) == core::cmp::Ordering::Less);
+                    *o = if take_parent {
+                        a += 1;
+                        parents[a - 1]
+                    } else {
+                        b += 1;
+                        kids[b - 1]
+                    };
+                }
                 let mut genes = [[0.0; MAX_DIM]; MAX_POP];
                 let mut fit = [0.0; MAX_POP];
                 for (slot, &k) in order[..n].iter().enumerate() {

@@ -77,7 +77,7 @@ impl Method {
     }
 
     /// The method with the parameter set `preset`; [`Method::build`] is
-    /// `build_preset(Preset::Thesis, ..)`. Only GA, PSO and GWO differ between the presets.
+    /// `build_preset(Preset::Thesis, ..)`. Only GA, PSO, GWO and ABC differ between the presets.
     pub fn build_preset(
         self,
         preset: Preset,
@@ -85,16 +85,18 @@ impl Method {
         max_generations: u32,
     ) -> AnyOptimizer {
         let t = max_generations;
-        let (ga, pso, gwo) = match preset {
+        let (ga, pso, gwo, abc) = match preset {
             Preset::Thesis => (
                 ga::GaParams::thesis(),
                 pso::PsoParams::thesis(),
                 gwo::Schedule::Started,
+                abc::AbcParams::karaboga(),
             ),
             Preset::Standard => (
                 ga::GaParams::standard(),
                 pso::PsoParams::standard(),
                 gwo::Schedule::Paper,
+                abc::AbcParams::standard(),
             ),
         };
         match self {
@@ -113,7 +115,7 @@ impl Method {
             Method::Ga => AnyOptimizer::Ga(ga::Ga::new(ga, t)),
             Method::Pso => AnyOptimizer::Pso(pso::Pso::new(pso, t)),
             Method::Gwo => AnyOptimizer::Gwo(gwo::Gwo::with_schedule(gwo, t)),
-            Method::Abc => AnyOptimizer::Abc(abc::Abc::new(abc::AbcParams::default(), t)),
+            Method::Abc => AnyOptimizer::Abc(abc::Abc::new(abc, t)),
             Method::CmaEs => AnyOptimizer::CmaEs(cmaes::CmaEs::new(t)),
             Method::Random => AnyOptimizer::Random(random_search::RandomSearch::new(t)),
         }
@@ -122,20 +124,22 @@ impl Method {
 
 /// Which hyper-parameters a method gets ([`Method::build_preset`]).
 ///
-/// ABC, CMA-ES, random search and the butterfly methods (whose only parameters are the
-/// thesis's own) are the same in both; GWO differs only in its `a` schedule
-/// ([`gwo::Schedule`]).
+/// CMA-ES, random search and the butterfly methods (whose only parameters are the thesis's
+/// own) are the same in both; GWO differs only in its `a` schedule ([`gwo::Schedule`]), ABC
+/// only in GABC's global-best term ([`abc::AbcParams`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Preset {
     /// The thesis's Table 4.1, tuned on the exploration problem: GA and PSO as in
     /// [`ga::GaParams::thesis`] and [`pso::PsoParams::thesis`], GWO with
-    /// [`gwo::Schedule::Started`]. [`Method::build`] uses it, so the exploration experiments
-    /// reproduce the thesis's set-up and their earlier results.
+    /// [`gwo::Schedule::Started`], ABC as Karaboga's ([`abc::AbcParams::karaboga`], pygmo's
+    /// `bee_colony`). [`Method::build`] uses it, so the exploration experiments keep the
+    /// thesis's set-up.
     #[default]
     Thesis,
     /// The literature's defaults: [`ga::GaParams::standard`] (Deb's), [`pso::PsoParams::standard`]
-    /// (Clerc and Kennedy's, pygmo's `pso` default) and [`gwo::Schedule::Paper`]. Stronger on
-    /// the standard test functions (`docs/optimizers.md`).
+    /// (Clerc and Kennedy's, pygmo's `pso` default), [`gwo::Schedule::Paper`] and GABC
+    /// ([`abc::AbcParams::standard`]). Stronger on the standard test functions
+    /// (`docs/optimizers.md`).
     Standard,
 }
 

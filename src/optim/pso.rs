@@ -181,10 +181,13 @@ impl Optimizer for Pso {
                 }
             }
         }
-        // Synchronous: every neighbourhood best as the generation starts.
+        // Synchronous: every neighbourhood best as the generation starts (the constriction
+        // variant looks them up as each particle moves instead).
         let mut lbest = [0usize; MAX_POP];
-        for (i, lb) in lbest[..n].iter_mut().enumerate() {
-            *lb = self.neighbourhood_best(i, n);
+        if !constriction {
+            for (i, lb) in lbest[..n].iter_mut().enumerate() {
+                *lb = self.neighbourhood_best(i, n);
+            }
         }
         for i in 0..n {
             let l = if constriction {

@@ -30,7 +30,7 @@ fn every_method_improves_on_every_run_within_bounds_with_exact_counts() {
 
 #[test]
 fn the_standard_preset_and_shifted_optima_keep_those_guarantees() {
-    for method in [Method::Ga, Method::Pso, Method::Gwo] {
+    for method in [Method::Ga, Method::Pso, Method::Gwo, Method::Abc] {
         for function in FUNCTIONS {
             check_every_run(method, Preset::Standard, function, None);
             check_every_run(method, Preset::Standard, function, Some(1.7));
@@ -144,6 +144,19 @@ fn standard_ga_and_pso_reach_a_sphere_median_the_thesis_tuning_does_not() {
                 "{method}, shift {shift}: standard {standard}, thesis {thesis}, bound {bound}"
             );
         }
+    }
+}
+
+#[test]
+fn gabc_reaches_a_sphere_median_karabogas_abc_does_not() {
+    // docs/optimizers.md: GABC (standard preset) ~3e-7 against Karaboga's ABC's ~2e-4.
+    for shift in [0.0, 1.7] {
+        let standard = median_best(Method::Abc, Preset::Standard, Function::Sphere, shift);
+        let thesis = median_best(Method::Abc, Preset::Thesis, Function::Sphere, shift);
+        assert!(
+            standard < 1e-5 && thesis > 1e-5,
+            "shift {shift}: standard {standard}, thesis {thesis}"
+        );
     }
 }
 
@@ -560,7 +573,7 @@ fn presets_round_trip_and_build_is_the_thesis_preset() {
         let c = run_once(m.build_preset(Preset::Standard, 8, 15));
         assert_eq!(
             a == c,
-            !matches!(m, Method::Ga | Method::Pso | Method::Gwo),
+            !matches!(m, Method::Ga | Method::Pso | Method::Gwo | Method::Abc),
             "{m}"
         );
     }

@@ -119,6 +119,7 @@ fn print(exp: &Experiment, out: &Outcome, json: bool) {
             "max": out.max,
             "evals": out.evals,
             "mean_ms": out.mean_ms,
+            "cpu_ms": out.cpu_ms,
         });
         println!("{v}");
     } else {
@@ -135,7 +136,10 @@ fn print(exp: &Experiment, out: &Outcome, json: bool) {
             out.median, out.min, out.max
         );
         println!("mean evaluations per run: {:.1}", out.evals);
-        println!("mean time per run: {:.3} ms", out.mean_ms);
+        println!(
+            "mean time per run: {:.4} ms CPU, {:.4} ms wall",
+            out.cpu_ms, out.mean_ms
+        );
     }
 }
 
