@@ -5,7 +5,10 @@
 # several missions at once.
 #
 #   scripts/soak.sh [--map lab] [--faults SPEC] [--link tcp|pty] [--watchdog-ms MS]
-#                   [--jobs N] [--limit-s N] [--resume-check] [--keep] SEED...
+#                   [--jobs N] [--limit-s N] [--board FILE] [--resume-check] [--keep] SEED...
+#
+# Defaults: the lab, no fault, tcp, serve's watchdog (2000 ms), 4 jobs, a limit of 600 s per
+# mission, boards/sim.json, seeds 1 to 10.
 #
 # One line per mission, in seed order:
 #   seed       the seed (serve's faults and slip, the mission's RNG)
@@ -56,7 +59,7 @@ while [ $# -gt 0 ]; do
         --resume-check) resume_check=1; shift ;;
         --keep) keep=1; shift ;;
         --board) board=$2; shift 2 ;;
-        -h|--help) sed -n 2,36p "$0"; exit 0 ;;
+        -h|--help) sed -n 2,39p "$0"; exit 0 ;;
         -*) echo "soak: unknown option $1" >&2; exit 2 ;;
         *) seeds+=("$1"); shift ;;
     esac
