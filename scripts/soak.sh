@@ -59,7 +59,7 @@ while [ $# -gt 0 ]; do
         --resume-check) resume_check=1; shift ;;
         --keep) keep=1; shift ;;
         --board) board=$2; shift 2 ;;
-        -h|--help) sed -n 2,39p "$0"; exit 0 ;;
+        -h|--help) sed -n 2,37p "$0"; exit 0 ;;
         -*) echo "soak: unknown option $1" >&2; exit 2 ;;
         *) seeds+=("$1"); shift ;;
     esac
