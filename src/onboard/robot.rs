@@ -598,6 +598,11 @@ impl ArcosClient {
         self.baud_switch
     }
 
+    /// What kind of link the session runs on.
+    pub fn link_kind(&self) -> super::link::LinkKind {
+        self.link.kind()
+    }
+
     /// The link's description.
     pub fn link_description(&self) -> String {
         self.link.describe()

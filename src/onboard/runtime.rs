@@ -227,8 +227,30 @@ pub async fn connect_robot(
     let mut client = ArcosClient::connect(link, SessionOptions::from_board(board)).await?;
     let id = client.identity().clone();
     tracing::info!(name = %id.name, class = %id.class, subclass = %id.subclass, baud = ?client.baud_switch(), "connected");
+    if let (Opening::First, Some(watchdog_ms)) = (opening, long_serial_watchdog_ms(&client)) {
+        tracing::warn!(
+            watchdog_ms,
+            "if this serial line is cut, only the firmware watchdog stops the robot, after {} s; \
+             ARCOScf's Watchdog can shorten it (papillon feeds it every quarter period)",
+            f64::from(watchdog_ms) / 1000.0
+        );
+    }
     client.start(&MotionLimits::from_board(board)).await?;
     Ok(client)
+}
+
+/// Longest firmware watchdog \[ms\] `run` accepts without a warning on a serial link. A cut
+/// serial line is silence to the robot: nothing the program sends gets through, and only the
+/// firmware's watchdog (FLASH `Watchdog`, 2000 ms as shipped) stops it (docs/reliability.md,
+/// section "Soaks": 2.0-2.3 s at 2000 ms, 0.5-0.8 s at 500 ms).
+pub const LONG_SERIAL_WATCHDOG_MS: u16 = 1000;
+
+/// The robot's watchdog \[ms\] when the session runs on a serial link and the watchdog is
+/// longer than [`LONG_SERIAL_WATCHDOG_MS`].
+fn long_serial_watchdog_ms(client: &ArcosClient) -> Option<u16> {
+    let watchdog_ms = client.config()?.watchdog_ms;
+    (client.link_kind() == super::link::LinkKind::Serial && watchdog_ms > LONG_SERIAL_WATCHDOG_MS)
+        .then_some(watchdog_ms)
 }
 
 /// A laser session: an LMS1xx over TCP or an LMS200 over a serial port.

@@ -374,6 +374,8 @@ fn pump(
 /// One line of `papillon-sim serve --truth-log`: a robot's true state.
 #[derive(Clone, Copy, Debug)]
 pub struct Truth {
+    /// Time of the sample since `serve` started \[s\] (the clock of its `--faults` windows).
+    pub t_s: f64,
     /// Wall-clock time of the sample \[s since the Unix epoch\].
     pub unix_s: f64,
     /// True pose in the world \[m, m, rad\].
@@ -384,6 +386,8 @@ pub struct Truth {
     pub speed_mm_s: f64,
     /// True turn rate \[deg/s\].
     pub turn_deg_s: f64,
+    /// Whether the robot touches something (a wheel stall or a bumper).
+    pub contact: bool,
 }
 
 impl Truth {
@@ -401,12 +405,14 @@ pub fn read_truth(path: &Path) -> Vec<Truth> {
         .filter(|v| v["robot"].as_u64() == Some(0))
         .filter_map(|v| {
             Some(Truth {
+                t_s: v["t_s"].as_f64()?,
                 unix_s: v["unix_s"].as_f64()?,
                 x_m: v["x_m"].as_f64()?,
                 y_m: v["y_m"].as_f64()?,
                 theta_rad: v["theta_rad"].as_f64()?,
                 speed_mm_s: v["speed_mm_s"].as_f64()?,
                 turn_deg_s: v["turn_deg_s"].as_f64()?,
+                contact: v["contact"].as_bool()?,
             })
         })
         .collect()

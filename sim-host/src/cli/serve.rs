@@ -42,7 +42,8 @@ pub struct Args {
     pub robots: u8,
     /// Write each robot's true pose and velocity to this file every 20 ms, as JSON lines:
     /// `{"t_s","unix_s","robot","x_m","y_m","theta_rad","speed_mm_s","turn_deg_s",
-    /// "motors_enabled"}` (`t_s` since start, `unix_s` since the Unix epoch). The file is
+    /// "motors_enabled","contact"}` (`t_s` since start, `unix_s` since the Unix epoch;
+    /// `contact`: a wheel stall or a bumper). The file is
     /// created or truncated; a symbolic link in its place is refused.
     #[arg(long)]
     pub truth_log: Option<PathBuf>,

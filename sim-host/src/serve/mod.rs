@@ -340,7 +340,9 @@ pub fn offset_addr(addr: &str, offset: usize) -> Result<String, String> {
 
 /// Steps every body to the server's clock about every 10 ms (the physics itself runs in its
 /// fixed steps, [`crate::physics::BodyConfig::step_s`]), presses and releases the e-stop
-/// faults, and writes the truth log every [`TRUTH_PERIOD_S`].
+/// faults, and writes the truth log every [`TRUTH_PERIOD_S`]: per robot its true pose, speed,
+/// turn rate, whether its motors are enabled and whether it touches something (`contact`: a
+/// wheel stall or a bumper, the physics' wall contact).
 fn physics_loop(sim: &Sim, mut truth: Option<io::BufWriter<std::fs::File>>) {
     let mut next_truth_s = 0.0;
     while !sim.stopped() {
@@ -370,13 +372,14 @@ fn physics_loop(sim: &Sim, mut truth: Option<io::BufWriter<std::fs::File>>) {
                 let p = b.true_pose();
                 let _ = writeln!(
                     lines,
-                    "{{\"t_s\":{now:.3},\"unix_s\":{unix_s:.3},\"robot\":{i},\"x_m\":{:.4},\"y_m\":{:.4},\"theta_rad\":{:.4},\"speed_mm_s\":{:.1},\"turn_deg_s\":{:.2},\"motors_enabled\":{}}}",
+                    "{{\"t_s\":{now:.3},\"unix_s\":{unix_s:.3},\"robot\":{i},\"x_m\":{:.4},\"y_m\":{:.4},\"theta_rad\":{:.4},\"speed_mm_s\":{:.1},\"turn_deg_s\":{:.2},\"motors_enabled\":{},\"contact\":{}}}",
                     p.x,
                     p.y,
                     p.theta,
                     b.speed_mm_s(),
                     b.turn_deg_s(),
-                    b.motors_enabled()
+                    b.motors_enabled(),
+                    b.stalled() || b.front_bumper() || b.rear_bumper()
                 );
             }
             drop(bodies);
