@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The house check of the user guide (section 7): for each seed, `papillon-sim serve --map house`
-# in real time, `papillon run --board boards/sim.json` against it (the board's mission seed set
+# in real time (its laser with the board's `laser.noise_fraction`, the noise the runner
+# simulates), `papillon run --board boards/sim.json` against it (the board's mission seed set
 # to the seed), then `papillon-sim score` of the saved map against the world's truth.
 #
 #   scripts/house-check.sh [--map house|lab|...] [--limit-s N] [--board FILE] [--faults SPEC] SEED...
@@ -23,7 +24,7 @@ while [ $# -gt 0 ]; do
         --limit-s) limit_s=$2; shift 2 ;;
         --board) board=$2; shift 2 ;;
         --faults) faults=$2; shift 2 ;;
-        -h|--help) sed -n 2,11p "$0"; exit 0 ;;
+        -h|--help) sed -n 2,12p "$0"; exit 0 ;;
         -*) echo "house-check: unknown option $1" >&2; exit 2 ;;
         *) seeds+=("$1"); shift ;;
     esac
@@ -47,7 +48,9 @@ for seed in "${seeds[@]}"; do
     dir=$work/seed-$seed
     mkdir -p "$dir"
     jq ".mission.seed = $seed" "$board" > "$dir/board.json"
-    args=(serve --map "$map" --tcp 127.0.0.1:0 --laser 127.0.0.1:0 --seed "$seed")
+    # The laser the board describes: its range noise, as the runner simulates it.
+    noise=$(jq '.laser.noise_fraction // 0' "$board")
+    args=(serve --map "$map" --tcp 127.0.0.1:0 --laser 127.0.0.1:0 --seed "$seed" --laser-noise "$noise")
     [ -n "$faults" ] && args+=(--faults "$faults")
     "$sim" "${args[@]}" > "$dir/serve.out" 2> "$dir/serve.err" &
     serve_pid=$!

@@ -104,8 +104,10 @@ fn main() -> ExitCode {
 }
 
 fn init_logging() {
+    // Colours only on a terminal: a log file of the progress lines stays plain text.
     let _ = tracing_subscriber::fmt()
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .with_target(false)
         .try_init();
 }

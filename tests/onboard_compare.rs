@@ -4,7 +4,8 @@
 //! binary's took) and `papillon run` against `papillon-sim serve` in real time. Both maps are
 //! scored against the world's truth (`papillon_sim::score`, what `papillon-sim score` prints).
 //!
-//! A manual check (it takes as long as the missions, 15-20 minutes per house seed):
+//! A manual check (it takes as long as the missions, 15-20 minutes on the house; the seeds'
+//! binary missions run at the same time, each against its own `serve`):
 //!
 //! ```text
 //! PAPILLON_COMPARE_MAP=lab PAPILLON_COMPARE_SEEDS="1 2 3" \
@@ -62,7 +63,9 @@ fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
     let board_path = dir.join("board.json");
     std::fs::write(&board_path, text).unwrap();
     let seed_text = seed.to_string();
-    let sim = Sim::start(map, None, &["--seed", &seed_text]);
+    // The laser the board describes (its range noise), as the runner simulates it.
+    let noise = board(seed).0.laser.noise_fraction.to_string();
+    let sim = Sim::start(map, None, &["--seed", &seed_text, "--laser-noise", &noise]);
     let log = dir.join("log");
     let began = Instant::now();
     let child = papillon(
@@ -208,6 +211,17 @@ fn print(map: &str, seed: u64, pump: &str, o: &Outcome) {
     );
 }
 
+/// The runner's onboard pump ends a mission on the binary's `NothingObservable` values.
+#[test]
+fn the_runner_ends_as_the_binary_does() {
+    use papillon::onboard::mission as onboard;
+    use papillon_sim::runner;
+    assert_eq!(runner::STALL_DECISIONS, onboard::STALL_DECISIONS);
+    assert_eq!(runner::STALL_IDLE_DECISIONS, onboard::STALL_IDLE_DECISIONS);
+    assert_eq!(runner::STALL_NEW_CELLS, onboard::STALL_NEW_CELLS);
+    assert_eq!(runner::STALL_STEPS, onboard::STALL_STEPS);
+}
+
 #[test]
 #[ignore = "manual check: real-time missions (see the module documentation)"]
 fn runner_predicts_the_binary() {
@@ -234,8 +248,18 @@ fn runner_predicts_the_binary() {
         }
         return;
     }
-    for &seed in &seeds {
-        let b = binary(&map, seed, limit);
+    // The binary's missions run at once, one `serve` each (they mostly wait on real time).
+    let binaries: Vec<Outcome> = std::thread::scope(|scope| {
+        let runs: Vec<_> = seeds
+            .iter()
+            .map(|&seed| {
+                let map = &map;
+                scope.spawn(move || binary(map, seed, limit))
+            })
+            .collect();
+        runs.into_iter().map(|r| r.join().unwrap()).collect()
+    });
+    for (&seed, b) in seeds.iter().zip(binaries) {
         print(&map, seed, "binary", &b);
         let r = runner(&map, seed, b.decision_s);
         print(&map, seed, "runner", &r);

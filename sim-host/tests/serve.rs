@@ -632,6 +632,52 @@ fn lms1xx_session_streams_scans_matching_the_world_only_after_subscribing() {
     }
 }
 
+/// `--laser-noise F`: each range gets Gaussian noise of F times the range, drawn afresh for
+/// every scan (the runner's laser model), around the noise-free range.
+#[test]
+fn laser_noise_perturbs_each_scan_afresh_around_the_true_ranges() {
+    let server = Server::start(&["--laser-noise", "0.05"]);
+    let addr = server.endpoint("laser lms1xx tcp");
+    let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
+    let truth =
+        LaserSim::new(laser_config(ScanConfig::DEFAULT_50HZ), 1).scan(&world, world.start(), &[]);
+    let scans = laser_scans(&addr, 3, Duration::from_secs(3));
+    assert_eq!(scans.len(), 3, "scans received");
+    let values: Vec<&[u16]> = scans
+        .iter()
+        .map(|t| &t.distance_channel().expect("DIST1").values[..])
+        .collect();
+    let mut compared = 0;
+    let mut off = 0;
+    let mut sum_sq = 0.0f64;
+    for (i, beam) in truth.beams().iter().enumerate() {
+        let Some(r) = beam.range_m.filter(|&r| r > 0.5 && r < 10.0) else {
+            continue;
+        };
+        for v in &values {
+            // 6 standard deviations: a correct draw is never that far out in these scans.
+            let err_m = f64::from(v[i]) / 1000.0 - f64::from(r);
+            assert!(
+                err_m.abs() < 6.0 * 0.05 * f64::from(r),
+                "beam {i}: {err_m} m off {r} m"
+            );
+            sum_sq += (err_m / (0.05 * f64::from(r))).powi(2);
+            compared += 1;
+        }
+        off += usize::from(values[0][i] != values[1][i]);
+    }
+    assert!(compared > 300, "{compared} ranges compared");
+    // Noise drawn afresh: the same beam differs from one scan to the next.
+    assert!(
+        off * 10 > compared / 3 * 9,
+        "{off} of {} beams differ",
+        compared / 3
+    );
+    // Its spread is the one asked for (unit variance after scaling, within sampling error).
+    let variance = sum_sq / compared as f64;
+    assert!((0.7..1.3).contains(&variance), "scaled variance {variance}");
+}
+
 #[test]
 fn driving_into_a_wall_sets_the_front_bumper_and_stall_flags() {
     let mut b = Bench::new();

@@ -60,6 +60,20 @@ pub struct Args {
     /// AROS firmware, positions in units of 0.485 mm).
     #[arg(long, value_enum, default_value = "p3dx-sh")]
     pub subclass: Subclass,
+    /// Range noise of the emulated laser, as a fraction of the range (standard deviation of
+    /// Gaussian noise, drawn afresh for every scan; the runner's model): 0 for noise-free
+    /// ranges, 0.05 for the thesis's laser that `papillon-sim mission` simulates with
+    /// `boards/sim.json`.
+    #[arg(long, default_value_t = 0.0, value_parser = noise_fraction)]
+    pub laser_noise: f32,
+}
+
+/// A `--laser-noise` value: a number in [0, 1).
+fn noise_fraction(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && (0.0..1.0).contains(&v) => Ok(v),
+        _ => Err(format!("{s:?} is not a fraction of the range in [0, 1)")),
+    }
 }
 
 /// What `serve` presents itself as.
@@ -122,6 +136,7 @@ impl From<Args> for ServeConfig {
                 Subclass::P3dx => arcos::Subclass::P3dx,
                 Subclass::P3dxSh => arcos::Subclass::P3dxSh,
             },
+            laser_noise_fraction: a.laser_noise,
         }
     }
 }

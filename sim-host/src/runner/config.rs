@@ -58,13 +58,20 @@ pub struct PumpModel {
     pub decision_latency_s: f64,
     /// End the run, as `papillon run` ends its mission, when [`STALL_DECISIONS`] decisions
     /// in a row added fewer than [`STALL_NEW_CELLS`] known cells to the map while the robot
-    /// spent at least [`STALL_STEPS`] on them (`papillon::onboard::mission::Stall`: what is
-    /// left Unknown next to Free cells cannot be seen).
+    /// spent at least [`STALL_STEPS`] on them, or when [`STALL_IDLE_DECISIONS`] decisions in
+    /// a row added fewer than [`STALL_NEW_CELLS`] however little it drove
+    /// (`papillon::onboard::mission::Stall`: what is left Unknown next to Free cells cannot
+    /// be seen).
     pub nothing_observable_end: bool,
     /// Above this turn rate a scan only feeds the safety monitor, it is not mapped
     /// (`papillon run` maps no scan between two status packets whose headings differ by more
     /// than 2°: its scans are timed by their arrival) \[deg/s\]. `None`: every scan is mapped.
     pub unmapped_turn_deg_s: Option<f32>,
+    /// Robot `k`'s decisions draw from a generator seeded with the run's seed plus `k`, as
+    /// `papillon run` seeds its own with the board's `mission.seed` (instead of a stream
+    /// derived from the run's seed, [`derive_seed`]): on the same seed the runner's optimizer
+    /// then draws what the binary's draws.
+    pub board_seeded_decisions: bool,
 }
 
 /// See [`PumpModel::nothing_observable_end`] (the same values as `papillon run`'s).
@@ -73,6 +80,8 @@ pub const STALL_DECISIONS: usize = 5;
 pub const STALL_NEW_CELLS: usize = 100;
 /// See [`PumpModel::nothing_observable_end`] \[steps\].
 pub const STALL_STEPS: f32 = 15.0;
+/// See [`PumpModel::nothing_observable_end`].
+pub const STALL_IDLE_DECISIONS: usize = 50;
 
 impl PumpModel {
     /// The runner's pump: the coverage is known, decisions take no simulated time.
@@ -82,19 +91,21 @@ impl PumpModel {
             decision_latency_s: 0.0,
             nothing_observable_end: false,
             unmapped_turn_deg_s: None,
+            board_seeded_decisions: false,
         }
     }
 
     /// `papillon run`'s pump: no coverage from the truth, a decision takes
     /// `decision_latency_s` (what its `decision` telemetry's `compute_ms` says), no scan is
-    /// mapped while the robot turns faster than 20 deg/s, and the run ends when decisions stop
-    /// adding to the map.
+    /// mapped while the robot turns faster than 20 deg/s, the run ends when decisions stop
+    /// adding to the map, and decisions draw from the board's seed.
     pub const fn onboard(decision_latency_s: f64) -> Self {
         Self {
             coverage_known: false,
             decision_latency_s,
             nothing_observable_end: true,
             unmapped_turn_deg_s: Some(20.0),
+            board_seeded_decisions: true,
         }
     }
 }

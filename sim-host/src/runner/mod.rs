@@ -50,8 +50,8 @@ mod coverage;
 mod report;
 
 pub use config::{
-    PumpModel, RunConfig, RunError, STALL_DECISIONS, STALL_NEW_CELLS, STALL_STEPS,
-    default_time_limit_s, derive_seed,
+    PumpModel, RunConfig, RunError, STALL_DECISIONS, STALL_IDLE_DECISIONS, STALL_NEW_CELLS,
+    STALL_STEPS, default_time_limit_s, derive_seed,
 };
 use config::{STREAM_BODY, STREAM_DECIDE, STREAM_LASER};
 use coverage::CoverageCounter;
@@ -239,7 +239,11 @@ impl Runner {
                     derive_seed(config.seed, k, STREAM_LASER),
                 ),
                 mission,
-                rng: random::seeded(derive_seed(config.seed, k, STREAM_DECIDE)),
+                rng: random::seeded(if config.pump.board_seeded_decisions {
+                    config.seed.wrapping_add(k as u64)
+                } else {
+                    derive_seed(config.seed, k, STREAM_DECIDE)
+                }),
                 report: RobotReport {
                     trajectory: vec![pose.position()],
                     final_pose: pose,
@@ -519,17 +523,19 @@ impl Runner {
                 let known = (0..self.map.grid.cell_count())
                     .filter(|&i| self.map.grid.class(i) != CellClass::Unknown)
                     .count();
-                if r.stall.len() > STALL_DECISIONS {
+                if r.stall.len() > STALL_IDLE_DECISIONS {
                     r.stall.pop_front();
                 }
-                r.stall.push_back((known, r.mission.stats().steps));
-                if let (Some(&(k0, s0)), Some(&(k1, s1))) = (r.stall.front(), r.stall.back())
-                    && r.stall.len() > STALL_DECISIONS
-                    && k1.saturating_sub(k0) < STALL_NEW_CELLS
-                    && s1 - s0 >= STALL_STEPS
-                {
-                    nothing_observable = true;
-                }
+                let steps = r.mission.stats().steps;
+                r.stall.push_back((known, steps));
+                let n = r.stall.len();
+                let driven = n > STALL_DECISIONS && {
+                    let (k0, s0) = r.stall[n - 1 - STALL_DECISIONS];
+                    known.saturating_sub(k0) < STALL_NEW_CELLS && steps - s0 >= STALL_STEPS
+                };
+                let idle = n > STALL_IDLE_DECISIONS
+                    && known.saturating_sub(r.stall[0].0) < STALL_NEW_CELLS;
+                nothing_observable |= driven || idle;
             }
             if deciding {
                 // The decision's command comes `latency` later; until then the robot stops.

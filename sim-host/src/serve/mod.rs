@@ -89,6 +89,12 @@ pub struct ServeConfig {
     pub identity: Identity,
     /// The P3-DX subclass emulated (its name and DistConvFactor).
     pub subclass: Subclass,
+    /// Range noise of the emulated laser: each range gets Gaussian noise of standard deviation
+    /// this fraction of the range ([`LaserSim`]'s model, the runner's), drawn afresh for every
+    /// scan. 0: noise-free ranges. The runner simulates the laser of its mission
+    /// configuration (`boards/sim.json`: 5 %, the thesis's); the binary predicts what the
+    /// runner predicts only on the same laser (`scripts/house-check.sh` passes the board's).
+    pub laser_noise_fraction: f32,
 }
 
 /// An endpoint the server opened, for the announcement line.
@@ -107,6 +113,8 @@ struct Sim {
     watchdog_ms: u16,
     identity: Identity,
     subclass: Subclass,
+    /// See [`ServeConfig::laser_noise_fraction`].
+    laser_noise_fraction: f32,
     /// Per robot: whether a client owns its microcontroller (one client at a time, as a
     /// serial port has one owner and AMRISim answers one client).
     owned: Vec<AtomicBool>,
@@ -146,8 +154,10 @@ impl Sim {
         self.bodies.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// A scan from robot `robot`'s true pose; the other robots appear as discs.
-    fn scan(&self, robot: usize, config: LaserConfig) -> Scan {
+    /// A scan from robot `robot`'s true pose, with the server's range noise; the other robots
+    /// appear as discs.
+    fn scan(&self, robot: usize, mut config: LaserConfig) -> Scan {
+        config.noise_fraction = self.laser_noise_fraction;
         let (pose, others) = {
             let bodies = self.bodies();
             let others: Vec<Disc> = bodies
@@ -213,6 +223,7 @@ impl Server {
             watchdog_ms: config.watchdog_ms,
             identity: config.identity,
             subclass: config.subclass,
+            laser_noise_fraction: config.laser_noise_fraction,
             owned: (0..n).map(|_| AtomicBool::new(false)).collect(),
             bodies: Mutex::new(bodies),
             start: Instant::now(),
