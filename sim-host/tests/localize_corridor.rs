@@ -37,8 +37,11 @@ fn along_a_featureless_corridor_the_odometry_is_kept_and_the_walls_hold_the_rest
     let mut grid = OccupancyGrid::<CELLS>::new_boxed(geom, LogOddsBounds::default()).unwrap();
     let mut hits = Box::new(HitMap::<CELLS>::new(geom));
     let mut matcher = Box::new(ScanMatcher::<WINDOW_CELLS>::new());
+    // Every scan matched (no minimum travel): the most matches, the most chances to drift.
     let config = LocalizeConfig {
         enabled: true,
+        min_travel_m: 0.0,
+        min_turn_rad: 0.0,
         ..LocalizeConfig::default()
     };
     let mut tracker = Tracker::new();

@@ -26,6 +26,12 @@
 //! seen so far and pulls the returns near it inward. Both passes
 //! are separable: one along the rows, one along the columns, each with a short line buffer.
 //!
+//! Two variants are kept for experiments (docs/experiments.md, fourth measurement), neither used
+//! by default: a Gaussian *sum* blur of the returns before the normalisation (`smooth`, a
+//! density whose ridge is the surface's mean line) and cubic interpolation
+//! ([`LikelihoodField::sample_cubic`]), which keeps the maximum of a ridge lying on a cell
+//! border where bilinear interpolation leaves a plateau a cell wide.
+//!
 //! The same field, read with bilinear interpolation between cell centres
 //! ([`LikelihoodField::sample`]), is the continuous map function Hector's Gauss-Newton step
 //! differentiates (Kohlbrecher et al., SSRR 2011, §IV.A).
@@ -126,7 +132,9 @@ impl<const T: usize> LikelihoodField<T> {
     }
 
     /// Builds the field over the cells covering `lo..=hi` (map frame \[m\]) from the returns
-    /// in `hits`, blurred by `sigma_m`. Cells outside the grid hold nothing. Returns `false`, leaving the field
+    /// in `hits`, blurred by `sigma_m`, wall cells at `wall_fraction` of the local peak
+    /// ([`WALL_FRACTION`]), by a sum before the normalisation when `smooth` (else by a maximum
+    /// after). Cells outside the grid hold nothing. Returns `false`, leaving the field
     /// empty, when the window needs more than `T` cells or a line longer than [`MAX_LINE`].
     pub fn build<const N: usize>(
         &mut self,
@@ -134,6 +142,8 @@ impl<const T: usize> LikelihoodField<T> {
         lo: Point2,
         hi: Point2,
         sigma_m: f32,
+        wall_fraction: f32,
+        smooth: bool,
     ) -> bool {
         let geom = *hits.geometry();
         let a = geom.cell_at_unchecked(lo);
@@ -172,12 +182,41 @@ impl<const T: usize> LikelihoodField<T> {
 
         let reach =
             (math::ceil(2.0 * sigma_m / geom.resolution_m).max(0.0) as usize).min(MAX_KERNEL);
-
-        // Each cell's weight relative to half the largest within the reach, capped: 1 over
-        // a wall's band of returns however often each part of it was seen (no slope along
-        // the wall), less on the band's edges.
+        let mut kernel = [0.0f32; MAX_KERNEL + 1];
+        for (k, w) in kernel.iter_mut().enumerate().take(reach + 1) {
+            let d = k as f32 * geom.resolution_m;
+            *w = math::exp(-d * d / (2.0 * sigma_m * sigma_m));
+        }
+        let kernel = &kernel[..=reach];
         let flat = [1.0f32; MAX_KERNEL + 1];
         let flat = &flat[..=reach];
+        let mut floor = FLOOR_M_PER_CELL * geom.resolution_m;
+
+        if smooth {
+            // The density of returns: a Gaussian sum-blur (a kernel density estimate), whose
+            // ridge is smooth and sits on the wall's mean line.
+            let total: f32 = kernel[0] + 2.0 * kernel[1..].iter().sum::<f32>();
+            let mut unit = [0.0f32; MAX_KERNEL + 1];
+            for (u, k) in unit.iter_mut().zip(kernel) {
+                *u = k / total;
+            }
+            let unit = &unit[..=reach];
+            floor *= unit[0];
+            for r in 0..height {
+                let span = r * width..(r + 1) * width;
+                sum_filter(&self.values[span.clone()], &mut self.peak[span], 1, unit);
+            }
+            for c in 0..width {
+                for r in 0..height {
+                    self.line[r] = self.peak[r * width + c];
+                }
+                sum_filter(&self.line[..height], &mut self.values[c..], width, unit);
+            }
+        }
+
+        // Each cell's weight relative to the largest within the reach, capped: 1 over
+        // a wall's band of returns however often each part of it was seen (no slope along
+        // the wall), less on the band's edges.
         for r in 0..height {
             let span = r * width..(r + 1) * width;
             max_filter(&self.values[span.clone()], &mut self.peak[span], 1, flat);
@@ -188,21 +227,17 @@ impl<const T: usize> LikelihoodField<T> {
             }
             max_filter(&self.line[..height], &mut self.peak[c..], width, flat);
         }
-        let floor = FLOOR_M_PER_CELL * geom.resolution_m;
         for (v, &p) in self.values[..width * height]
             .iter_mut()
             .zip(&self.peak[..width * height])
         {
-            *v = (*v / (WALL_FRACTION * p.max(floor))).min(1.0);
+            *v = (*v / (wall_fraction * p.max(floor))).min(1.0);
+        }
+        if smooth {
+            return true;
         }
 
         // The separable max-convolution with a Gaussian of σ, cut at 2σ.
-        let mut kernel = [0.0f32; MAX_KERNEL + 1];
-        for (k, w) in kernel.iter_mut().enumerate().take(reach + 1) {
-            let d = k as f32 * geom.resolution_m;
-            *w = math::exp(-d * d / (2.0 * sigma_m * sigma_m));
-        }
-        let kernel = &kernel[..=reach];
         for r in 0..height {
             let row = &mut self.values[r * width..(r + 1) * width];
             self.line[..width].copy_from_slice(row);
@@ -247,6 +282,83 @@ impl<const T: usize> LikelihoodField<T> {
         let gy = ((1.0 - du) * (m01 - m00) + du * (m11 - m10)) * inv;
         (value, gx, gy)
     }
+
+    /// The value at a map point and its gradient \[1/m\], interpolated between cell centres
+    /// by cubic convolution (Keys, *Cubic convolution interpolation for digital image
+    /// processing*, IEEE Trans. ASSP 29(6), 1981, with a = -0.5, the Catmull-Rom spline);
+    /// zero outside the window. Bilinear interpolation, as Hector's, is flat between two equal
+    /// cells: the ridge of a wall lying on a cell border (every wall of a map drawn on the
+    /// grid) would be a plateau a cell wide, and a scan could slide across it by ±half a cell.
+    /// The cubic puts the ridge's maximum where the samples place it, with a continuous slope.
+    /// (Measured with `examples/localize_open.rs`, not yet used by the matcher: see
+    /// docs/experiments.md.)
+    #[inline]
+    pub fn sample_cubic(&self, p: Point2) -> (f32, f32, f32) {
+        let (u, v) = self.to_window(p);
+        let (fu, fv) = (math::floor(u), math::floor(v));
+        let (iu, iv) = (fu as i32, fv as i32);
+        if iu < 1 || iv < 1 || iu as usize + 2 >= self.width || iv as usize + 2 >= self.height {
+            return (0.0, 0.0, 0.0);
+        }
+        let (wu, du) = cubic_weights(u - fu);
+        let (wv, dv) = cubic_weights(v - fv);
+        let (mut value, mut gx, mut gy) = (0.0f32, 0.0f32, 0.0f32);
+        let base = (iv as usize - 1) * self.width + iu as usize - 1;
+        for j in 0..4 {
+            let row = &self.values[base + j * self.width..base + j * self.width + 4];
+            let (mut r, mut dr) = (0.0f32, 0.0f32);
+            for i in 0..4 {
+                r += wu[i] * row[i];
+                dr += du[i] * row[i];
+            }
+            value += wv[j] * r;
+            gx += wv[j] * dr;
+            gy += dv[j] * r;
+        }
+        let inv = 1.0 / self.resolution_m;
+        (value, gx * inv, gy * inv)
+    }
+}
+
+/// The four weights of Catmull-Rom cubic convolution at fraction `t` (0..1) past the second
+/// sample, and their derivatives in `t`.
+#[inline]
+fn cubic_weights(t: f32) -> ([f32; 4], [f32; 4]) {
+    let (t2, t3) = (t * t, t * t * t);
+    (
+        [
+            0.5 * (-t3 + 2.0 * t2 - t),
+            0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+            0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+            0.5 * (t3 - t2),
+        ],
+        [
+            0.5 * (-3.0 * t2 + 4.0 * t - 1.0),
+            0.5 * (9.0 * t2 - 10.0 * t),
+            0.5 * (-9.0 * t2 + 8.0 * t + 1.0),
+            0.5 * (3.0 * t2 - 2.0 * t),
+        ],
+    )
+}
+
+/// `out[i·stride] = Σ_k src[i + k] · kernel[|k|]` for `|k| <= reach`, splatting the non-zero
+/// source cells.
+fn sum_filter(src: &[f32], out: &mut [f32], stride: usize, kernel: &[f32]) {
+    let reach = kernel.len() - 1;
+    let n = src.len();
+    for i in 0..n {
+        out[i * stride] = 0.0;
+    }
+    for (j, &s) in src.iter().enumerate() {
+        if s <= 0.0 {
+            continue;
+        }
+        let lo = j.saturating_sub(reach);
+        let hi = (j + reach).min(n - 1);
+        for i in lo..=hi {
+            out[i * stride] += s * kernel[i.abs_diff(j)];
+        }
+    }
 }
 
 /// `out[i·stride] = max_k src[i + k] · kernel[|k|]` for `|k| <= reach`, splatting each
@@ -285,7 +397,14 @@ mod tests {
         let mut hits = HitMap::<400>::new(geom);
         hits.add_point(Point2::new(1.05, 1.05), 0.3);
         let mut f = LikelihoodField::<400>::new();
-        assert!(f.build(&hits, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
+        assert!(f.build(
+            &hits,
+            Point2::new(0.0, 0.0),
+            Point2::new(1.99, 1.99),
+            0.1,
+            WALL_FRACTION,
+            false
+        ));
         let centre = Point2::new(1.05, 1.05);
         let (v, _, _) = f.sample(centre);
         assert!((v - 1.0).abs() < 1e-6);
@@ -310,7 +429,14 @@ mod tests {
             hits.add_point(Point2::new(0.6 + 0.01 * k as f32, 1.0), 0.01);
         }
         let mut f = LikelihoodField::<400>::new();
-        assert!(f.build(&hits, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
+        assert!(f.build(
+            &hits,
+            Point2::new(0.0, 0.0),
+            Point2::new(1.99, 1.99),
+            0.1,
+            WALL_FRACTION,
+            false
+        ));
         let below = f.sample(Point2::new(1.0, 0.96)).0;
         let above = f.sample(Point2::new(1.0, 1.04)).0;
         assert!((below - above).abs() < 1e-4, "{below} vs {above}");
@@ -322,7 +448,14 @@ mod tests {
         let geom = GridGeometry::new(20, 20, 0.1, Point2::new(0.0, 0.0)).unwrap();
         let hits = HitMap::<400>::new(geom);
         let mut f = LikelihoodField::<100>::new();
-        assert!(!f.build(&hits, Point2::new(0.0, 0.0), Point2::new(1.99, 1.99), 0.1));
+        assert!(!f.build(
+            &hits,
+            Point2::new(0.0, 0.0),
+            Point2::new(1.99, 1.99),
+            0.1,
+            WALL_FRACTION,
+            false
+        ));
         assert_eq!(f.width(), 0);
     }
 }

@@ -97,13 +97,25 @@ pub struct MatchConfig {
     pub min_return_value: f32,
     /// Fewer than this fraction of the returns on known ground fitting so: no match.
     pub min_fit_fraction: f32,
+    /// A cell of the returns layer is a wall cell (scores 1) at this fraction of the largest
+    /// weight within the blur's reach ([`likelihood::WALL_FRACTION`]).
+    pub wall_fraction: f32,
+    /// Blur the returns by a Gaussian sum (a density of returns) before normalising, instead
+    /// of by Olson's max-convolution after (an experiment, off: measured no better,
+    /// docs/experiments.md).
+    pub smooth: bool,
+    /// A return takes part in the refinement only when its neighbours along the scan within
+    /// this distance fit too \[m\] (0: no boundary test).
+    pub boundary_m: f32,
 }
 
 impl Default for MatchConfig {
     /// ±0.3 m and ±0.1 rad (5.7°) at 0.01 rad, σ 0.1 m, at most 270 returns, at least 30,
     /// half of them on known cells, mean likelihood 0.25, information 0.5/m² and 3 % of the
     /// strongest, returns beyond 1 m
-    /// weighted by 1/r², L = 1 m, 10 steps, prior 0.02, search gain 0.03, returns refined from a field value of 0.5, at least 30 % of them.
+    /// weighted by 1/r², L = 1 m, 10 steps, prior 0.02, search gain 0.03, returns refined from a field value of 0.5, at least 30 % of them,
+    /// with their neighbours along the scan within 15 cm; wall cells at half the local peak,
+    /// max-convolution.
     fn default() -> Self {
         Self {
             search_xy_m: 0.3,
@@ -123,6 +135,9 @@ impl Default for MatchConfig {
             min_search_gain: 0.03,
             min_return_value: 0.5,
             min_fit_fraction: 0.3,
+            wall_fraction: likelihood::WALL_FRACTION,
+            smooth: false,
+            boundary_m: 0.15,
         }
     }
 }
@@ -307,7 +322,14 @@ impl<const T: usize> ScanMatcher<T> {
             + 2.0 * res;
         lo = Point2::new(lo.x - margin, lo.y - margin);
         hi = Point2::new(hi.x + margin, hi.y + margin);
-        if !self.field.build(hits, lo, hi, config.sigma_m) {
+        if !self.field.build(
+            hits,
+            lo,
+            hi,
+            config.sigma_m,
+            config.wall_fraction,
+            config.smooth,
+        ) {
             return refuse(quality, Distrust::WindowTooLarge);
         }
 
@@ -381,11 +403,42 @@ impl<const T: usize> ScanMatcher<T> {
         // a return that lands a little beyond the end of a wall seen so far has the wall's
         // end within the blur and would pull the scan along the wall toward it (a bias in
         // the direction the robot turns or drives, several tenths of a degree per scan).
+        //
+        // Returns at the boundary of what fits are left out too, as Turk & Levoy reject
+        // correspondences on the boundary of the reference (*Zippered polygon meshes from
+        // range images*, SIGGRAPH 1994): a return whose neighbours along the scan, within
+        // [`MatchConfig::boundary_m`], do not all fit stands at the end of the part of a
+        // surface the map knows, where the field falls off along the surface and pulls it
+        // back (measured in a house mission with exact poses and noiseless scans: the first
+        // 15 cm of a wall coming into view at the edge of the scan scored 0.2-0.9 and pulled
+        // the match 10 cm back along it).
         let total = self.len;
-        let mut kept = 0;
         for i in 0..total {
             let q = start.transform_point(self.points[i]);
-            if self.field.sample(q).0 >= config.min_return_value {
+            self.scratch[i].1 = self.field.sample(q).0;
+        }
+        let fits = |v: f32| v >= config.min_return_value;
+        let reach2 = config.boundary_m * config.boundary_m;
+        let mut kept = 0;
+        for i in 0..total {
+            let p = self.points[i];
+            let near = |j: usize| {
+                let d = self.points[j];
+                let (dx, dy) = (d.x - p.x, d.y - p.y);
+                dx * dx + dy * dy <= reach2
+            };
+            let mut ok = fits(self.scratch[i].1);
+            let mut j = i + 1;
+            while ok && j < total && near(j) {
+                ok = fits(self.scratch[j].1);
+                j += 1;
+            }
+            let mut j = i;
+            while ok && j > 0 && near(j - 1) {
+                ok = fits(self.scratch[j - 1].1);
+                j -= 1;
+            }
+            if ok {
                 self.points[kept] = self.points[i];
                 self.weights[kept] = self.weights[i];
                 kept += 1;

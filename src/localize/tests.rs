@@ -264,10 +264,14 @@ fn the_tracker_moves_the_odometry_frame_by_the_correction_it_trusts() {
         ),
         None
     );
+    // The blend alone: the odometry below comes back to where it was matched, which the
+    // minimum-travel gate would skip (tested below).
     let on = LocalizeConfig {
         enabled: true,
         every_n_scans: 2,
         matcher: config(),
+        min_travel_m: 0.0,
+        min_turn_rad: 0.0,
         ..LocalizeConfig::default()
     };
     // Standing still, the prediction is as good as a match: the pose stays.
@@ -374,4 +378,41 @@ fn a_turn_in_place_with_exact_poses_is_not_pulled() {
             "turning {dir}: mean correction {mean:?}"
         );
     }
+}
+
+#[test]
+fn the_tracker_matches_again_only_after_the_minimum_travel() {
+    use crate::control::odometry::MapFromOdom;
+    let (walls, geom) = room();
+    let (grid, hits) = draw(&walls, geom, Point2::new(0.5, 0.5), Point2::new(8.5, 6.5));
+    let laser = LaserConfig::lms1xx();
+    let scan = scan_at(&walls, Pose2::new(4.0, 3.0, 0.3), &laser, 0.0, 1);
+    let mut transform = MapFromOdom::from_start(Pose2::new(4.0, 3.0, 0.3), Pose2::default());
+    let mut tracker = Tracker::new();
+    let mut m = matcher();
+    let on = LocalizeConfig {
+        enabled: true,
+        matcher: config(),
+        ..LocalizeConfig::default()
+    };
+    let mut feed = |tracker: &mut Tracker, odom: Pose2| {
+        tracker.on_scan(
+            &on,
+            &grid,
+            &hits,
+            &mut m,
+            &scan,
+            &laser,
+            odom,
+            &mut transform,
+        );
+        tracker.matches()
+    };
+    assert_eq!(feed(&mut tracker, Pose2::default()), 1);
+    // Less than the minimum travel and turn: not matched.
+    assert_eq!(feed(&mut tracker, Pose2::new(0.3, 0.0, 0.3)), 1);
+    // Far enough: matched; then the distance counts from there.
+    assert_eq!(feed(&mut tracker, Pose2::new(0.6, 0.0, 0.0)), 2);
+    assert_eq!(feed(&mut tracker, Pose2::new(0.9, 0.0, 0.0)), 2);
+    assert_eq!(feed(&mut tracker, Pose2::new(0.6, 0.0, on.min_turn_rad)), 3);
 }
