@@ -202,7 +202,8 @@ pub struct SafetyInputs<'a> {
     pub flags: RobotFlags,
     /// Obstacles the map remembers around the robot, in the base frame \[m\]: what the laser
     /// cannot see (behind a 180° laser, inside its blind zone) but a turn or a back-off would
-    /// run into. Empty when the caller has no map.
+    /// run into; they are checked for turns in place and backing, not for driving forward
+    /// (the laser watches the way ahead). Empty when the caller has no map.
     pub remembered: &'a [Point2],
 }
 
@@ -481,7 +482,16 @@ impl SafetyMonitor {
         let seen = inputs
             .scan
             .and_then(|s| self.obstacle_in_path(command, s, inputs.laser));
-        let remembered = self.nearest_in_path(command, inputs.remembered.iter().copied());
+        // The map's memory is for what the laser cannot watch: turning in place (the swing
+        // circle reaches behind a forward-facing laser) and backing. Driving forward, the laser
+        // sees the corridor ahead itself; the map's cells there are a cell's width coarse and
+        // carry its noise, and a spurious one beside a door's frame stopped the robot in every
+        // narrow opening.
+        let remembered = if command.speed_mm_s() > 0 {
+            None
+        } else {
+            self.nearest_in_path(command, inputs.remembered.iter().copied())
+        };
         let nearest = match (seen, remembered) {
             (Some(a), Some(b)) => Some(if b.0 < a.0 { b } else { a }),
             (a, b) => a.or(b),

@@ -22,15 +22,18 @@
 //! - **Starting**: commands zero until the first odometry (which fixes the map-from-odom
 //!   transform at the start pose) and the first scan integrated.
 //! - **Deciding**: a decision by the configured selector ([`SelectorKind`]), computed inside
-//!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` ends the mission with
-//!   [`DoneReason::NothingReachable`]; `NoFeasibleTarget` with the battery low ends it with
-//!   [`DoneReason::BatteryExhausted`].
+//!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` (no frontier reachable) counts
+//!   as a failed decision: [`MissionConfig::max_failed_decisions`] of them in a row end the
+//!   mission with [`DoneReason::NothingReachable`] (one look can be cut off for a moment by a
+//!   return the monitor just stopped for, which fresh scans clear); `NoFeasibleTarget` with
+//!   the battery low ends it with [`DoneReason::BatteryExhausted`].
 //! - **Rotating / Driving**: the [`WaypointFollower`](crate::control::follower::WaypointFollower)
 //!   turns in place then drives to each waypoint ([`MissionEvent::WaypointReached`]).
 //!   After every scan the remaining segments are checked against the traversability layer;
 //!   an Occupied or inflated cell across them (a door that closed) means a replan.
 //! - **Replanning**: a fresh path from the current pose to the decision's remaining targets.
-//!   Caused by the safety monitor (obstacle ahead: the return is added to the map; contact or
+//!   Caused by the safety monitor (obstacle ahead: the return is added to the map with one
+//!   return's evidence, so free space seen through it later clears it; contact or
 //!   stall: once the monitor has backed off), by a cut path, or by the end of a fault. A
 //!   decision that needed more than [`MissionConfig::max_replans_per_decision`] replans
 //!   without the robot getting anywhere (less than 1 m from where the first of them was

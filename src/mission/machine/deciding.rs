@@ -123,8 +123,11 @@ impl<const N: usize> Mission<N> {
                 self.adopt(now, &d, events)
             }
             Ok(Outcome::Done) => {
-                self.finish(DoneReason::NothingReachable, events);
-                true
+                // No frontier reachable from here on this map. One look can be wrong: a return
+                // the safety monitor just stopped for, or the robot standing in a wall's band,
+                // can cut it off for a moment, and fresh scans clear that. Ended only after
+                // `max_failed_decisions` such looks in a row (as `failed` counts them).
+                self.failed(events)
             }
             Err(DecideError::NoFeasibleTarget { .. }) if self.battery_low() => {
                 self.finish(DoneReason::BatteryExhausted, events);

@@ -10,7 +10,6 @@ use crate::control::command::MotionCommand;
 use crate::control::follower::Controller;
 use crate::control::safety::{SafetyEvent, SafetyState};
 use crate::geometry::{Point2, Pose2, normalize_angle};
-use crate::grid::CellClass;
 use crate::math;
 
 use super::super::ReplanCause;
@@ -87,7 +86,7 @@ impl<const N: usize> Mission<N> {
         match event {
             SafetyEvent::ObstacleAhead { point_base_m, .. } => {
                 let p = pose.transform_point(point_base_m);
-                mark_occupied(map, p);
+                mark_occupied(map, p, self.config.sensor.occupied_log_odds);
                 match self.phase {
                     Phase::Escaping(_) => {
                         // The escape itself was refused: plan again; the next hold picks
@@ -130,7 +129,11 @@ impl<const N: usize> Mission<N> {
                     }
                     let a = pose.transform_point(Point2::new(x, -half));
                     let b = pose.transform_point(Point2::new(x, half));
-                    mark_occupied(map, pose.transform_point(Point2::new(x, 0.0)));
+                    mark_occupied(
+                        map,
+                        pose.transform_point(Point2::new(x, 0.0)),
+                        map.grid.bounds().max,
+                    );
                     if self.contacts.is_full() {
                         self.contacts.pop_front();
                     }
@@ -234,14 +237,18 @@ impl<const N: usize> Mission<N> {
     }
 }
 
-/// Sets the cell holding map point `p` Occupied (an obstacle the laser or a bumper found).
-fn mark_occupied<const N: usize>(map: &mut SharedMap<N>, p: Point2) {
+/// Makes the cell holding map point `p` Occupied with log-odds `l` at least (a bumper contact:
+/// the bound; a return the safety monitor stopped for: one return's evidence,
+/// `occupied_log_odds`, so that free space seen through it later clears it as it clears any
+/// return; saturating it made one noisy return in a doorway shut the door for good).
+fn mark_occupied<const N: usize>(map: &mut SharedMap<N>, p: Point2, l: f32) {
     if let Some(i) = map
         .grid
         .geometry()
         .cell_at(p)
         .and_then(|c| map.grid.geometry().index(c))
     {
-        map.grid.set_class(i, CellClass::Occupied, &mut map.trav);
+        let l = map.grid.log_odds_at(i).max(l);
+        map.grid.set_log_odds(i, l, &mut map.trav);
     }
 }

@@ -1,0 +1,280 @@
+//! Why a mission ended short of full coverage: runs one `papillon-sim mission` (same options)
+//! and sorts the observable cells its map does not know by the first reason that explains them:
+//!
+//! - `unseen`: no pose the planning layer reaches on the *true* map (fully known, same body and
+//!   clearance) sees the cell (line of sight within the laser's 4 m): the observable set counts
+//!   cells the body cannot observe;
+//! - `left`: a cell seen from a pose the robot could still reach on its *final* map: the mission
+//!   ended with reachable unknown space (battery, or gave up);
+//! - `noise`: seen only from poses that the final map's Occupied cells that are free in truth
+//!   (laser noise) cut off; with those cells cleared the robot reaches a pose that sees it;
+//! - `shut`: anything else (the final map's planning layer shuts the way for another reason).
+//!
+//! Usage: `coverage_gaps [mission options...]`, e.g.
+//! `coverage_gaps --map gen-03 --seed 25 --battery 488`. Prints one tab-separated line:
+//! `map method seed coverage reason missing unseen left noise shut spurious_occupied steps
+//! contacts replans_by_cause`. With `GAPS_EVENTS=1` it also prints the last events, the map
+//! around the robot (or around `GAPS_AT=X,Y`) and the planning layer there; with
+//! `GAPS_GATES=1` the spurious Occupied cells next to where the final map's reach stops.
+//! Results are in docs/experiments.md ("Generated world set after the obstacle-mark change").
+
+use clap::Parser;
+use papillon::geometry::Point2;
+use papillon::grid::{Cell, CellClass, OccupancyGrid};
+use papillon::planner::Traversability;
+use papillon_sim::cli::mission::{Args, setup_from_args};
+use papillon_sim::dynamic::Dynamics;
+use papillon_sim::runner::{MAP_CAPACITY, Runner};
+
+#[derive(Parser)]
+struct Cli {
+    #[command(flatten)]
+    args: Args,
+}
+
+/// Cells the layer lets a robot's centre reach from `from` (4-connected over passable cells).
+fn reach(trav: &Traversability<MAP_CAPACITY>, from: Cell) -> Vec<bool> {
+    let g = *trav.geometry();
+    let mut seen = vec![false; g.cell_count()];
+    // Start from the nearest passable cell within 3 cells (the robot may sit in a band).
+    let mut stack = Vec::new();
+    for dr in -3..=3 {
+        for dc in -3..=3 {
+            let c = Cell::new(from.col + dc, from.row + dr);
+            if let Some(i) = g.index(c)
+                && trav.is_passable(c)
+                && !seen[i]
+            {
+                seen[i] = true;
+                stack.push(c);
+            }
+        }
+    }
+    while let Some(c) = stack.pop() {
+        for (dc, dr) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+            let n = Cell::new(c.col + dc, c.row + dr);
+            if let Some(j) = g.index(n)
+                && !seen[j]
+                && trav.is_passable(n)
+            {
+                seen[j] = true;
+                stack.push(n);
+            }
+        }
+    }
+    seen
+}
+
+/// Cells seen (line of sight through free truth cells, up to `range_m`) from the reached cells,
+/// sampled every `step` cells, 720 rays each.
+fn seen_from(
+    world: &papillon_sim::world::World,
+    reached: &[bool],
+    step: i32,
+    range_m: f32,
+) -> Vec<bool> {
+    let g = *world.geometry();
+    let mut seen = vec![false; g.cell_count()];
+    for (i, _) in reached.iter().enumerate().filter(|(_, r)| **r) {
+        let c = g.cell(i);
+        if c.col % step != 0 || c.row % step != 0 {
+            continue;
+        }
+        let o = g.cell_center(c);
+        for k in 0..720 {
+            let a = k as f32 * std::f32::consts::PI / 360.0;
+            let n = (range_m / (0.5 * g.resolution_m)) as usize;
+            for s in 0..=n {
+                let d = s as f32 * 0.5 * g.resolution_m;
+                let p = Point2::new(o.x + d * a.cos(), o.y + d * a.sin());
+                let Some(cell) = g.cell_at(p) else { break };
+                let j = g.index(cell).unwrap();
+                seen[j] = true;
+                if world.is_blocked_index(j) {
+                    break;
+                }
+            }
+        }
+    }
+    seen
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let setup = setup_from_args(&cli.args).unwrap_or_else(|e| panic!("{e}"));
+    let world = setup.world.clone();
+    let mut runner = Runner::new(world.clone(), Dynamics::new(), setup.run.clone()).unwrap();
+    let report = runner.run().unwrap();
+    if std::env::var_os("GAPS_EVENTS").is_some() {
+        let ev = runner.events();
+        for e in &ev[ev.len().saturating_sub(40)..] {
+            eprintln!("{:8.1} {:?}", e.time_s, e.event);
+        }
+        eprintln!("stats {:?}", runner.mission(0).stats());
+    }
+    let g = *world.geometry();
+    let truth = world.truth();
+    let map = &runner.map().grid;
+    if std::env::var_os("GAPS_EVENTS").is_some() {
+        let p = runner.body(0).true_pose();
+        eprintln!("end pose {p:?}");
+        // Map around the robot: '#' Occupied and blocked, '!' Occupied but free in truth,
+        // '.' Free, ',' Free but blocked in truth, ' ' Unknown (truth free), '%' Unknown (truth
+        // blocked), 'R' the robot's cell.
+        let at = std::env::var("GAPS_AT").ok().and_then(|v| {
+            let (x, y) = v.split_once(',')?;
+            Some(Point2::new(x.parse().ok()?, y.parse().ok()?))
+        });
+        let c = g.cell_at(at.unwrap_or(Point2::new(p.x, p.y))).unwrap();
+        for dr in (-15..=15).rev() {
+            let mut line = String::new();
+            for dc in -25..=25 {
+                let cell = Cell::new(c.col + dc, c.row + dr);
+                let Some(i) = g.index(cell) else {
+                    line.push('~');
+                    continue;
+                };
+                let b = world.is_blocked_index(i);
+                line.push(if dc == 0 && dr == 0 {
+                    'R'
+                } else {
+                    match (map.class(i), b) {
+                        (CellClass::Occupied, true) => '#',
+                        (CellClass::Occupied, false) => '!',
+                        (CellClass::Free, false) => '.',
+                        (CellClass::Free, true) => ',',
+                        (CellClass::Unknown, false) => ' ',
+                        (CellClass::Unknown, true) => '%',
+                    }
+                });
+            }
+            eprintln!("{line}");
+        }
+    }
+    let config = setup.run.mission.traversability;
+
+    // The true map's reachable poses and what they see.
+    let true_grid = world.to_occupancy_grid::<MAP_CAPACITY>().unwrap();
+    let mut trav = Traversability::<MAP_CAPACITY>::new_boxed(g, config).unwrap();
+    trav.rebuild_from(&true_grid).unwrap();
+    let start = world.start_cell().unwrap();
+    let step = 2;
+    let seen_true = seen_from(&world, &reach(&trav, start), step, 4.0);
+
+    // The final map's reachable poses, from where the robot ended.
+    let end = report.robots[0]
+        .trajectory
+        .last()
+        .map(|p| g.cell_at(Point2::new(p.x, p.y)).unwrap())
+        .unwrap_or(start);
+    trav.rebuild_from(map).unwrap();
+    let reach_final = reach(&trav, end);
+    if std::env::var_os("GAPS_EVENTS").is_some() {
+        eprintln!(
+            "end cell passable {} reached from it {}",
+            trav.is_passable(end),
+            reach_final.iter().filter(|&&r| r).count()
+        );
+        for dr in (-6..=6).rev() {
+            let line: String = (-6..=6)
+                .map(|dc| {
+                    let c = Cell::new(end.col + dc, end.row + dr);
+                    if dc == 0 && dr == 0 {
+                        'R'
+                    } else if trav.is_passable(c) {
+                        if trav.can_turn(c) { 'o' } else { '-' }
+                    } else {
+                        'x'
+                    }
+                })
+                .collect();
+            eprintln!("{line}");
+        }
+    }
+    let seen_final = seen_from(&world, &reach_final, step, 4.0);
+
+    // The final map without its spurious Occupied cells.
+    let mut clean: Box<OccupancyGrid<MAP_CAPACITY>> =
+        OccupancyGrid::new_boxed(g, map.bounds()).unwrap();
+    let mut spurious = 0;
+    for i in 0..g.cell_count() {
+        let mut class = map.class(i);
+        if class == CellClass::Occupied && !world.is_blocked_index(i) {
+            spurious += usize::from(truth.mask()[i]);
+            class = CellClass::Free;
+        }
+        if class != CellClass::Unknown {
+            clean.set_class(i, class, &mut ());
+        }
+    }
+    trav.rebuild_from(&*clean).unwrap();
+    let reach_clean = reach(&trav, end);
+    let seen_clean = seen_from(&world, &reach_clean, step, 4.0);
+    if std::env::var_os("GAPS_GATES").is_some() {
+        // Spurious Occupied cells within 0.3 m of a cell the clean map reaches and the final
+        // map does not, next to one the final map reaches: what shuts the way.
+        let mut blockers = std::collections::BTreeMap::new();
+        for i in 0..g.cell_count() {
+            if !reach_clean[i] || reach_final[i] {
+                continue;
+            }
+            let c = g.cell(i);
+            let gate = [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|&(dc, dr)| {
+                g.index(Cell::new(c.col + dc, c.row + dr))
+                    .is_some_and(|j| reach_final[j])
+            });
+            if !gate {
+                continue;
+            }
+            for dr in -3..=3 {
+                for dc in -3..=3 {
+                    if let Some(j) = g.index(Cell::new(c.col + dc, c.row + dr))
+                        && map.class(j) == CellClass::Occupied
+                        && !world.is_blocked_index(j)
+                    {
+                        blockers.insert(j, map.log_odds_at(j));
+                    }
+                }
+            }
+        }
+        for (j, l) in &blockers {
+            let p = g.cell_center(g.cell(*j));
+            eprintln!("blocker ({:.2}, {:.2}) l={l:.2}", p.x, p.y);
+        }
+    }
+
+    let (mut missing, mut unseen, mut left, mut noise, mut shut) = (0, 0, 0, 0, 0);
+    for &i in truth.cells() {
+        if map.class(i).is_known() {
+            continue;
+        }
+        missing += 1;
+        if !seen_true[i] {
+            unseen += 1;
+        } else if seen_final[i] {
+            left += 1;
+        } else if seen_clean[i] {
+            noise += 1;
+        } else {
+            shut += 1;
+        }
+    }
+    let mut causes = std::collections::BTreeMap::new();
+    for e in runner.events() {
+        if let papillon::mission::MissionEvent::Replanned { cause } = e.event {
+            *causes.entry(format!("{cause:?}")).or_insert(0) += 1;
+        }
+    }
+    let causes: Vec<String> = causes.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    println!(
+        "{}\t{}\t{}\t{:.3}\t{}\t{missing}\t{unseen}\t{left}\t{noise}\t{shut}\t{spurious}\t{}\t{}\t{}",
+        world.name(),
+        setup.method(),
+        setup.run.seed,
+        report.coverage,
+        report.reason.map_or("-", |r| r.name()),
+        report.steps(),
+        report.collisions(),
+        causes.join(","),
+    );
+}
