@@ -426,6 +426,9 @@ fn mismatch(kind: Kind, token: &[u8]) -> Option<Expected> {
             if token.first() != Some(&b'"') {
                 return Some(Expected::Kind("a string"));
             }
+            if core::str::from_utf8(token).is_err() {
+                return Some(Expected::Kind("a string of UTF-8 text"));
+            }
             let n = unescaped_len(&token[1..token.len() - 1]);
             (n > max).then_some(Expected::Length { found: n, max })
         }
