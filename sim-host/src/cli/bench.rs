@@ -28,10 +28,10 @@ pub struct Args {
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Runs per combination (default: the sweep's, 10 for the named experiments).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub runs: Option<usize>,
     /// Worker threads (default: one per core).
-    #[arg(long, default_value = "0")]
+    #[arg(long, default_value = "0", allow_negative_numbers = true)]
     pub jobs: usize,
     /// Output directory (default: bench-results/NAME).
     #[arg(long)]
@@ -43,7 +43,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub maps: Option<Vec<String>>,
     /// Replace the sweep's battery (steps).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub battery: Option<f32>,
     /// Replace the sweep's objective: efficient (the default) or thesis.
     #[arg(long)]
