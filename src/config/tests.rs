@@ -428,3 +428,21 @@ fn too_many_long_term_targets_and_an_absurd_gain_are_refused() {
     });
     only_problem_at("$.pid.distance_kp", |c| c.pid.distance_kp = 1e30);
 }
+
+/// Half of a UTF-16 pair in a `\u` escape is a syntax error at its place; a whole pair is
+/// read (before: `"\ud800"` was accepted as a robot name).
+#[test]
+fn a_lone_surrogate_escape_is_refused_and_a_pair_read() {
+    let lone = SIM.replacen("\"sim-p3dx\"", "\"\\ud800\"", 1);
+    match BoardConfig::from_json(lone.as_bytes()) {
+        Err(ConfigError::Syntax { line, .. }) => assert_eq!(line, 3),
+        other => panic!("{other:?}"),
+    }
+    let low = SIM.replacen("\"sim-p3dx\"", "\"\\udc00x\"", 1);
+    assert!(matches!(
+        BoardConfig::from_json(low.as_bytes()),
+        Err(ConfigError::Syntax { .. })
+    ));
+    let pair = SIM.replacen("\"sim-p3dx\"", "\"\\ud83d\\ude00\"", 1);
+    assert!(BoardConfig::from_json(pair.as_bytes()).is_ok());
+}
