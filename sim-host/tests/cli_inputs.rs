@@ -450,6 +450,35 @@ fn a_sweep_with_values_no_run_can_have_is_refused_naming_the_field() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Bad inputs table: `bench --jobs 100000` is refused naming the flag (before: it started
+/// 100000 worker threads; with 2 GiB of address space a thread's stack could not be allocated
+/// and it panicked).
+#[test]
+fn a_hundred_thousand_bench_jobs_are_refused() {
+    let dir = temp_dir("jobs");
+    let sweep = dir.join("sweep.json");
+    std::fs::write(
+        &sweep,
+        r#"{"maps": ["lab"], "methods": ["nearest-frontier"], "runs": 1, "generations": 2}"#,
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
+    let out = sim(
+        &[
+            "bench",
+            "--config",
+            sweep.to_str().unwrap(),
+            "--jobs",
+            "100000",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ],
+        Duration::from_secs(20),
+    );
+    assert_refused(&out, &["--jobs"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Bad inputs table: `mission --gens 4000000000`, `--battery 1e30` and a start heading of
 /// 1e30 rad are refused naming the flag (before: all three ran), and so is `score
 /// --robot-start 1e30 1e30` (before: "coverage 0.00 %").
