@@ -15,6 +15,10 @@
 //! | `estop=T+D` | the e-stop is pressed from T s for D s (repeatable) |
 //! | `drain=V` | the battery drains V volts per minute while powered |
 //!
+//! Limits: [`MAX_DELAY_MS`], [`MAX_WINDOW_S`], [`MAX_SLIP_FACTOR`], [`MAX_DRAIN_V_PER_MIN`];
+//! each fault but the windows at most once, no empty item (an empty specification is no
+//! fault).
+//!
 //! Byte faults (`corrupt`, `drop`, `latency`, `jitter`) apply to the microcontroller's output
 //! (robot to PC), where a noisy serial line hurts the onboard binary's decoder.
 
