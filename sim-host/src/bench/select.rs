@@ -136,7 +136,7 @@ pub fn check_overrides(overrides: &Overrides) -> Result<(), SelectError> {
         && !(b.is_finite() && b > 0.0)
     {
         return bad(format!(
-            "--battery: expected a positive number of steps, got {b}"
+            "--battery: battery_steps must be positive, got {b}"
         ));
     }
     if let Some(o) = &overrides.objective
@@ -154,7 +154,6 @@ pub fn check_overrides(overrides: &Overrides) -> Result<(), SelectError> {
 
 /// The sweep `source` names with `overrides` applied, checked.
 pub fn select(source: &Source, overrides: &Overrides) -> Result<Sweep, SelectError> {
-    check_overrides(overrides)?;
     let sweep = match source {
         Source::Named { name, thesis_maps } => {
             let runs = overrides.runs.unwrap_or(sweep::DEFAULT_RUNS);
@@ -162,11 +161,12 @@ pub fn select(source: &Source, overrides: &Overrides) -> Result<Sweep, SelectErr
         }
         Source::File(path) => from_file(path)?,
     };
+    check_overrides(overrides)?;
     let sweep = apply(sweep, overrides);
     sweep.check().map_err(SelectError::Sweep)?;
     if overrides.maps.is_some() {
         sweep
-            .check_maps()
+            .check_runnable()
             .map_err(|e| SelectError::Sweep(format!("--maps: {e}")))?;
     }
     Ok(sweep)

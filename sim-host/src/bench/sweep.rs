@@ -260,11 +260,14 @@ impl Sweep {
         })
     }
 
-    /// Reads a sweep file; a sweep without a name takes the file's stem.
+    /// Reads a sweep file and checks that its methods and maps are known
+    /// ([`Sweep::check_runnable`]); a sweep without a name takes the file's stem.
     pub fn from_file(path: &Path) -> Result<Self, String> {
         let text = papillon::files::read_limited_to_string(path, papillon::files::TEXT_MAX_BYTES)
             .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-        let mut s = Sweep::from_json(&text, &path.display().to_string())?;
+        let origin = path.display().to_string();
+        let mut s = Sweep::from_json(&text, &origin)?;
+        s.check_runnable().map_err(|e| format!("{origin}: {e}"))?;
         if s.name.is_empty() {
             s.name = path
                 .file_stem()
@@ -280,7 +283,6 @@ impl Sweep {
         let sweep: Sweep =
             serde_json::from_str(text).map_err(|e| format!("{origin}: bad sweep: {e}"))?;
         sweep.check().map_err(|e| format!("{origin}: {e}"))?;
-        sweep.check_maps().map_err(|e| format!("{origin}: {e}"))?;
         Ok(sweep)
     }
 
@@ -314,10 +316,6 @@ impl Sweep {
                 "maps x methods x strategies x populations x robots x runs is more than \
                  {MAX_SWEEP_RUNS} runs"
             ));
-        }
-        for (i, m) in self.methods.iter().enumerate() {
-            crate::scenario::selector_from_name(m)
-                .map_err(|e| format!("methods[{i}]: {}", e.trim_start_matches("--method: ")))?;
         }
         for (i, &p) in self.populations.iter().enumerate() {
             if !(2..=64).contains(&p) {
@@ -356,9 +354,14 @@ impl Sweep {
         Ok(())
     }
 
-    /// Checks that every map loads at the sweep's cell size (a name, a file, its size), so
-    /// that a bad one is one error naming it rather than every run failing.
-    pub fn check_maps(&self) -> Result<(), String> {
+    /// Checks that every method is known and every map loads at the sweep's cell size (a
+    /// name, a file, its size), so that a bad one is one error naming it rather than every
+    /// run failing ([`Sweep::check`] leaves them to the runs).
+    pub fn check_runnable(&self) -> Result<(), String> {
+        for (i, m) in self.methods.iter().enumerate() {
+            crate::scenario::selector_from_name(m)
+                .map_err(|e| format!("methods[{i}]: {}", e.trim_start_matches("--method: ")))?;
+        }
         for (i, m) in self.maps.iter().enumerate() {
             crate::world::World::load(m, self.resolution_m).map_err(|e| {
                 // The world's errors speak of `mission`'s flag; here it is the sweep's field.
