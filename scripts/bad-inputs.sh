@@ -58,9 +58,19 @@ N=0 PANICS=0 ABORTS=0 HANGS=0 ACCEPTED=0 NOLOC=0
 # Markdown cell: pipes escaped, backticks dropped.
 cell() { printf '%s' "$1" | tr -d '`' | sed 's/|/\\|/g'; }
 
+# The endpoints of this run's servers by name, so that the table does not change between runs.
+named() {
+    local x=$1
+    if [ -n "${ROBOT:-}" ]; then x=${x//$ROBOT/\$ROBOT}; fi
+    if [ -n "${LASER:-}" ]; then x=${x//$LASER/\$LASER}; fi
+    if [ -n "${SILENT:-}" ]; then x=${x//$SILENT/\$SILENT}; fi
+    if [ -n "${NOISE:-}" ]; then x=${x//$NOISE/\$NOISE}; fi
+    printf '%s' "$x"
+}
+
 # t NEEDLES PROGRAM ARGS...: runs one case. NEEDLES: words separated by `;` that the error
-# must contain. PROGRAM: papillon or papillon-sim. Arguments are shown as given, but the
-# values of $ROBOT and $LASER (a served robot's endpoints) by those names.
+# must contain. PROGRAM: papillon or papillon-sim. Arguments and errors are shown as given,
+# but the servers' endpoints by their names ($ROBOT, $LASER, $SILENT, $NOISE).
 t() {
     local needles=$1 prog=$2
     shift 2
@@ -112,9 +122,9 @@ t() {
         fi
     fi
     local shown="$prog" a
+    err=$(named "$err")
     for a in "$@"; do
-        if [ -n "${ROBOT:-}" ]; then a=${a//$ROBOT/\$ROBOT}; fi
-        if [ -n "${LASER:-}" ]; then a=${a//$LASER/\$LASER}; fi
+        a=$(named "$a")
         case $a in
             "") a="''" ;;
             *[[:space:]]*) a="'$a'" ;;
