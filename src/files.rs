@@ -12,6 +12,7 @@
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Read};
 use std::path::Path;
+use std::time::Duration;
 
 /// Largest board file \[bytes\]: a board is about 1.3 kB.
 pub const BOARD_MAX_BYTES: u64 = 64 << 10;
@@ -20,18 +21,48 @@ pub const TEXT_MAX_BYTES: u64 = 1 << 20;
 /// Largest map image, CSV or Moving AI map, saved state \[bytes\]: a 4096 x 4096 PGM with
 /// 16-bit pixels is 32 MiB.
 pub const MAP_MAX_BYTES: u64 = 64 << 20;
+/// How long [`read_limited`] waits for a program to open a named pipe for writing.
+pub const PIPE_WRITER_WAIT: Duration = Duration::from_secs(5);
 
 /// Reads the whole of `path` if it has at most `limit` bytes. A larger file (or one that never
 /// ends, such as a character device) is an [`io::ErrorKind::InvalidData`] error saying so; the
-/// caller names the file.
+/// caller names the file. A named pipe that no program opens for writing within
+/// [`PIPE_WRITER_WAIT`] is an [`io::ErrorKind::TimedOut`] error (opening it would block for
+/// ever); once a writer has it open, the pipe is read to its end as any file.
 pub fn read_limited(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
-    let file = File::open(path)?;
+    let file = open_to_read(path)?;
     let mut bytes = Vec::new();
     file.take(limit.saturating_add(1)).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > limit {
         return Err(too_large(limit));
     }
     Ok(bytes)
+}
+
+/// Opens `path` for reading; a named pipe is opened on a thread of its own, given up after
+/// [`PIPE_WRITER_WAIT`] (the thread stays blocked until a writer comes or the program ends).
+fn open_to_read(path: &Path) -> io::Result<File> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if fs::metadata(path)?.file_type().is_fifo() {
+            let (sender, receiver) = std::sync::mpsc::channel();
+            let pipe = path.to_path_buf();
+            std::thread::spawn(move || {
+                let _ = sender.send(File::open(pipe));
+            });
+            return receiver.recv_timeout(PIPE_WRITER_WAIT).unwrap_or_else(|_| {
+                Err(io::Error::new(
+                    io::ErrorKind::TimedOut,
+                    format!(
+                        "a named pipe that no program opened for writing within {} s",
+                        PIPE_WRITER_WAIT.as_secs()
+                    ),
+                ))
+            });
+        }
+    }
+    File::open(path)
 }
 
 /// [`read_limited`] for a UTF-8 text file.
@@ -182,6 +213,42 @@ mod tests {
             .write_all(b"c")
             .unwrap();
         assert_eq!(fs::read(&plain).unwrap(), b"c");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_named_pipe_without_a_writer_is_given_up_and_one_with_a_writer_is_read() {
+        let dir = std::env::temp_dir().join(format!("papillon-fifo-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        let fifo = dir.join("board.json");
+        // Two pipes: the thread left blocked on the first one must not take the second's data.
+        let other = dir.join("other.json");
+        let made = std::process::Command::new("mkfifo")
+            .args([&fifo, &other])
+            .status();
+        if !made.is_ok_and(|s| s.success()) {
+            eprintln!("skipped: no mkfifo");
+            return;
+        }
+        let e = read_limited(&fifo, BOARD_MAX_BYTES).unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::TimedOut, "{e}");
+        assert!(e.to_string().contains("named pipe"), "{e}");
+        let writer = {
+            let other = other.clone();
+            std::thread::spawn(move || {
+                use std::io::Write;
+                OpenOptions::new()
+                    .write(true)
+                    .open(other)
+                    .unwrap()
+                    .write_all(b"{}")
+                    .unwrap();
+            })
+        };
+        assert_eq!(read_limited(&other, BOARD_MAX_BYTES).unwrap(), b"{}");
+        writer.join().unwrap();
         fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -88,7 +88,18 @@ struct RunArgs {
 const EXIT_FILE: u8 = 2;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if e.use_stderr() => {
+            eprintln!("papillon: {}", clap_error_line(&e));
+            return ExitCode::from(EXIT_FILE);
+        }
+        Err(e) => {
+            // --help and --version.
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+    };
     match cli.command {
         Command::Check { board } => check(&board),
         Command::Ports => ports(),
@@ -101,6 +112,22 @@ fn main() -> ExitCode {
             run(args)
         }
     }
+}
+
+/// One line for a bad command line: clap's first paragraph (the error and, for a missing
+/// argument, the flags it names), without its `error: ` prefix.
+fn clap_error_line(e: &clap::Error) -> String {
+    if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+        return "a subcommand is missing: check, ports, probe or run (see papillon --help)".into();
+    }
+    let text = e.to_string();
+    let first: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect();
+    let line = first.join(" ");
+    line.strip_prefix("error: ").unwrap_or(&line).to_string()
 }
 
 fn init_logging() {
@@ -116,6 +143,10 @@ fn init_logging() {
 fn load_board(path: &Path) -> Result<BoardConfig, ExitCode> {
     let bytes = match papillon::files::read_limited(path, papillon::files::BOARD_MAX_BYTES) {
         Ok(b) => b,
+        Err(_) if path.as_os_str().is_empty() => {
+            eprintln!("papillon: --board: an empty path names no board file");
+            return Err(ExitCode::from(EXIT_FILE));
+        }
         Err(e) => {
             eprintln!("papillon: cannot read board file {}: {e}", path.display());
             return Err(ExitCode::from(EXIT_FILE));
@@ -146,9 +177,13 @@ fn check(path: &Path) -> ExitCode {
         Ok(b) => b,
         Err(code) => return code,
     };
-    let problems = board.validate(|json_path, problem| println!("{json_path}: {problem}"));
-    if problems > 0 {
-        eprintln!("{}: {problems} problem(s)", path.display());
+    let mut first = None;
+    let problems = board.validate(|json_path, problem| {
+        println!("{json_path}: {problem}");
+        first.get_or_insert_with(|| format!("{json_path}: {problem}"));
+    });
+    if let Some(first) = first {
+        eprintln!("{}: {first}{}", path.display(), more(problems));
         return ExitCode::from(1);
     }
     let link = match &board.link.tcp {
@@ -211,6 +246,11 @@ fn runtime() -> tokio::runtime::Runtime {
 }
 
 fn probe(args: ProbeArgs) -> ExitCode {
+    let flag = match (&args.target.tcp, &args.target.port) {
+        (Some(tcp), _) => format!("--tcp {tcp}"),
+        (None, Some(port)) => format!("--port {port}"),
+        (None, None) => "--port or --tcp".to_string(),
+    };
     let options = ProbeOptions {
         port: args.target.port.unwrap_or_default(),
         tcp: args.target.tcp,
@@ -230,7 +270,12 @@ fn probe(args: ProbeArgs) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("papillon: {e}");
+            let e = e.to_string();
+            if e.contains("check --") {
+                eprintln!("papillon: {e}");
+            } else {
+                eprintln!("papillon: {e}; check {flag}");
+            }
             ExitCode::from(1)
         }
     }
@@ -263,9 +308,23 @@ fn run(args: RunArgs) -> ExitCode {
             None => return too_long("--laser"),
         }
     }
-    let problems = board.validate(|path, problem| eprintln!("{path}: {problem}"));
-    if problems > 0 {
-        eprintln!("papillon: the board has {problems} problem(s); run `papillon check`");
+    // A problem in a value given on the command line names its flag, any other the board file
+    // and the JSON path.
+    let flag_for = |path: &str| match path {
+        "$.link.port" => args.port.as_ref().map(|v| format!("--port '{v}'")),
+        "$.link.tcp" => args.tcp.as_ref().map(|v| format!("--tcp '{v}'")),
+        "$.laser.address" | "$.laser.port" => args.laser.as_ref().map(|v| format!("--laser '{v}'")),
+        _ => None,
+    };
+    let mut first = None;
+    let problems = board.validate(|path, problem| {
+        first.get_or_insert_with(|| match flag_for(path) {
+            Some(flag) => format!("{flag} (the board's {path}): {problem}"),
+            None => format!("{}: {path}: {problem}", args.board.display()),
+        });
+    });
+    if let Some(first) = first {
+        eprintln!("papillon: {first}{}", more(problems));
         return ExitCode::from(1);
     }
     let options = RunOptions {
@@ -290,6 +349,15 @@ fn run(args: RunArgs) -> ExitCode {
             eprintln!("papillon: {e}");
             ExitCode::from(1)
         }
+    }
+}
+
+/// ` (and N more problems)` after the first of `problems`.
+fn more(problems: usize) -> String {
+    match problems {
+        0 | 1 => String::new(),
+        2 => " (and 1 more problem)".into(),
+        n => format!(" (and {} more problems)", n - 1),
     }
 }
 

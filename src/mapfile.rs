@@ -327,6 +327,8 @@ pub fn parse_map(
     let mut negate = false;
     let mut occupied_thresh: Option<f32> = None;
     let mut free_thresh: Option<f32> = None;
+    // The known keys seen, to refuse one given twice (the second would win silently).
+    let mut seen: Vec<String> = Vec::new();
     for (n, raw) in text.lines().enumerate() {
         let line = n + 1;
         let content = raw.split('#').next().unwrap_or("").trim();
@@ -349,6 +351,28 @@ pub fn parse_map(
             expected,
         };
         let number = |v: &str| v.trim().parse::<f32>().ok().filter(|x| x.is_finite());
+        let known = [
+            "image",
+            "resolution",
+            "origin",
+            "negate",
+            "occupied_thresh",
+            "free_thresh",
+            "mode",
+        ];
+        if known.contains(&key) {
+            if seen.iter().any(|k| k == key) {
+                return Err(MapFileError::BadValue {
+                    path: path(),
+                    line,
+                    key: key.to_string(),
+                    found: value.to_string(),
+                    expected: "no second value (the key is already given above)",
+                });
+            }
+            seen.push(key.to_string());
+        }
+        let fraction = |v: &str| number(v).filter(|x| (0.0..=1.0).contains(x));
         match key {
             "image" => {
                 let v = value.trim_matches(|c| c == '"' || c == '\'');
@@ -365,9 +389,11 @@ pub fn parse_map(
                 )
             }
             "occupied_thresh" => {
-                occupied_thresh = Some(number(value).ok_or_else(|| bad("a number"))?)
+                occupied_thresh = Some(fraction(value).ok_or_else(|| bad("a number from 0 to 1"))?)
             }
-            "free_thresh" => free_thresh = Some(number(value).ok_or_else(|| bad("a number"))?),
+            "free_thresh" => {
+                free_thresh = Some(fraction(value).ok_or_else(|| bad("a number from 0 to 1"))?)
+            }
             "negate" => {
                 negate = match value {
                     "0" | "false" | "False" => false,
@@ -426,6 +452,14 @@ pub fn parse_map(
         path: path(),
         key: "free_thresh",
     })?;
+    if free_thresh > occupied_thresh {
+        return Err(MapFileError::Unsupported {
+            path: path(),
+            what: format!(
+                "free_thresh {free_thresh} above occupied_thresh {occupied_thresh} (a cell would be both)"
+            ),
+        });
+    }
     if origin[2].abs() > 1e-6 {
         return Err(MapFileError::Unsupported {
             path: path(),

@@ -234,3 +234,209 @@ fn a_number_too_large_for_its_field_names_its_path() {
         "found 70000",
     );
 }
+
+/// A fresh directory of this test process.
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("papillon-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Asserts a refusal (exit 1 or 2, no panic) whose last line on standard error holds every
+/// one of `needles`; returns that line.
+fn assert_last_line_names(out: &std::process::Output, needles: &[&str]) -> String {
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(
+        matches!(out.status.code(), Some(1) | Some(2)),
+        "exit {:?}: {stderr}",
+        out.status
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let last = stderr
+        .lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("");
+    for n in needles {
+        assert!(last.contains(n), "{n:?} not in the last line of:\n{stderr}");
+    }
+    last.to_string()
+}
+
+/// Bad inputs table (docs/reliability.md): a named pipe no program writes to is refused after
+/// a bounded wait, naming it (before: `check --board FIFO` blocked in open(2) for ever).
+#[cfg(unix)]
+#[test]
+fn a_named_pipe_without_a_writer_is_refused_not_waited_for() {
+    let dir = temp_dir("fifo");
+    let fifo = dir.join("board.json");
+    if !Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        eprintln!("skipped: no mkfifo");
+        return;
+    }
+    let out = bounded(
+        &["check", "--board", fifo.to_str().unwrap()],
+        std::time::Duration::from_secs(15),
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert_last_line_names(&out, &[fifo.to_str().unwrap(), "named pipe"]);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Bad inputs table: a bad command line is one line naming the flag (before: clap's error,
+/// a blank line, the usage and a hint, five lines, the last naming nothing).
+#[test]
+fn a_bad_command_line_is_one_line_naming_the_flag() {
+    let sim = board("sim.json");
+    for (args, flag) in [
+        (vec!["check", "--bored", "x.json"], "--bored"),
+        (vec!["check"], "--board"),
+        (
+            vec!["run", "--board", &sim, "--resume", "--fresh"],
+            "--fresh",
+        ),
+        (vec!["probe"], "--port"),
+    ] {
+        let out = Command::new(BIN).args(&args).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+        assert!(stderr.contains(flag), "{args:?}: {stderr}");
+    }
+}
+
+/// Bad inputs table: a board value out of range is named with the file and its JSON path on
+/// the last line of `check` and of `run`, and a value given on `run`'s command line by its
+/// flag (before: "board.json: 1 problem(s)" and "the board has 1 problem(s); run `papillon
+/// check`").
+#[test]
+fn a_board_problem_names_the_file_and_the_field_on_the_last_line() {
+    let text = std::fs::read_to_string(board("sim.json")).unwrap();
+    let p = temp_file(
+        "radius0.json",
+        &text.replacen("\"radius_m\": 0.25", "\"radius_m\": 0.0", 1),
+    );
+    let file = p.to_str().unwrap();
+    let out = Command::new(BIN)
+        .args(["check", "--board", file])
+        .output()
+        .unwrap();
+    assert_last_line_names(&out, &[file, "$.robot.radius_m"]);
+    let log = temp_dir("radius0-log");
+    let out = bounded(
+        &["run", "--board", file, "--log-dir", log.to_str().unwrap()],
+        std::time::Duration::from_secs(10),
+    );
+    assert_last_line_names(&out, &[file, "$.robot.radius_m"]);
+    let sim = board("sim.json");
+    let out = bounded(
+        &[
+            "run",
+            "--board",
+            &sim,
+            "--tcp",
+            "nohost",
+            "--log-dir",
+            log.to_str().unwrap(),
+        ],
+        std::time::Duration::from_secs(10),
+    );
+    assert_last_line_names(&out, &["--tcp", "$.link.tcp"]);
+    // Targets beyond the mission's 8 with the long strategy, a gain of 1e30: refused.
+    let long = text
+        .replacen("\"strategy\": \"short\"", "\"strategy\": \"long\"", 1)
+        .replacen("\"targets\": 16", "\"targets\": 1000", 1);
+    let gain = text.replacen("\"distance_kp\": 1.0", "\"distance_kp\": 1e30", 1);
+    for (name, text, path) in [
+        ("targets.json", long, "$.mission.targets"),
+        ("gain.json", gain, "$.pid.distance_kp"),
+    ] {
+        let p = temp_file(name, &text);
+        let out = Command::new(BIN)
+            .args(["check", "--board", p.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_last_line_names(&out, &[p.to_str().unwrap(), path]);
+        std::fs::remove_file(p).unwrap();
+    }
+    std::fs::remove_file(p).unwrap();
+    std::fs::remove_dir_all(log).unwrap();
+}
+
+/// Bad inputs table: a log directory that cannot be one names `--log-dir` and the path
+/// (before: "papillon: File exists (os error 17)").
+#[test]
+fn a_log_dir_that_is_a_file_names_the_flag() {
+    let dir = temp_dir("logdir-file");
+    let file = dir.join("afile");
+    std::fs::write(&file, "not a directory\n").unwrap();
+    let sim = board("sim.json");
+    for log in [file.clone(), file.join("sub")] {
+        let out = bounded(
+            &["run", "--board", &sim, "--log-dir", log.to_str().unwrap()],
+            std::time::Duration::from_secs(10),
+        );
+        assert_last_line_names(&out, &["--log-dir", log.to_str().unwrap()]);
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Bad inputs table: a saved state that cannot be read names its file, and one with values no
+/// mission has names the field, before any link is opened (before: "Is a directory (os error
+/// 21)" without a path; a `mission_time_s` of 1e300 was loaded and panicked once connected,
+/// "cannot convert float seconds to Duration").
+#[test]
+fn a_damaged_saved_state_names_its_file_and_field() {
+    let sim = board("sim.json");
+    let state = |time: &str, x: &str| {
+        format!(
+            r#"{{"version": 1, "mission_time_s": {time},
+            "pose": {{"x_m": {x}, "y_m": 1.0, "theta_rad": 0.0}},
+            "odom_pose": {{"x_m": 1.0, "y_m": 1.0, "theta_rad": 0.0}},
+            "trajectory": [], "counters": {{"decisions": 1, "distance_m": 0.5,
+            "energy_used_steps": 1.0, "faults": 0, "reconnects": 0, "scans": 10}},
+            "coverage": 0.1, "finished": false}}"#
+        )
+    };
+    for (name, contents, field) in [
+        ("dir", None, ""),
+        ("time", Some(state("1e300", "1.0")), "$.mission_time_s"),
+        ("pose", Some(state("12.5", "1e30")), "$.pose"),
+    ] {
+        let log = temp_dir(&format!("state-{name}"));
+        let path = log.join("state.json");
+        match contents {
+            Some(text) => std::fs::write(&path, text).unwrap(),
+            None => std::fs::create_dir(&path).unwrap(),
+        }
+        let out = bounded(
+            &[
+                "run",
+                "--board",
+                &sim,
+                "--resume",
+                "--log-dir",
+                log.to_str().unwrap(),
+            ],
+            std::time::Duration::from_secs(10),
+        );
+        assert_last_line_names(&out, &[path.to_str().unwrap(), field]);
+        std::fs::remove_dir_all(log).unwrap();
+    }
+}
+
+/// Bad inputs table: a `probe` that cannot connect names `--tcp` (before: "cannot connect to
+/// nohost: invalid socket address").
+#[test]
+fn probe_names_the_flag_of_an_address_it_cannot_use() {
+    let out = bounded(
+        &["probe", "--tcp", "nohost"],
+        std::time::Duration::from_secs(10),
+    );
+    assert_last_line_names(&out, &["--tcp", "nohost"]);
+}

@@ -15,6 +15,10 @@
 //! | `estop=T+D` | the e-stop is pressed from T s for D s (repeatable) |
 //! | `drain=V` | the battery drains V volts per minute while powered |
 //!
+//! Limits: [`MAX_DELAY_MS`], [`MAX_WINDOW_S`], [`MAX_SLIP_FACTOR`], [`MAX_DRAIN_V_PER_MIN`];
+//! each fault but the windows at most once, no empty item (an empty specification is no
+//! fault).
+//!
 //! Byte faults (`corrupt`, `drop`, `latency`, `jitter`) apply to the microcontroller's output
 //! (robot to PC), where a noisy serial line hurts the onboard binary's decoder.
 
@@ -90,11 +94,30 @@ pub enum FaultSpecError {
         /// The item seen.
         item: String,
     },
+    /// A fault that takes one value given twice.
+    Repeated {
+        /// The second item.
+        item: String,
+    },
+    /// A slip factor above [`MAX_SLIP_FACTOR`] or a drain above [`MAX_DRAIN_V_PER_MIN`].
+    TooLarge {
+        /// The item seen.
+        item: String,
+        /// The largest value accepted.
+        max: u32,
+    },
 }
 
 /// Longest `latency` or `jitter` \[ms\]: a link silent for longer is a cut (`cut=T+D`), and
 /// the firmware's watchdog (2 s) has long stopped the robot.
 pub const MAX_DELAY_MS: u32 = 10_000;
+/// Latest start and longest duration of a `cut`, `laser-drop` or `estop` window \[s\]: a day,
+/// far beyond any mission `serve` hosts.
+pub const MAX_WINDOW_S: f64 = 86_400.0;
+/// Largest `slip` factor: 100 times the thesis's slip is 1.5 m per move.
+pub const MAX_SLIP_FACTOR: f32 = 100.0;
+/// Largest `drain` \[V/min\]: more empties a 12 V battery in a few seconds.
+pub const MAX_DRAIN_V_PER_MIN: f32 = 100.0;
 
 impl std::fmt::Display for FaultSpecError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -116,8 +139,15 @@ impl std::fmt::Display for FaultSpecError {
             ),
             FaultSpecError::BadWindow { item } => write!(
                 f,
-                "in {item:?}: expected START+DURATION in seconds, e.g. 10+3"
+                "in {item:?}: expected START+DURATION in seconds, each at most {MAX_WINDOW_S} \
+                 (a day), e.g. 10+3"
             ),
+            FaultSpecError::Repeated { item } => {
+                write!(f, "in {item:?}: this fault is already given")
+            }
+            FaultSpecError::TooLarge { item, max } => {
+                write!(f, "in {item:?}: expected a number from 0 to {max}")
+            }
         }
     }
 }
@@ -129,11 +159,23 @@ impl std::str::FromStr for Faults {
 
     fn from_str(spec: &str) -> Result<Self, Self::Err> {
         let mut faults = Faults::default();
-        for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
+        let mut seen: Vec<&str> = Vec::new();
+        if spec.trim().is_empty() {
+            return Ok(faults);
+        }
+        for item in spec.split(',').map(str::trim) {
             let owned = || item.to_string();
             let (name, value) = item
                 .split_once('=')
                 .ok_or_else(|| FaultSpecError::UnknownItem { item: owned() })?;
+            // The windows repeat; any other fault given twice would be one value silently lost.
+            let name = name.trim();
+            if !matches!(name, "cut" | "laser-drop" | "estop") {
+                if seen.contains(&name) {
+                    return Err(FaultSpecError::Repeated { item: owned() });
+                }
+                seen.push(name);
+            }
             let value = value.trim();
             let number = || {
                 value
@@ -152,6 +194,16 @@ impl std::str::FromStr for Faults {
                     }
                 })
             };
+            let at_most = |v: f32, max: f32| {
+                if v <= max {
+                    Ok(v)
+                } else {
+                    Err(FaultSpecError::TooLarge {
+                        item: owned(),
+                        max: max as u32,
+                    })
+                }
+            };
             let probability = || {
                 value
                     .parse::<f32>()
@@ -166,23 +218,23 @@ impl std::str::FromStr for Faults {
                     s.trim()
                         .parse::<f64>()
                         .ok()
-                        .filter(|v| v.is_finite() && *v >= 0.0)
+                        .filter(|v| (0.0..=MAX_WINDOW_S).contains(v))
                 };
                 Ok(Window {
                     start_s: secs(start).ok_or_else(bad)?,
                     duration_s: secs(duration).ok_or_else(bad)?,
                 })
             };
-            match name.trim() {
+            match name {
                 "corrupt" => faults.corrupt = probability()?,
                 "drop" => faults.drop = probability()?,
                 "latency" => faults.latency_ms = delay_ms()?,
                 "jitter" => faults.jitter_ms = delay_ms()?,
                 "cut" => faults.cuts.push(window()?),
                 "laser-drop" => faults.laser_dropouts.push(window()?),
-                "slip" => faults.slip = Some(number()?),
+                "slip" => faults.slip = Some(at_most(number()?, MAX_SLIP_FACTOR)?),
                 "estop" => faults.estops.push(window()?),
-                "drain" => faults.drain_v_per_min = Some(number()?),
+                "drain" => faults.drain_v_per_min = Some(at_most(number()?, MAX_DRAIN_V_PER_MIN)?),
                 _ => return Err(FaultSpecError::UnknownItem { item: owned() }),
             }
         }

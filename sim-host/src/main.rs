@@ -34,13 +34,7 @@ fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if e.use_stderr() => {
-            // One line: clap's first line, without its "error: " prefix.
-            let text = e.to_string();
-            let first = text.lines().next().unwrap_or("bad arguments");
-            eprintln!(
-                "papillon-sim: {}",
-                first.strip_prefix("error: ").unwrap_or(first)
-            );
+            eprintln!("papillon-sim: {}", clap_error_line(&e));
             return ExitCode::from(2);
         }
         Err(e) => {
@@ -57,4 +51,22 @@ fn main() -> ExitCode {
         Command::Serve(args) => cli::serve::run(args),
         Command::Score(args) => cli::score::run(args),
     }
+}
+
+/// One line for a bad command line: clap's first paragraph (the error and, for a missing
+/// argument, the flags it names), without its `error: ` prefix.
+fn clap_error_line(e: &clap::Error) -> String {
+    if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+        return "a subcommand is missing: bench, mission, optimize, plan, serve or score (see \
+                papillon-sim --help)"
+            .into();
+    }
+    let text = e.to_string();
+    let first: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect();
+    let line = first.join(" ");
+    line.strip_prefix("error: ").unwrap_or(&line).to_string()
 }

@@ -200,6 +200,11 @@ pub struct Setup {
     pub slip: Slip,
 }
 
+/// Most generations per decision (as a board's `$.mission.generations`).
+pub const MAX_GENERATIONS: u32 = u16::MAX as u32;
+/// Largest battery \[steps\]: 1000 km of travel.
+pub const MAX_BATTERY_STEPS: f32 = 1.0e6;
+
 impl Setup {
     /// Checks `spec` and loads its world; the error is one line naming the option or the file.
     pub fn new(spec: &ScenarioSpec) -> Result<Self, String> {
@@ -214,8 +219,11 @@ impl Setup {
         if !(2..=64).contains(&pop) {
             return Err(format!("--pop: expected 2 to 64, got {pop}"));
         }
-        if spec.generations == 0 {
-            return Err("--gens: expected at least 1".into());
+        if !(1..=MAX_GENERATIONS).contains(&spec.generations) {
+            return Err(format!(
+                "--gens: expected 1 to {MAX_GENERATIONS}, got {}",
+                spec.generations
+            ));
         }
         let max_k = papillon::explore::MAX_TARGETS;
         let targets = match spec.strategy {
@@ -244,9 +252,9 @@ impl Setup {
         mission.explore.max_generations = spec.generations;
         mission.explore.targets = targets;
         if let Some(b) = spec.battery_steps {
-            if !(b.is_finite() && b > 0.0) {
+            if !(b.is_finite() && b > 0.0 && b <= MAX_BATTERY_STEPS) {
                 return Err(format!(
-                    "--battery: expected a positive number of steps, got {b}"
+                    "--battery: expected a positive number of steps up to {MAX_BATTERY_STEPS}, got {b}"
                 ));
             }
             mission.battery_steps = b;
@@ -262,6 +270,12 @@ impl Setup {
         if let Some(pose) = spec.start {
             if !(pose.x.is_finite() && pose.y.is_finite() && pose.theta.is_finite()) {
                 return Err("--start: expected finite numbers".into());
+            }
+            if pose.theta.abs() > std::f32::consts::TAU {
+                return Err(format!(
+                    "--start: THETA {} is more than a turn; expected -2π to 2π rad",
+                    pose.theta
+                ));
             }
             world.set_start(pose);
             if let Some(why) = world.start_outside() {

@@ -43,6 +43,15 @@ pub fn parse_pose(name: &str, values: &[f32]) -> Result<Pose2, String> {
             "{name}: expected X Y [THETA] as finite numbers, got {values:?}"
         ));
     }
+    // A heading of more than a turn is a mistake.
+    if values
+        .get(2)
+        .is_some_and(|t| t.abs() > std::f32::consts::TAU)
+    {
+        return Err(format!(
+            "{name}: expected THETA within ±2π rad, got {values:?}"
+        ));
+    }
     Ok(pose_from(values))
 }
 

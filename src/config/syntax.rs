@@ -328,6 +328,20 @@ impl Scanner<'_> {
         }
     }
 
+    /// The four hex digits after `\u`, as a UTF-16 code unit.
+    fn hex4(&mut self) -> Result<u16, ConfigError> {
+        let mut unit = 0u16;
+        for _ in 0..4 {
+            let digit = self
+                .peek()
+                .and_then(|b| (b as char).to_digit(16))
+                .ok_or_else(|| self.error("four hex digits after \\u"))?;
+            unit = unit * 16 + digit as u16;
+            self.pos += 1;
+        }
+        Ok(unit)
+    }
+
     fn string(&mut self) -> Result<(), ConfigError> {
         self.pos += 1;
         loop {
@@ -345,11 +359,20 @@ impl Scanner<'_> {
                         }
                         Some(b'u') => {
                             self.pos += 1;
-                            for _ in 0..4 {
-                                if !self.peek().is_some_and(|b| b.is_ascii_hexdigit()) {
-                                    return Err(self.error("four hex digits after \\u"));
+                            let unit = self.hex4()?;
+                            // A UTF-16 surrogate is only half a character: a high one must be
+                            // followed by a low one, and a low one cannot stand alone.
+                            if (0xDC00..=0xDFFF).contains(&unit) {
+                                return Err(self.error("a character, not half of a \\u pair"));
+                            }
+                            if (0xD800..=0xDBFF).contains(&unit) {
+                                if self.json.get(self.pos..self.pos + 2) != Some(&b"\\u"[..]) {
+                                    return Err(self.error("the second half of a \\u pair"));
                                 }
-                                self.pos += 1;
+                                self.pos += 2;
+                                if !(0xDC00..=0xDFFF).contains(&self.hex4()?) {
+                                    return Err(self.error("the second half of a \\u pair"));
+                                }
                             }
                         }
                         _ => return Err(self.error("a valid escape after '\\'")),
@@ -425,6 +448,9 @@ fn mismatch(kind: Kind, token: &[u8]) -> Option<Expected> {
         Kind::Str(max) => {
             if token.first() != Some(&b'"') {
                 return Some(Expected::Kind("a string"));
+            }
+            if core::str::from_utf8(token).is_err() {
+                return Some(Expected::Kind("a string of UTF-8 text"));
             }
             let n = unescaped_len(&token[1..token.len() - 1]);
             (n > max).then_some(Expected::Length { found: n, max })

@@ -401,3 +401,48 @@ fn the_objective_is_optional_and_named() {
         assert_eq!(paths(&c), Vec::<String>::new());
     }
 }
+
+/// A string that is not UTF-8 is named by its path (before: "a value has the wrong type or is
+/// too long for its field (Invalid unicode code point.)", no path).
+#[test]
+fn a_string_that_is_not_utf8_names_its_path() {
+    let mut bytes = SIM.replacen("\"sim-p3dx\"", "\"sim@\"", 1).into_bytes();
+    let at = bytes.iter().position(|&b| b == b'@').unwrap();
+    bytes[at] = 0xFF;
+    match BoardConfig::from_json(&bytes) {
+        Err(ConfigError::Value { path, expected, .. }) => {
+            assert_eq!(path, "$.robot.name");
+            assert!(expected.contains("UTF-8"), "{expected}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// With the long strategy, more targets than a decision can hold are refused, and so is an
+/// absurd gain (before: clamped to 8 and accepted).
+#[test]
+fn too_many_long_term_targets_and_an_absurd_gain_are_refused() {
+    only_problem_at("$.mission.targets", |c| {
+        c.mission.strategy = Name::new("long").unwrap();
+        c.mission.targets = 1000;
+    });
+    only_problem_at("$.pid.distance_kp", |c| c.pid.distance_kp = 1e30);
+}
+
+/// Half of a UTF-16 pair in a `\u` escape is a syntax error at its place; a whole pair is
+/// read (before: `"\ud800"` was accepted as a robot name).
+#[test]
+fn a_lone_surrogate_escape_is_refused_and_a_pair_read() {
+    let lone = SIM.replacen("\"sim-p3dx\"", "\"\\ud800\"", 1);
+    match BoardConfig::from_json(lone.as_bytes()) {
+        Err(ConfigError::Syntax { line, .. }) => assert_eq!(line, 3),
+        other => panic!("{other:?}"),
+    }
+    let low = SIM.replacen("\"sim-p3dx\"", "\"\\udc00x\"", 1);
+    assert!(matches!(
+        BoardConfig::from_json(low.as_bytes()),
+        Err(ConfigError::Syntax { .. })
+    ));
+    let pair = SIM.replacen("\"sim-p3dx\"", "\"\\ud83d\\ude00\"", 1);
+    assert!(BoardConfig::from_json(pair.as_bytes()).is_ok());
+}

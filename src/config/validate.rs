@@ -243,6 +243,13 @@ impl BoardConfig {
         }
         if m.targets == 0 {
             r("$.mission.targets", "must be at least 1");
+        } else if Strategy::from_name(&m.strategy) == Some(Strategy::Long)
+            && usize::from(m.targets) > crate::explore::MAX_TARGETS
+        {
+            r(
+                "$.mission.targets",
+                "must be at most 8 with the long strategy (targets per decision)",
+            );
         }
         if !positive(m.battery_steps) {
             r(
@@ -269,8 +276,8 @@ impl BoardConfig {
             ("$.pid.heading_kp", p.heading_kp),
             ("$.pid.distance_kp", p.distance_kp),
         ] {
-            if !positive(v) {
-                r(path, "must be a positive gain");
+            if !(positive(v) && v <= MAX_GAIN) {
+                r(path, "must be a positive gain of at most 1000");
             }
         }
         for (path, v) in [
@@ -312,6 +319,10 @@ impl BoardConfig {
         }
     }
 }
+
+/// Largest PID gain: the gains act on metres and radians, where 1000 already saturates the
+/// motors at a millimetre's error.
+const MAX_GAIN: f32 = 1000.0;
 
 fn positive(v: f32) -> bool {
     v.is_finite() && v > 0.0

@@ -107,6 +107,44 @@ pub struct MissionState {
     pub finished: bool,
 }
 
+/// Largest mission time a saved state may hold \[s\]: a year.
+pub const MAX_MISSION_TIME_S: f64 = 365.0 * 86_400.0;
+/// Largest distance of a saved pose from the map's origin \[m\] (as a map file's origin).
+pub const MAX_POSE_M: f32 = 100_000.0;
+
+impl MissionState {
+    /// Why the state cannot be a mission's (a field out of range, with its JSON path), if so:
+    /// a damaged or hand-edited `state.json` is refused rather than resumed.
+    pub fn implausible(&self) -> Option<String> {
+        if !(self.mission_time_s.is_finite()
+            && (0.0..=MAX_MISSION_TIME_S).contains(&self.mission_time_s))
+        {
+            return Some(format!(
+                "$.mission_time_s is {}, expected 0 to {MAX_MISSION_TIME_S} s",
+                self.mission_time_s
+            ));
+        }
+        if !(self.coverage.is_finite() && (0.0..=1.0).contains(&self.coverage)) {
+            return Some(format!(
+                "$.coverage is {}, expected a fraction from 0 to 1",
+                self.coverage
+            ));
+        }
+        let poses = [("$.pose", &self.pose), ("$.odom_pose", &self.odom_pose)];
+        let trajectory = self.trajectory.iter().map(|p| ("$.trajectory[]", p));
+        for (path, p) in poses.into_iter().chain(trajectory) {
+            let fine = |v: f32| v.is_finite() && v.abs() <= MAX_POSE_M;
+            if !(fine(p.x_m) && fine(p.y_m) && p.theta_rad.is_finite()) {
+                return Some(format!(
+                    "{path} is ({}, {}, {}), expected metres within ±{MAX_POSE_M} and a finite heading",
+                    p.x_m, p.y_m, p.theta_rad
+                ));
+            }
+        }
+        None
+    }
+}
+
 /// Current [`MissionState::version`].
 pub const STATE_VERSION: u32 = 1;
 
@@ -390,7 +428,12 @@ impl StateStore {
         let text = match read_limited(&state_path, MAP_MAX_BYTES) {
             Ok(t) => t,
             Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
-            Err(e) => return Err(e.into()),
+            Err(e) => {
+                return Err(PersistError::Io(io::Error::new(
+                    e.kind(),
+                    format!("{}: {e}", state_path.display()),
+                )));
+            }
         };
         let state: MissionState = serde_json::from_slice(&text)
             .map_err(|e| PersistError::Corrupt(format!("{}: {e}", state_path.display())))?;
@@ -401,11 +444,25 @@ impl StateStore {
                 state.version
             )));
         }
+        if let Some(why) = state.implausible() {
+            return Err(PersistError::Corrupt(format!(
+                "{}: {why}",
+                state_path.display()
+            )));
+        }
         let map = match (
             read_limited(&self.dir.join("map.pgm"), MAP_MAX_BYTES),
             read_limited_to_string(&self.dir.join("map.yaml"), TEXT_MAX_BYTES),
         ) {
-            (Ok(pgm), Ok(yaml)) => Some(MapImage::from_pgm_yaml(&pgm, &yaml)?),
+            (Ok(pgm), Ok(yaml)) => Some(MapImage::from_pgm_yaml(&pgm, &yaml).map_err(|e| {
+                match e {
+                    // The map's own errors name `map.pgm` or `map.yaml`; say where they are.
+                    PersistError::Corrupt(what) => {
+                        PersistError::Corrupt(format!("{}/{what}", self.dir.display()))
+                    }
+                    other => other,
+                }
+            })?),
             _ => None,
         };
         Ok(Some((state, map)))

@@ -86,6 +86,17 @@ pub enum RuntimeError {
     },
     /// The mission could not be set up (names the board field or the saved state).
     Mission(String),
+    /// The log directory (`--log-dir`) cannot hold the mission's files.
+    LogDir(PathBuf, io::Error),
+    /// The robot or the laser could not be reached at start-up; `check` names the flag and
+    /// the board field that gave its address.
+    Endpoint {
+        /// What failed.
+        error: Box<RuntimeError>,
+        /// The address and where it came from, e.g. `--tcp (or the board's $.link.tcp)
+        /// 127.0.0.1:8101`.
+        check: String,
+    },
 }
 
 impl std::fmt::Display for RuntimeError {
@@ -96,6 +107,8 @@ impl std::fmt::Display for RuntimeError {
             RuntimeError::Laser(e) => write!(f, "{e}"),
             RuntimeError::Persist(e) => write!(f, "{e}"),
             RuntimeError::Mission(e) => write!(f, "{e}"),
+            RuntimeError::LogDir(dir, e) => write!(f, "--log-dir {}: {e}", dir.display()),
+            RuntimeError::Endpoint { error, check } => write!(f, "{error}; check {check}"),
             RuntimeError::NothingToResume(dir) => {
                 write!(f, "--resume: no saved mission in {}", dir.display())
             }
@@ -335,6 +348,46 @@ pub async fn connect_laser(
     }
 }
 
+/// The robot's address and where it came from, for an error at start-up.
+fn robot_source(board: &BoardConfig) -> String {
+    match &board.link.tcp {
+        Some(tcp) => format!("--tcp (or the board's $.link.tcp) {}", tcp.as_str()),
+        None => format!(
+            "--port (or the board's $.link.port) {}",
+            board.link.port.as_str()
+        ),
+    }
+}
+
+/// The laser's address and where it came from, for an error at start-up.
+fn laser_source(board: &BoardConfig) -> String {
+    let shown = |a: Option<&crate::config::Address>| a.map_or("(none)", |a| a.as_str()).to_string();
+    match board.laser_model() {
+        Some(LaserModel::Lms1xx) => format!(
+            "--laser (or the board's $.laser.address) {}",
+            shown(board.laser.address.as_ref())
+        ),
+        _ => format!(
+            "--laser (or the board's $.laser.port) {}",
+            shown(board.laser.port.as_ref())
+        ),
+    }
+}
+
+impl RuntimeError {
+    /// This error of the robot or laser link at start-up, naming where its address came from
+    /// (unless it already names a flag, as a serial port's errors do).
+    fn at(self, check: String) -> Self {
+        if self.to_string().contains("check --") {
+            return self;
+        }
+        RuntimeError::Endpoint {
+            error: Box::new(self),
+            check,
+        }
+    }
+}
+
 /// Whether a failed (re)connection may succeed if tried again: the link or the session
 /// broke, as opposed to a robot or a board that does not fit.
 fn worth_retrying(e: &RuntimeError) -> bool {
@@ -393,7 +446,8 @@ pub async fn run_with(
     shutdown: impl std::future::Future<Output = ()>,
 ) -> Result<RunOutcome, RuntimeError> {
     let board = &options.board;
-    let store = StateStore::open(&options.log_dir)?;
+    let log_dir = |e: io::Error| RuntimeError::LogDir(options.log_dir.clone(), e);
+    let store = StateStore::open(&options.log_dir).map_err(log_dir)?;
     match options.start {
         Start::New => {
             let saved = match store.load() {
@@ -413,13 +467,13 @@ pub async fn run_with(
             }
         }
         Start::Fresh => {
-            if let Some(aside) = store.set_aside()? {
+            if let Some(aside) = store.set_aside().map_err(log_dir)? {
                 tracing::info!(to = %aside.display(), "the saved mission's files were moved aside");
             }
         }
         Start::Resume => {}
     }
-    let mut telemetry = Telemetry::open(&options.log_dir)?;
+    let mut telemetry = Telemetry::open(&options.log_dir).map_err(log_dir)?;
     let resumed = if options.start == Start::Resume {
         match store.load()? {
             Some(saved) => {
@@ -436,7 +490,9 @@ pub async fn run_with(
         None
     };
     let mut shutdown = std::pin::pin!(shutdown);
-    let mut client = connect_robot(board, Opening::First).await?;
+    let mut client = connect_robot(board, Opening::First)
+        .await
+        .map_err(|e| e.at(robot_source(board)))?;
     let mut mission = match make_mission(board, resumed.as_ref()) {
         Ok(m) => m,
         Err(e) => {
@@ -445,7 +501,9 @@ pub async fn run_with(
         }
     };
     let outcome = {
-        let mut laser_client = connect_laser(board, laser(), Opening::First).await?;
+        let mut laser_client = connect_laser(board, laser(), Opening::First)
+            .await
+            .map_err(|e| e.at(laser_source(board)))?;
         // Mission time runs on across reconnections, and across a `--resume` from where the
         // saved mission stopped.
         let resumed_s = resumed

@@ -49,7 +49,7 @@ pub const SWEEP_FILE: &str = "sweep.json";
 
 /// Creates `dir` and writes its `sweep.json`.
 pub fn write_sweep_file(dir: &Path, sweep: &Sweep, shard: Shard) -> Result<(), String> {
-    fs::create_dir_all(dir).map_err(|e| format!("{}: cannot create: {e}", dir.display()))?;
+    fs::create_dir_all(dir).map_err(|e| format!("--out {}: cannot create: {e}", dir.display()))?;
     let f = SweepFile {
         sweep: sweep.clone(),
         shard_index: shard.index,
@@ -116,7 +116,7 @@ pub fn write_outputs(
     name: &str,
     records: &[RunRecord],
 ) -> Result<Vec<PathBuf>, String> {
-    fs::create_dir_all(dir).map_err(|e| format!("{}: cannot create: {e}", dir.display()))?;
+    fs::create_dir_all(dir).map_err(|e| format!("--out {}: cannot create: {e}", dir.display()))?;
     let write = |file: &str, text: String| -> Result<PathBuf, String> {
         let p = dir.join(file);
         fs::write(&p, text).map_err(|e| format!("{}: cannot write: {e}", p.display()))?;

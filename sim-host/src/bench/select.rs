@@ -121,6 +121,37 @@ pub fn apply(mut sweep: Sweep, overrides: &Overrides) -> Sweep {
     sweep
 }
 
+/// Checks the overrides on their own, so that a bad one is named by its flag.
+pub fn check_overrides(overrides: &Overrides) -> Result<(), SelectError> {
+    let bad = |e: String| Err(SelectError::Sweep(e));
+    if let Some(r) = overrides.runs
+        && !(1..=sweep::MAX_RUNS).contains(&r)
+    {
+        return bad(format!(
+            "--runs: expected 1 to {}, got {r}",
+            sweep::MAX_RUNS
+        ));
+    }
+    if let Some(b) = overrides.battery_steps
+        && !(b.is_finite() && b > 0.0)
+    {
+        return bad(format!(
+            "--battery: battery_steps must be positive, got {b}"
+        ));
+    }
+    if let Some(o) = &overrides.objective
+        && let Err(e) = crate::scenario::objective_from_name(o)
+    {
+        return bad(e);
+    }
+    if let Some(maps) = &overrides.maps
+        && (maps.is_empty() || maps.iter().any(|m| m.trim().is_empty()))
+    {
+        return bad("--maps: expected comma-separated world names or map files".into());
+    }
+    Ok(())
+}
+
 /// The sweep `source` names with `overrides` applied, checked.
 pub fn select(source: &Source, overrides: &Overrides) -> Result<Sweep, SelectError> {
     let sweep = match source {
@@ -130,8 +161,14 @@ pub fn select(source: &Source, overrides: &Overrides) -> Result<Sweep, SelectErr
         }
         Source::File(path) => from_file(path)?,
     };
+    check_overrides(overrides)?;
     let sweep = apply(sweep, overrides);
     sweep.check().map_err(SelectError::Sweep)?;
+    if overrides.maps.is_some() {
+        sweep
+            .check_runnable()
+            .map_err(|e| SelectError::Sweep(format!("--maps: {e}")))?;
+    }
     Ok(sweep)
 }
 

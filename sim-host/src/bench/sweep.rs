@@ -95,6 +95,11 @@ fn default_robots() -> Vec<usize> {
     vec![1]
 }
 
+/// Most runs per combination of a sweep.
+pub const MAX_RUNS: usize = 100_000;
+/// Most runs in a sweep.
+pub const MAX_SWEEP_RUNS: usize = 1_000_000;
+
 /// A sweep, as named experiments define it or as read from a JSON file (`--config`); every
 /// field but `maps` and `methods` has a default.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -255,11 +260,14 @@ impl Sweep {
         })
     }
 
-    /// Reads a sweep file; a sweep without a name takes the file's stem.
+    /// Reads a sweep file and checks that its methods and maps are known
+    /// ([`Sweep::check_runnable`]); a sweep without a name takes the file's stem.
     pub fn from_file(path: &Path) -> Result<Self, String> {
         let text = papillon::files::read_limited_to_string(path, papillon::files::TEXT_MAX_BYTES)
             .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-        let mut s = Sweep::from_json(&text, &path.display().to_string())?;
+        let origin = path.display().to_string();
+        let mut s = Sweep::from_json(&text, &origin)?;
+        s.check_runnable().map_err(|e| format!("{origin}: {e}"))?;
         if s.name.is_empty() {
             s.name = path
                 .file_stem()
@@ -289,18 +297,52 @@ impl Sweep {
         if self.strategies.is_empty() || self.populations.is_empty() || self.robots.is_empty() {
             return Err("strategies, populations and robots must not be empty".into());
         }
-        if self.runs == 0 {
-            return Err("runs must be at least 1".into());
+        if !(1..=MAX_RUNS).contains(&self.runs) {
+            return Err(format!("runs must be 1 to {MAX_RUNS}, got {}", self.runs));
+        }
+        let combinations = [
+            self.maps.len(),
+            self.strategies.len(),
+            self.populations.len(),
+            self.robots.len(),
+            self.runs,
+            self.methods.len(),
+        ]
+        .iter()
+        .try_fold(1usize, |n, &k| n.checked_mul(k))
+        .filter(|&n| n <= MAX_SWEEP_RUNS);
+        if combinations.is_none() {
+            return Err(format!(
+                "maps x methods x strategies x populations x robots x runs is more than \
+                 {MAX_SWEEP_RUNS} runs"
+            ));
+        }
+        for (i, &p) in self.populations.iter().enumerate() {
+            if !(2..=64).contains(&p) {
+                return Err(format!("populations[{i}]: expected 2 to 64, got {p}"));
+            }
+        }
+        for (i, &r) in self.robots.iter().enumerate() {
+            if !(1..=crate::runner::MAX_ROBOTS).contains(&r) {
+                return Err(format!(
+                    "robots[{i}]: expected 1 to {}, got {r}",
+                    crate::runner::MAX_ROBOTS
+                ));
+            }
+        }
+        if self.generations == 0 {
+            return Err("generations must be at least 1".into());
         }
         for s in &self.strategies {
             if s.name != "short" && s.name != "long" {
                 return Err(format!("strategy must be short or long, got '{}'", s.name));
             }
         }
-        crate::scenario::objective_from_name(&self.objective)?;
-        if !(self.resolution_m.is_finite() && self.resolution_m > 0.0) {
+        crate::scenario::objective_from_name(&self.objective)
+            .map_err(|e| e.replacen("--objective", "objective", 1))?;
+        if !(self.resolution_m.is_finite() && self.resolution_m > 0.0 && self.resolution_m <= 1.0) {
             return Err(format!(
-                "resolution_m must be a positive number, got {}",
+                "resolution_m must be a cell size of more than 0 and at most 1 m, got {}",
                 self.resolution_m
             ));
         }
@@ -308,6 +350,23 @@ impl Sweep {
             && !(b.is_finite() && b > 0.0)
         {
             return Err(format!("battery_steps must be positive, got {b}"));
+        }
+        Ok(())
+    }
+
+    /// Checks that every method is known and every map loads at the sweep's cell size (a
+    /// name, a file, its size), so that a bad one is one error naming it rather than every
+    /// run failing ([`Sweep::check`] leaves them to the runs).
+    pub fn check_runnable(&self) -> Result<(), String> {
+        for (i, m) in self.methods.iter().enumerate() {
+            crate::scenario::selector_from_name(m)
+                .map_err(|e| format!("methods[{i}]: {}", e.trim_start_matches("--method: ")))?;
+        }
+        for (i, m) in self.maps.iter().enumerate() {
+            crate::world::World::load(m, self.resolution_m).map_err(|e| {
+                // The world's errors speak of `mission`'s flag; here it is the sweep's field.
+                format!("maps[{i}]: {e}").replace("(--resolution)", "(resolution_m)")
+            })?;
         }
         Ok(())
     }

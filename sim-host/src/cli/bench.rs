@@ -28,10 +28,10 @@ pub struct Args {
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Runs per combination (default: the sweep's, 10 for the named experiments).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub runs: Option<usize>,
-    /// Worker threads (default: one per core).
-    #[arg(long, default_value = "0")]
+    /// Worker threads (default: one per core; at most 1024).
+    #[arg(long, default_value = "0", allow_negative_numbers = true)]
     pub jobs: usize,
     /// Output directory (default: bench-results/NAME).
     #[arg(long)]
@@ -43,7 +43,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub maps: Option<Vec<String>>,
     /// Replace the sweep's battery (steps).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub battery: Option<f32>,
     /// Replace the sweep's objective: efficient (the default) or thesis.
     #[arg(long)]
@@ -105,6 +105,10 @@ pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
     })
 }
 
+/// Most worker threads: far more than the cores of any machine this runs on, and few enough
+/// that their stacks fit in memory.
+pub const MAX_JOBS: usize = 1024;
+
 fn fail(msg: &str) -> ExitCode {
     eprintln!("papillon-sim bench: {msg}");
     ExitCode::from(2)
@@ -114,6 +118,12 @@ fn fail(msg: &str) -> ExitCode {
 pub fn run(args: Args) -> ExitCode {
     if let Some(BenchCommand::Merge(m)) = &args.command {
         return merge(m);
+    }
+    if args.jobs > MAX_JOBS {
+        return fail(&format!(
+            "--jobs: expected 0 (one per core) to {MAX_JOBS}, got {}",
+            args.jobs
+        ));
     }
     let sweep = match sweep_from_args(&args) {
         Ok(s) => s,

@@ -54,7 +54,7 @@ pub struct Args {
     pub battery: Option<String>,
     /// Start pose in the map frame: X Y, optionally THETA (m, m, rad; default 1 m east and 1 m north of
     /// the map's south-west corner, heading east).
-    #[arg(long, num_args = 2..=3, allow_negative_numbers = true, value_names = ["X", "Y", "THETA"])]
+    #[arg(long, num_args = 1.., allow_negative_numbers = true, value_names = ["X", "Y", "THETA"])]
     pub start: Option<Vec<String>>,
     /// Odometry slip of the simulated robots: thesis (a 1.5 cm slide at the end of each move,
     /// what the thesis saw), full (also heading and distance random walks, see
@@ -109,6 +109,12 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
     let resolution_m = number("--resolution", &args.resolution, "a cell size in metres")?;
     let start = match &args.start {
         Some(v) => {
+            if !(2..=3).contains(&v.len()) {
+                return Err(format!(
+                    "--start: expected X Y [THETA], got {} values",
+                    v.len()
+                ));
+            }
             let nums = v
                 .iter()
                 .map(|t| number::<f32>("--start", t, "X Y [THETA] as numbers"))

@@ -17,7 +17,7 @@ pub struct Args {
     #[arg(long, default_value = "sphere")]
     pub function: String,
     /// Number of genes (1 to 16; rosenbrock needs 2).
-    #[arg(long, default_value = "10")]
+    #[arg(long, default_value = "10", allow_negative_numbers = true)]
     pub dim: String,
     /// Method: xboa boa mboa aboa saboa ga pso gwo abc cmaes, or random (baseline).
     #[arg(long, default_value = "xboa")]
@@ -28,22 +28,22 @@ pub struct Args {
     #[arg(long, default_value = "standard")]
     pub preset: String,
     /// Move the optimum to x_i = SHIFT (inside the bounds); default: the function's own.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub shift: Option<String>,
     /// Population size (2 to 32).
-    #[arg(long, default_value = "20")]
+    #[arg(long, default_value = "20", allow_negative_numbers = true)]
     pub pop: String,
     /// Generations per run (1 to 999).
-    #[arg(long, default_value = "100")]
+    #[arg(long, default_value = "100", allow_negative_numbers = true)]
     pub gens: String,
     /// Number of runs.
-    #[arg(long, default_value = "25")]
+    #[arg(long, default_value = "25", allow_negative_numbers = true)]
     pub runs: String,
     /// Base seed.
-    #[arg(long, default_value = "1")]
+    #[arg(long, default_value = "1", allow_negative_numbers = true)]
     pub seed: String,
     /// Stop a run after this many generations without improvement (default: never).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub patience: Option<String>,
     /// Print one JSON object instead of text.
     #[arg(long)]

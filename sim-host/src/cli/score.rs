@@ -22,7 +22,7 @@ pub struct Args {
     #[arg(long)]
     pub robot_map: PathBuf,
     /// Cell size for worlds whose file does not give one (built-in, .csv, images, .map), in metres.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     pub resolution: f32,
     /// The robot's start in the world's map frame: X Y, optionally THETA (m, m, rad; default: the
     /// world's start, 1 m east and 1 m north of its south-west corner).
@@ -49,6 +49,14 @@ fn execute(args: &Args) -> Result<Score, String> {
         Some(v) => parse_pose("--robot-start", v)?,
         None => Pose2::default(),
     };
+    // As a map file's origin: a start farther than 100 km from the map's is a mistake (the
+    // world's `--start` is checked against the world itself).
+    if robot_start.x.abs() > 100_000.0 || robot_start.y.abs() > 100_000.0 {
+        return Err(format!(
+            "--robot-start: ({}, {}) is more than 100 km from the robot map's origin",
+            robot_start.x, robot_start.y
+        ));
+    }
     let map = mapfile::read_map(&args.robot_map).map_err(|e| e.to_string())?;
     Ok(score(&world, &map, robot_start))
 }

@@ -31,14 +31,14 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "lms1xx")]
     pub laser_model: LaserModel,
     /// Seed of the simulation's random choices (wheel slip, faults).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Faults to inject, e.g. `corrupt=0.01,cut=10+3,laser-drop=20+2` (see the user guide:
     /// corrupt, drop, latency, jitter, cut, laser-drop, slip, estop, drain).
     #[arg(long, default_value = "")]
     pub faults: Faults,
     /// Robots sharing the world (1 to 16), served on consecutive endpoints.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=16))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=16), allow_negative_numbers = true)]
     pub robots: u8,
     /// Write each robot's true pose and velocity to this file every 20 ms, as JSON lines:
     /// `{"t_s","unix_s","robot","x_m","y_m","theta_rad","speed_mm_s","turn_deg_s",
@@ -49,7 +49,7 @@ pub struct Args {
     pub truth_log: Option<PathBuf>,
     /// The emulated firmware's watchdog \[ms\] (FLASH `Watchdog`, reported in CONFIG): with no
     /// command for this long on an open session the robot halts at its deceleration.
-    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u16).range(100..))]
+    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u16).range(100..), allow_negative_numbers = true)]
     pub watchdog_ms: u16,
     /// What the microcontroller presents itself as: `robot` (a robot's serial number; ARIA
     /// then connects the laser on its own port) or `mobilesim` (serial number `SIM`, as

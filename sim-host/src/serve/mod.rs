@@ -263,12 +263,15 @@ impl Server {
             let mut announce = |what: String| self.endpoints.push(Endpoint { robot, what });
             if let Some(link) = &config.pty {
                 let link = robot_link(link, robot, n);
-                let what = serve_on_pty(sim, &link, robot, session::arcos_on_pty)?;
+                let what = serve_on_pty(sim, &link, robot, session::arcos_on_pty)
+                    .map_err(|e| format!("--pty: {e}"))?;
                 self.links.push(link);
                 announce(format!("arcos {what}"));
             }
             if let Some(addr) = &config.tcp {
-                let listener = bind(&offset_addr(addr, robot)?)?;
+                let listener = offset_addr(addr, robot)
+                    .and_then(|a| bind(&a))
+                    .map_err(|e| format!("--tcp: {e}"))?;
                 announce(format!("arcos tcp {}", local_addr(&listener)?));
                 let sim = Arc::clone(sim);
                 thread::spawn(move || {
@@ -278,7 +281,9 @@ impl Server {
             match config.laser_model {
                 LaserModel::Lms1xx => {
                     let addr = config.laser.as_deref().unwrap_or(DEFAULT_LMS1XX_ADDR);
-                    let listener = bind(&offset_addr(addr, robot)?)?;
+                    let listener = offset_addr(addr, robot)
+                        .and_then(|a| bind(&a))
+                        .map_err(|e| format!("--laser: {e}"))?;
                     announce(format!("laser lms1xx tcp {}", local_addr(&listener)?));
                     let sim = Arc::clone(sim);
                     thread::spawn(move || {
@@ -288,7 +293,8 @@ impl Server {
                 LaserModel::Lms200 => {
                     let link = config.laser.as_deref().unwrap_or(DEFAULT_LMS200_LINK);
                     let link = robot_link(Path::new(link), robot, n);
-                    let what = serve_on_pty(sim, &link, robot, session::serve_lms200)?;
+                    let what = serve_on_pty(sim, &link, robot, session::serve_lms200)
+                        .map_err(|e| format!("--laser: {e}"))?;
                     self.links.push(link);
                     announce(format!("laser lms200 {what}"));
                 }
