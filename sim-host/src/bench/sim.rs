@@ -33,6 +33,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
         start: None,
         slip: Slip::Thesis,
         localize: false,
+        laser_noise: None,
     })
 }
 

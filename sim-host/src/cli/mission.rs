@@ -65,6 +65,11 @@ pub struct Args {
     /// Scan-to-map matching before each scan is integrated: on or off.
     #[arg(long, default_value = "off")]
     pub localize: String,
+    /// Range noise of the simulated laser, as a fraction of the range (standard deviation of
+    /// Gaussian noise): default the thesis's 0.05; a SICK LMS1xx is nearer 0.003 (about 12 mm
+    /// at 4 m), 0 for noise-free ranges.
+    #[arg(long, allow_negative_numbers = true)]
+    pub laser_noise: Option<String>,
     /// Cell size in metres (the map file's own for .yaml).
     #[arg(long, default_value = "0.1", allow_negative_numbers = true)]
     pub resolution: String,
@@ -128,6 +133,17 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         None => None,
     };
     let slip = Slip::from_name(&args.slip)?;
+    let laser_noise = match &args.laser_noise {
+        Some(t) => match number::<f32>("--laser-noise", t, "a fraction of the range in [0, 1)")? {
+            v if v.is_finite() && (0.0..1.0).contains(&v) => Some(v),
+            v => {
+                return Err(format!(
+                    "--laser-noise: expected a fraction of the range in [0, 1), got {v}"
+                ));
+            }
+        },
+        None => None,
+    };
     let localize = match args.localize.as_str() {
         "on" => true,
         "off" => false,
@@ -148,6 +164,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         start,
         slip,
         localize,
+        laser_noise,
     })
 }
 
@@ -215,6 +232,7 @@ mod tests {
             resolution: "0.1".into(),
             slip: "thesis".into(),
             localize: "off".into(),
+            laser_noise: None,
             json: false,
             png: None,
             frames: None,
@@ -243,6 +261,13 @@ mod tests {
         assert_eq!(s.world.start(), Pose2::new(1.0, 1.0, 0.0));
         assert_eq!(m.battery_steps, MissionConfig::default().battery_steps);
         assert_eq!(s.run.body.slip, SlipConfig::thesis());
+        assert_eq!(m.laser.noise_fraction, 0.05);
+        let sick = setup_from_args(&Args {
+            laser_noise: Some("0.003".into()),
+            ..args()
+        })
+        .unwrap();
+        assert_eq!(sick.run.mission.laser.noise_fraction, 0.003);
         assert_eq!(
             m.explore.objective,
             papillon::explore::ObjectiveKind::Efficient
@@ -338,6 +363,20 @@ mod tests {
                     ..args()
                 },
                 "--slip:",
+            ),
+            (
+                Args {
+                    laser_noise: Some("1.5".into()),
+                    ..args()
+                },
+                "--laser-noise:",
+            ),
+            (
+                Args {
+                    laser_noise: Some("NaN".into()),
+                    ..args()
+                },
+                "--laser-noise:",
             ),
             (
                 Args {
