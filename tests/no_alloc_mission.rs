@@ -11,40 +11,16 @@ mod alloc_count;
 
 use alloc_count::allocations_in;
 use papillon::control::Time;
-use papillon::control::command::RobotCommand;
-use papillon::control::safety::RobotFlags;
 use papillon::grid::{CellClass, DEFAULT_CELL_CAPACITY};
 use papillon::mission::{Mission, MissionConfig, MissionState, SharedMap, Workspace};
 use papillon::random::seeded;
 use papillon::sensor::Scan;
 use papillon_sim::laser::LaserSim;
 use papillon_sim::physics::{BodyConfig, RobotBody, SlipConfig, advance_all};
+use papillon_sim::runner::{apply, flags};
 use papillon_sim::world::World;
 
 const CONTROL_PERIOD_US: u64 = 100_000;
-
-/// Applies a mission command to the simulated body (as the runner does).
-fn apply(body: &mut RobotBody, command: RobotCommand) {
-    match command {
-        RobotCommand::Velocity(v) => {
-            body.command(v.speed_mm_s() as f32, v.turn_rate_deg_s() as f32)
-        }
-        RobotCommand::Stop | RobotCommand::EmergencyStop => body.stop(),
-        RobotCommand::EnableMotors(on) => body.set_motors_enabled(on),
-        _ => {}
-    }
-}
-
-fn flags(b: &RobotBody) -> RobotFlags {
-    RobotFlags {
-        front_bumper: b.front_bumper(),
-        rear_bumper: b.rear_bumper(),
-        left_stall: b.stalled(),
-        right_stall: b.stalled(),
-        motors_enabled: b.motors_enabled(),
-        estop: b.e_stop(),
-    }
-}
 
 #[test]
 fn a_whole_lab_mission_allocates_nothing_in_the_core() {

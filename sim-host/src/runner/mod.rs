@@ -90,17 +90,6 @@ struct Robot {
 }
 
 impl Robot {
-    fn flags(b: &RobotBody) -> RobotFlags {
-        RobotFlags {
-            front_bumper: b.front_bumper(),
-            rear_bumper: b.rear_bumper(),
-            left_stall: b.stalled(),
-            right_stall: b.stalled(),
-            motors_enabled: b.motors_enabled(),
-            estop: b.e_stop(),
-        }
-    }
-
     /// Feeds the body's odometry to the mission and accumulates distance and rotation.
     fn feed_odometry(&mut self, now: Time, body: &RobotBody) {
         let odom = body.odometry_pose();
@@ -110,13 +99,25 @@ impl Robot {
                 papillon::geometry::normalize_angle(odom.theta - prev.theta).abs() as f64;
         }
         self.last_odom = Some(odom);
-        self.mission.on_odometry(now, odom, Self::flags(body));
+        self.mission.on_odometry(now, odom, flags(body));
+    }
+}
+
+/// What a body's status tells its mission: bumpers, stall, motors, e-stop.
+pub fn flags(b: &RobotBody) -> RobotFlags {
+    RobotFlags {
+        front_bumper: b.front_bumper(),
+        rear_bumper: b.rear_bumper(),
+        left_stall: b.stalled(),
+        right_stall: b.stalled(),
+        motors_enabled: b.motors_enabled(),
+        estop: b.e_stop(),
     }
 }
 
 /// Applies a mission command to a body. `SetLimits` and `KeepAlive` change nothing in the
 /// simulation (the body has the P3-DX's limits; there is no watchdog).
-fn apply(body: &mut RobotBody, command: RobotCommand) {
+pub fn apply(body: &mut RobotBody, command: RobotCommand) {
     match command {
         RobotCommand::Velocity(v) => {
             body.command(v.speed_mm_s() as f32, v.turn_rate_deg_s() as f32)
