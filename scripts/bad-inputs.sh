@@ -600,7 +600,7 @@ o "--shift" --shift 1e30
 o "--shift" --shift east
 o "--pop" --pop 0
 o "--pop" --pop 1
-o "--pop" --pop 33
+o "--pop" --pop 65
 o "--gens" --gens 0
 o "--gens" --gens 1000
 t "--runs" $S optimize --runs 0
