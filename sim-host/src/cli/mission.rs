@@ -134,14 +134,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
     };
     let slip = Slip::from_name(&args.slip)?;
     let laser_noise = match &args.laser_noise {
-        Some(t) => match number::<f32>("--laser-noise", t, "a fraction of the range in [0, 1)")? {
-            v if v.is_finite() && (0.0..1.0).contains(&v) => Some(v),
-            v => {
-                return Err(format!(
-                    "--laser-noise: expected a fraction of the range in [0, 1), got {v}"
-                ));
-            }
-        },
+        Some(t) => Some(super::noise_fraction(t).map_err(|e| format!("--laser-noise: {e}"))?),
         None => None,
     };
     let localize = match args.localize.as_str() {

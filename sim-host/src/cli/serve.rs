@@ -64,16 +64,8 @@ pub struct Args {
     /// Gaussian noise, drawn afresh for every scan; the runner's model): 0 for noise-free
     /// ranges, 0.05 for the thesis's laser that `papillon-sim mission` simulates with
     /// `boards/sim.json`.
-    #[arg(long, default_value_t = 0.0, value_parser = noise_fraction)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::noise_fraction)]
     pub laser_noise: f32,
-}
-
-/// A `--laser-noise` value: a number in [0, 1).
-fn noise_fraction(s: &str) -> Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() && (0.0..1.0).contains(&v) => Ok(v),
-        _ => Err(format!("{s:?} is not a fraction of the range in [0, 1)")),
-    }
 }
 
 /// What `serve` presents itself as.
