@@ -168,6 +168,9 @@ pub struct ScenarioSpec {
     /// `None`: the mission's laser's (the thesis's 5 %). A SICK LMS1xx is nearer 0.3 %
     /// (about 12 mm at 4 m).
     pub laser_noise: Option<f32>,
+    /// Hyper-parameters replacing the thesis's Table 4.1 for the selector's optimizer
+    /// (`None`: Table 4.1; see [`papillon::optim::Method::build_tuned`]).
+    pub tuning: Option<papillon::optim::Tuning>,
 }
 
 impl Default for ScenarioSpec {
@@ -188,6 +191,7 @@ impl Default for ScenarioSpec {
             slip: Slip::Thesis,
             localize: false,
             laser_noise: None,
+            tuning: None,
         }
     }
 }
@@ -256,6 +260,16 @@ impl Setup {
         mission.explore.population = pop;
         mission.explore.max_generations = spec.generations;
         mission.explore.targets = targets;
+        if let Some(t) = spec.tuning {
+            if spec.selector != SelectorKind::Optimized(t.method()) {
+                return Err(format!(
+                    "hyper-parameters of {} given to the selector {}",
+                    t.method(),
+                    selector_name(spec.selector)
+                ));
+            }
+            mission.explore.tuning = Some(t);
+        }
         if let Some(b) = spec.battery_steps {
             if !(b.is_finite() && b > 0.0 && b <= MAX_BATTERY_STEPS) {
                 return Err(format!(

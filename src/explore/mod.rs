@@ -164,6 +164,9 @@ pub struct ExploreConfig {
     pub population: usize,
     /// Generations of the optimizer (default 30).
     pub max_generations: u32,
+    /// Hyper-parameters replacing the thesis's Table 4.1 for the optimizer they belong to
+    /// (`None`, the default: Table 4.1; see [`crate::optim::Method::build_tuned`]).
+    pub tuning: Option<crate::optim::Tuning>,
 }
 
 impl Default for ExploreConfig {
@@ -180,6 +183,7 @@ impl Default for ExploreConfig {
             viewpoint_spacing_m: 0.5,
             population: 5,
             max_generations: 30,
+            tuning: None,
         }
     }
 }

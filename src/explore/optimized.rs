@@ -101,9 +101,11 @@ impl<const N: usize, P: Planner<N>> TargetSelector<N> for Optimized<'_, '_, N, P
             patience: None,
             max_evaluations: None,
         };
-        let mut opt = self
-            .method
-            .build(self.config.population, rules.max_generations);
+        let mut opt = self.method.build_tuned(
+            self.config.tuning,
+            self.config.population,
+            rules.max_generations,
+        );
         let (best, evaluations, history_len) = {
             let mut problem = self.objective.problem_avoiding(req, &self.blacklist);
             let efficient = self.config.objective == ObjectiveKind::Efficient;

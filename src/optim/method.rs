@@ -76,6 +76,36 @@ impl Method {
         self.build_preset(Preset::Thesis, population, max_generations)
     }
 
+    /// [`Method::build`], except that `tuning`, when it is this method's, replaces the
+    /// thesis's hyper-parameters (a tuning of another method is ignored: the caller checks
+    /// that they match, see [`Tuning::method`]).
+    pub fn build_tuned(
+        self,
+        tuning: Option<Tuning>,
+        population: usize,
+        max_generations: u32,
+    ) -> AnyOptimizer {
+        let t = max_generations;
+        match tuning {
+            Some(Tuning::Xboa(p)) if self == Method::Xboa => {
+                AnyOptimizer::Xboa(xboa::Xboa::new(p, t))
+            }
+            Some(Tuning::Boa(p)) if self == Method::Boa => AnyOptimizer::Boa(boa::Boa::new(p, t)),
+            Some(Tuning::Mboa(p)) if self == Method::Mboa => {
+                AnyOptimizer::Mboa(mboa::Mboa::new(p, t))
+            }
+            Some(Tuning::Aboa(p)) if self == Method::Aboa => {
+                AnyOptimizer::Aboa(aboa::Aboa::new(p, t))
+            }
+            Some(Tuning::Saboa(p)) if self == Method::Saboa => {
+                AnyOptimizer::Saboa(saboa::Saboa::new(p, t))
+            }
+            Some(Tuning::Ga(p)) if self == Method::Ga => AnyOptimizer::Ga(ga::Ga::new(p, t)),
+            Some(Tuning::Pso(p)) if self == Method::Pso => AnyOptimizer::Pso(pso::Pso::new(p, t)),
+            _ => self.build(population, max_generations),
+        }
+    }
+
     /// The method with the parameter set `preset`; [`Method::build`] is
     /// `build_preset(Preset::Thesis, ..)`. Only GA, PSO, GWO and ABC differ between the presets.
     pub fn build_preset(
@@ -118,6 +148,42 @@ impl Method {
             Method::Abc => AnyOptimizer::Abc(abc::Abc::new(abc, t)),
             Method::CmaEs => AnyOptimizer::CmaEs(cmaes::CmaEs::new(t)),
             Method::Random => AnyOptimizer::Random(random_search::RandomSearch::new(t)),
+        }
+    }
+}
+
+/// Hyper-parameters of one method that replace the thesis's ([`Method::build_tuned`]): what
+/// `papillon-sim tune` searches and a sweep's `params` sets. GWO, ABC and CMA-ES have none
+/// (the thesis's "auto-tuning").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tuning {
+    /// xBOA's.
+    Xboa(xboa::XboaParams),
+    /// BOA's.
+    Boa(boa::BoaParams),
+    /// mBOA's.
+    Mboa(mboa::MboaParams),
+    /// ABOA's.
+    Aboa(aboa::AboaParams),
+    /// SABOA's.
+    Saboa(saboa::SaboaParams),
+    /// GA's.
+    Ga(ga::GaParams),
+    /// PSO's.
+    Pso(pso::PsoParams),
+}
+
+impl Tuning {
+    /// The method these parameters are for.
+    pub fn method(&self) -> Method {
+        match self {
+            Tuning::Xboa(_) => Method::Xboa,
+            Tuning::Boa(_) => Method::Boa,
+            Tuning::Mboa(_) => Method::Mboa,
+            Tuning::Aboa(_) => Method::Aboa,
+            Tuning::Saboa(_) => Method::Saboa,
+            Tuning::Ga(_) => Method::Ga,
+            Tuning::Pso(_) => Method::Pso,
         }
     }
 }

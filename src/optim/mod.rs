@@ -52,7 +52,7 @@ pub mod random_search;
 pub mod saboa;
 pub mod xboa;
 
-pub use method::{AnyOptimizer, Method, Preset, UnknownMethod, UnknownPreset};
+pub use method::{AnyOptimizer, Method, Preset, Tuning, UnknownMethod, UnknownPreset};
 
 /// Largest population any method holds.
 pub const MAX_POP: usize = 64;

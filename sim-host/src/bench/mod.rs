@@ -14,6 +14,7 @@
 //! run anywhere and [`merge`] combines their directories.
 
 pub mod exec;
+pub mod params;
 pub mod plot;
 pub mod record;
 pub mod select;

@@ -6,7 +6,9 @@
 //! - `pareto-MAP`: mean decision time vs mean final coverage per series, the Pareto front
 //!   (less time, more coverage) filled and joined;
 //! - `convergence-MAP`: best fitness vs generation of the runs' first decision, mean over the
-//!   runs, per optimizer series (the frontier selectors have no generations).
+//!   runs, per optimizer series (the frontier selectors have no generations);
+//! - `cost-MAP`: the thesis's cost figures, fitness evaluations per run and mean computation
+//!   time per decision, one bar per series.
 //!
 //! A series is a group of runs ([`GroupKey`]), named by the method plus whatever else varies
 //! on that map (strategy, population, robots).
@@ -48,18 +50,7 @@ struct Series<'a> {
 fn series_by_map(records: &[RunRecord]) -> BTreeMap<String, Vec<Series<'_>>> {
     let mut groups: BTreeMap<GroupKey, Vec<&RunRecord>> = BTreeMap::new();
     for r in records {
-        let s = &r.spec;
-        groups
-            .entry(GroupKey {
-                map: s.map_label.clone(),
-                method: s.method.clone(),
-                strategy: s.strategy.clone(),
-                targets: s.targets,
-                population: s.population,
-                robots: s.robots,
-            })
-            .or_default()
-            .push(r);
+        groups.entry(GroupKey::of(r)).or_default().push(r);
     }
     let mut by_map: BTreeMap<String, Vec<(GroupKey, Vec<&RunRecord>)>> = BTreeMap::new();
     for (k, rs) in groups {
@@ -75,6 +66,7 @@ fn series_by_map(records: &[RunRecord]) -> BTreeMap<String, Vec<Series<'_>>> {
             let strat = varies(&|k| format!("{}{}", k.strategy, k.targets));
             let pop = varies(&|k| k.population.to_string());
             let robots = varies(&|k| k.robots.to_string());
+            let objective = varies(&|k| k.objective.clone());
             let series = groups
                 .into_iter()
                 .map(|(k, rs)| {
@@ -87,6 +79,9 @@ fn series_by_map(records: &[RunRecord]) -> BTreeMap<String, Vec<Series<'_>>> {
                     }
                     if robots {
                         name += &format!(" {}r", k.robots);
+                    }
+                    if objective {
+                        name += &format!(" ({})", k.objective);
                     }
                     Series {
                         name,
@@ -364,6 +359,95 @@ fn draw_convergence<DB: DrawingBackend>(
     root.present().map_err(err)
 }
 
+/// One panel of horizontal bars: `values[i]` for series `i`.
+fn draw_bars<DB: DrawingBackend>(
+    area: &Area<'_, DB>,
+    title: &str,
+    x_desc: &str,
+    names: &[String],
+    values: &[f64],
+) -> Result<(), String> {
+    let n = values.len().max(1);
+    let vmax = values.iter().copied().fold(0.0f64, f64::max).max(1e-9) * 1.1;
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, (FAMILY, 18))
+        .margin(10)
+        .x_label_area_size(36)
+        .y_label_area_size(150)
+        .build_cartesian_2d(0.0..vmax, -0.5..(n as f64 - 0.5))
+        .map_err(err)?;
+    let labels = names.to_vec();
+    chart
+        .configure_mesh()
+        .disable_y_mesh()
+        .y_labels(n)
+        .y_label_formatter(&move |y: &f64| {
+            let i = y.round();
+            if (y - i).abs() < 1e-6 && i >= 0.0 {
+                labels.get(i as usize).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        })
+        .x_desc(x_desc)
+        .label_style((FAMILY, 12))
+        .draw()
+        .map_err(err)?;
+    chart
+        .draw_series(values.iter().enumerate().map(|(i, &v)| {
+            let y = i as f64;
+            Rectangle::new(
+                [(0.0, y - 0.35), (v, y + 0.35)],
+                Palette99::pick(i).to_rgba().filled(),
+            )
+        }))
+        .map_err(err)?;
+    Ok(())
+}
+
+fn draw_cost<DB: DrawingBackend>(
+    root: &Area<'_, DB>,
+    map: &str,
+    series: &[Series<'_>],
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(err)?;
+    let names: Vec<String> = series.iter().map(|s| s.name.clone()).collect();
+    let mean = |s: &Series<'_>, f: &dyn Fn(&super::record::RunResult) -> f64| {
+        s.runs.iter().map(|r| f(r)).sum::<f64>() / s.runs.len().max(1) as f64
+    };
+    let evals: Vec<f64> = series
+        .iter()
+        .map(|s| mean(s, &|r| r.fitness_evals as f64))
+        .collect();
+    let times: Vec<f64> = series
+        .iter()
+        .map(|s| {
+            let t: Vec<f64> = s
+                .runs
+                .iter()
+                .flat_map(|r| r.decision_ms.iter().copied())
+                .collect();
+            t.iter().sum::<f64>() / t.len().max(1) as f64
+        })
+        .collect();
+    let panels = root.split_evenly((1, 2));
+    draw_bars(
+        &panels[0],
+        &format!("Fitness evaluations per run, {map}"),
+        "evaluations (mean over runs)",
+        &names,
+        &evals,
+    )?;
+    draw_bars(
+        &panels[1],
+        &format!("Computation time per decision, {map}"),
+        "mean decision time [ms]",
+        &names,
+        &times,
+    )?;
+    root.present().map_err(err)
+}
+
 /// Draws one picture as SVG and PNG.
 fn render(
     dir: &Path,
@@ -429,6 +513,12 @@ pub fn write_plots(dir: &Path, records: &[RunRecord]) -> Result<Vec<PathBuf>, St
             &format!("convergence-{m}"),
             |a| draw_convergence(a, &map, &series),
             |a| draw_convergence(a, &map, &series),
+        )?);
+        files.extend(render(
+            dir,
+            &format!("cost-{m}"),
+            |a| draw_cost(a, &map, &series),
+            |a| draw_cost(a, &map, &series),
         )?);
     }
     Ok(files)

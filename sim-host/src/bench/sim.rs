@@ -34,6 +34,14 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
         slip: Slip::Thesis,
         localize: false,
         laser_noise: None,
+        tuning: match &spec.params {
+            Some(values) => Some(super::params::tuning(
+                &spec.method,
+                spec.population,
+                values,
+            )?),
+            None => None,
+        },
     })
 }
 

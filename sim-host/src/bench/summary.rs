@@ -11,6 +11,9 @@ use super::record::{RunRecord, quantile};
 /// What identifies a group of runs: everything but the run index.
 #[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct GroupKey {
+    /// What the optimizers maximised (`thesis` or `efficient`).
+    #[serde(default)]
+    pub objective: String,
     /// Map label.
     pub map: String,
     /// Target selector.
@@ -26,9 +29,11 @@ pub struct GroupKey {
 }
 
 impl GroupKey {
-    fn of(r: &RunRecord) -> Self {
+    /// The group of run `r`.
+    pub fn of(r: &RunRecord) -> Self {
         let s = &r.spec;
         Self {
+            objective: s.objective.clone(),
             map: s.map_label.clone(),
             method: s.method.clone(),
             strategy: s.strategy.clone(),
@@ -202,7 +207,11 @@ pub fn markdown(name: &str, groups: &[GroupSummary]) -> String {
         "Coverage is the final exploration rate [%]; steps are summed over robots (1 m of travel or 45° of rotation); \"to 90 %\" and \"to 99 %\" average the runs that reached the level (how many in brackets when not all); decision times are the median and 99th percentile over every decision of the group's runs.\n"
     );
     let mut maps: Vec<&str> = groups.iter().map(|g| g.key.map.as_str()).collect();
+    maps.sort();
     maps.dedup();
+    let objectives_vary = groups
+        .iter()
+        .any(|g| g.key.objective != groups[0].key.objective);
     for map in maps {
         let _ = writeln!(out, "## {map}\n");
         let _ = writeln!(
@@ -223,7 +232,11 @@ pub fn markdown(name: &str, groups: &[GroupSummary]) -> String {
             let _ = writeln!(
                 out,
                 "| {} | {} ({}) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                k.method,
+                if objectives_vary {
+                    format!("{} ({})", k.method, k.objective)
+                } else {
+                    k.method.clone()
+                },
                 k.strategy,
                 k.targets,
                 k.population,

@@ -11,6 +11,9 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+use super::params::ParamMap;
 
 /// The thesis's base seed.
 pub const BASE_SEED: u64 = 25;
@@ -139,6 +142,15 @@ pub struct Sweep {
     /// Cell size \[m\].
     #[serde(default = "default_resolution")]
     pub resolution_m: f32,
+    /// Objectives compared side by side (the outermost dimension of the sweep); empty: the
+    /// single `objective`. The `thesis-*` experiments run `thesis` (the reproduction) and
+    /// `efficient` (Papillon's default).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub objectives: Vec<String>,
+    /// Hyper-parameters per method replacing the thesis's Table 4.1 (method name ->
+    /// parameter name -> value, see [`super::params`]); `papillon-sim tune` writes them.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub params: BTreeMap<String, ParamMap>,
 }
 
 /// One run of a sweep.
@@ -174,6 +186,9 @@ pub struct RunSpec {
     pub battery_steps: Option<f32>,
     /// Cell size \[m\].
     pub resolution_m: f32,
+    /// Hyper-parameters replacing Table 4.1's for this run's method (`None`: Table 4.1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub params: Option<ParamMap>,
 }
 
 /// The label of a world spec: a built-in name as is, a file by its stem.
@@ -257,6 +272,8 @@ impl Sweep {
             battery_steps: None,
             base_seed: BASE_SEED,
             resolution_m: default_resolution(),
+            objectives: Vec::new(),
+            params: BTreeMap::new(),
         })
     }
 
@@ -301,6 +318,7 @@ impl Sweep {
             return Err(format!("runs must be 1 to {MAX_RUNS}, got {}", self.runs));
         }
         let combinations = [
+            self.objective_list().len(),
             self.maps.len(),
             self.strategies.len(),
             self.populations.len(),
@@ -340,6 +358,15 @@ impl Sweep {
         }
         crate::scenario::objective_from_name(&self.objective)
             .map_err(|e| e.replacen("--objective", "objective", 1))?;
+        for (i, o) in self.objectives.iter().enumerate() {
+            crate::scenario::objective_from_name(o)
+                .map_err(|e| e.replacen("--objective", &format!("objectives[{i}]"), 1))?;
+        }
+        for (method, values) in &self.params {
+            for &p in &self.populations {
+                super::params::tuning(method, p, values)?;
+            }
+        }
         if !(self.resolution_m.is_finite() && self.resolution_m > 0.0 && self.resolution_m <= 1.0) {
             return Err(format!(
                 "resolution_m must be a cell size of more than 0 and at most 1 m, got {}",
@@ -373,7 +400,8 @@ impl Sweep {
 
     /// Number of runs in the sweep.
     pub fn len(&self) -> usize {
-        self.maps.len()
+        self.objective_list().len()
+            * self.maps.len()
             * self.strategies.len()
             * self.populations.len()
             * self.robots.len()
@@ -390,6 +418,7 @@ impl Sweep {
     /// share a seed, are neighbours).
     pub fn specs(&self) -> Vec<RunSpec> {
         let mut out = Vec::with_capacity(self.len());
+        for objective in &self.objective_list() {
         for map in &self.maps {
             for strategy in &self.strategies {
                 for &population in &self.populations {
@@ -402,7 +431,7 @@ impl Sweep {
                                     map_label: map_label(map),
                                     method: method.clone(),
                                     strategy: strategy.name.clone(),
-                                    objective: self.objective.clone(),
+                                    objective: objective.clone(),
                                     targets: strategy.k(),
                                     population,
                                     generations: self.generations,
@@ -411,6 +440,7 @@ impl Sweep {
                                     seed: self.base_seed + run as u64,
                                     battery_steps: self.battery_steps,
                                     resolution_m: self.resolution_m,
+                                    params: self.params.get(method).cloned(),
                                 });
                             }
                         }
@@ -418,7 +448,17 @@ impl Sweep {
                 }
             }
         }
+        }
         out
+    }
+
+    /// The objectives the sweep runs: `objectives`, or `objective` alone.
+    pub fn objective_list(&self) -> Vec<String> {
+        if self.objectives.is_empty() {
+            vec![self.objective.clone()]
+        } else {
+            self.objectives.clone()
+        }
     }
 }
 

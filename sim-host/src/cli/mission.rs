@@ -158,6 +158,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         slip,
         localize,
         laser_noise,
+        tuning: None,
     })
 }
 
