@@ -21,6 +21,7 @@ pub mod select;
 pub mod sim;
 pub mod summary;
 pub mod sweep;
+pub mod thesis;
 
 use std::collections::BTreeMap;
 use std::fs::{self, OpenOptions};
@@ -133,6 +134,9 @@ pub fn write_outputs(
         .map_err(|e| e.to_string())?;
     files.push(write("summary.json", json + "\n")?);
     files.push(write("summary.md", summary::markdown(name, &groups))?);
+    if let Some(md) = thesis::markdown(name, records) {
+        files.push(write("thesis.md", md)?);
+    }
     files.extend(plot::write_plots(dir, records)?);
     Ok(files)
 }

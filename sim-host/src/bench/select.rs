@@ -61,8 +61,10 @@ impl fmt::Display for SelectError {
         match self {
             SelectError::UnknownExperiment(name) => write!(
                 f,
-                "unknown experiment '{name}', expected one of: {}",
-                EXPERIMENTS.join(", ")
+                "unknown experiment '{name}', expected one of: {}, {}, {}",
+                EXPERIMENTS.join(", "),
+                super::thesis::EXPERIMENTS.join(", "),
+                super::thesis::ALL
             ),
             SelectError::NoThesisMaps(dir) => write!(
                 f,

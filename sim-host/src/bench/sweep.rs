@@ -216,6 +216,14 @@ impl Sweep {
     /// A named experiment (see [`EXPERIMENTS`]), with `runs` runs per combination, on the
     /// built-in maps plus `extra_maps` (the thesis's own maps when present).
     pub fn named(name: &str, runs: usize, extra_maps: &[String]) -> Option<Self> {
+        if name.starts_with("thesis-") {
+            // The thesis's own maps when found, else the project's drawn after them.
+            let maps = match extra_maps {
+                [empty, house] => [empty.clone(), house.clone()],
+                _ => ["empty".to_string(), "house".to_string()],
+            };
+            return super::thesis::sweep(name, runs, &maps);
+        }
         let owned = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
         let mut all_methods = owned(&OPTIMIZERS);
         all_methods.extend(owned(&FRONTIER_SELECTORS));

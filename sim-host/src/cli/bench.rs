@@ -20,7 +20,10 @@ pub struct Args {
     /// Merge shard directories.
     #[command(subcommand)]
     pub command: Option<BenchCommand>,
-    /// Named experiment: multi-robot, horizon, methods, population, boa-variants.
+    /// Named experiment: multi-robot, horizon, methods, population, boa-variants; the
+    /// thesis's, side by side with its tables: thesis-methods, thesis-methods-long,
+    /// thesis-horizon, thesis-population, thesis-pop5, thesis-boa-variants,
+    /// thesis-multi-robot, or thesis-all (all of them, each into OUT/NAME).
     #[arg(long, conflicts_with = "config")]
     pub experiment: Option<String>,
     /// Sweep file (JSON: maps, methods, strategies, populations, robots, runs, generations,
@@ -125,6 +128,9 @@ pub fn run(args: Args) -> ExitCode {
             args.jobs
         ));
     }
+    if args.experiment.as_deref() == Some(crate::bench::thesis::ALL) {
+        return run_thesis_all(&args);
+    }
     let sweep = match sweep_from_args(&args) {
         Ok(s) => s,
         Err(e) => return fail(&e),
@@ -166,6 +172,45 @@ pub fn run(args: Args) -> ExitCode {
         }
         Err(e) => fail(&e),
     }
+}
+
+/// `--experiment thesis-all`: every thesis experiment in turn, each into `OUT/NAME` (default
+/// OUT: `bench-results/thesis-all`), then `OUT/thesis.md` with all their side-by-side tables.
+fn run_thesis_all(args: &Args) -> ExitCode {
+    let base = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("bench-results").join(crate::bench::thesis::ALL));
+    let start = std::time::Instant::now();
+    let mut index = String::from("# The thesis reproduced side by side (`thesis-all`)\n");
+    let mut status = ExitCode::SUCCESS;
+    for name in crate::bench::thesis::EXPERIMENTS {
+        let sub = Args {
+            experiment: Some(name.to_string()),
+            out: Some(base.join(name)),
+            ..args.clone()
+        };
+        let code = run(sub);
+        if code != ExitCode::SUCCESS {
+            status = code;
+        }
+        if code == ExitCode::from(2) {
+            return code;
+        }
+        if let Ok(md) = std::fs::read_to_string(base.join(name).join("thesis.md")) {
+            index.push('\n');
+            index += &md.replacen("# ", "## ", 1).replace("\n## ", "\n### ");
+        }
+    }
+    let wall = start.elapsed().as_secs_f64();
+    index += &format!("\nWall time of the whole reproduction: {wall:.0} s.\n");
+    let path = base.join("thesis.md");
+    if let Err(e) = std::fs::write(&path, index) {
+        return fail(&format!("{}: cannot write: {e}", path.display()));
+    }
+    eprintln!("papillon-sim bench: thesis-all took {wall:.0} s");
+    println!("{}", path.display());
+    status
 }
 
 fn merge(m: &MergeArgs) -> ExitCode {
