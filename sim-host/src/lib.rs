@@ -22,4 +22,5 @@ pub mod scenario;
 pub mod score;
 pub mod serve;
 pub mod shared_data;
+pub mod tpe;
 pub mod world;

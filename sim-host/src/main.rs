@@ -28,6 +28,9 @@ enum Command {
     Serve(cli::serve::Args),
     /// Score a saved robot map (ROS map_server YAML + PGM) against a world's ground truth.
     Score(cli::score::Args),
+    /// Tune one method's hyper-parameters on exploration missions (TPE, like the thesis's
+    /// Hyperopt run).
+    Tune(cli::tune::Args),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +53,7 @@ fn main() -> ExitCode {
         Command::Plan(args) => cli::plan::run(args),
         Command::Serve(args) => cli::serve::run(args),
         Command::Score(args) => cli::score::run(args),
+        Command::Tune(args) => cli::tune::run(args),
     }
 }
 
@@ -57,7 +61,7 @@ fn main() -> ExitCode {
 /// argument, the flags it names), without its `error: ` prefix.
 fn clap_error_line(e: &clap::Error) -> String {
     if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
-        return "a subcommand is missing: bench, mission, optimize, plan, serve or score (see \
+        return "a subcommand is missing: bench, mission, optimize, plan, serve, score or tune (see \
                 papillon-sim --help)"
             .into();
     }

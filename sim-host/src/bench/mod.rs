@@ -22,6 +22,7 @@ pub mod sim;
 pub mod summary;
 pub mod sweep;
 pub mod thesis;
+pub mod tune;
 
 use std::collections::BTreeMap;
 use std::fs::{self, OpenOptions};

@@ -43,6 +43,8 @@ pub struct Overrides {
     pub battery_steps: Option<f32>,
     /// What the optimizers maximise (`efficient` or `thesis`).
     pub objective: Option<String>,
+    /// Hyper-parameters per method (`bench --params`, a `tune` run's `best.json`).
+    pub params: Option<std::collections::BTreeMap<String, super::params::ParamMap>>,
 }
 
 /// Why no sweep could be chosen.
@@ -119,6 +121,10 @@ pub fn apply(mut sweep: Sweep, overrides: &Overrides) -> Sweep {
     }
     if let Some(o) = &overrides.objective {
         sweep.objective = o.clone();
+        sweep.objectives.clear();
+    }
+    if let Some(p) = &overrides.params {
+        sweep.params.extend(p.clone());
     }
     sweep
 }
@@ -192,6 +198,7 @@ mod tests {
             maps: Some(vec!["lab".into()]),
             battery_steps: Some(50.0),
             objective: Some("thesis".into()),
+            params: None,
         };
         let s = select(&named_source("boa-variants"), &o).unwrap();
         assert_eq!((s.runs, s.maps.clone()), (2, vec!["lab".to_string()]));

@@ -427,35 +427,35 @@ impl Sweep {
     pub fn specs(&self) -> Vec<RunSpec> {
         let mut out = Vec::with_capacity(self.len());
         for objective in &self.objective_list() {
-        for map in &self.maps {
-            for strategy in &self.strategies {
-                for &population in &self.populations {
-                    for &robots in &self.robots {
-                        for run in 0..self.runs {
-                            for method in &self.methods {
-                                out.push(RunSpec {
-                                    index: out.len(),
-                                    map: map.clone(),
-                                    map_label: map_label(map),
-                                    method: method.clone(),
-                                    strategy: strategy.name.clone(),
-                                    objective: objective.clone(),
-                                    targets: strategy.k(),
-                                    population,
-                                    generations: self.generations,
-                                    robots,
-                                    run,
-                                    seed: self.base_seed + run as u64,
-                                    battery_steps: self.battery_steps,
-                                    resolution_m: self.resolution_m,
-                                    params: self.params.get(method).cloned(),
-                                });
+            for map in &self.maps {
+                for strategy in &self.strategies {
+                    for &population in &self.populations {
+                        for &robots in &self.robots {
+                            for run in 0..self.runs {
+                                for method in &self.methods {
+                                    out.push(RunSpec {
+                                        index: out.len(),
+                                        map: map.clone(),
+                                        map_label: map_label(map),
+                                        method: method.clone(),
+                                        strategy: strategy.name.clone(),
+                                        objective: objective.clone(),
+                                        targets: strategy.k(),
+                                        population,
+                                        generations: self.generations,
+                                        robots,
+                                        run,
+                                        seed: self.base_seed + run as u64,
+                                        battery_steps: self.battery_steps,
+                                        resolution_m: self.resolution_m,
+                                        params: self.params.get(method).cloned(),
+                                    });
+                                }
                             }
                         }
                     }
                 }
             }
-        }
         }
         out
     }

@@ -51,6 +51,10 @@ pub struct Args {
     /// Replace the sweep's objective: efficient (the default) or thesis.
     #[arg(long)]
     pub objective: Option<String>,
+    /// Hyper-parameters replacing Table 4.1's: a JSON file with {"params": {METHOD: {NAME:
+    /// VALUE}}}, such as a `tune` run's best.json.
+    #[arg(long)]
+    pub params: Option<PathBuf>,
     /// Directory with the thesis's map-empty.csv and map-house.csv, added to the named
     /// experiments' maps (default: ../shared/data/thesis-maps when it exists).
     #[arg(long, conflicts_with = "no_thesis_maps")]
@@ -95,7 +99,12 @@ pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
         (None, Some(path)) => Source::File(path.clone()),
         _ => return Err("give --experiment NAME or --config FILE".into()),
     };
+    let params = match &args.params {
+        Some(p) => Some(crate::bench::tune::read_params(p).map_err(|e| format!("--params: {e}"))?),
+        None => None,
+    };
     let overrides = Overrides {
+        params,
         runs: args.runs,
         maps: args.maps.clone(),
         battery_steps: args.battery,

@@ -6,6 +6,7 @@ pub mod optimize;
 pub mod plan;
 pub mod score;
 pub mod serve;
+pub mod tune;
 
 /// A `--laser-noise` value (`mission`, `serve`): a fraction of the range in [0, 1).
 pub(crate) fn noise_fraction(s: &str) -> Result<f32, String> {
