@@ -201,8 +201,9 @@ mod tests {
         assert!((integral - 1.0).abs() < 1e-3, "{integral}");
     }
 
-    /// TPE finds the minimum of a 2-D bowl with far fewer trials than random search needs
-    /// for the same precision, and stays in the bounds.
+    /// With the same 60 trials, TPE gets nearer the minimum of a 2-D bowl than random search
+    /// (summed over 10 seeds; Hyperopt's broad Parzen windows make the margin moderate: about
+    /// 0.63 of random search's distance here), and stays in the bounds.
     #[test]
     fn tpe_beats_random_search_on_a_bowl() {
         let bounds = [
