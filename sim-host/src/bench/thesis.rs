@@ -72,6 +72,8 @@ pub struct Cell {
     pub max_at_stop: bool,
 }
 
+// One argument per column of the table rows below, which read best as plain calls.
+#[allow(clippy::too_many_arguments)]
 const fn c(
     table: &'static str,
     strategy: &'static str,

@@ -3,8 +3,9 @@
 //! TPE ([`crate::tpe`]).
 //!
 //! A trial sets the method's parameters ([`super::params::space`]) and runs `runs` missions,
-//! seeds `base_seed ..`, the same for every trial. Its loss is `99 − mean final coverage [%]
-//! + 0.001 × mean steps`, each coverage counted up to the mission's 99 % stop: coverage first
+//! seeds `base_seed ..`, the same for every trial. Its loss is
+//! `99 − mean final coverage [%] + 0.001 × mean steps`, each coverage counted up to the
+//! mission's 99 % stop: coverage first
 //! (the thesis's criterion), steps (energy) only separating trials whose coverage is equal,
 //! which happens whenever they all reach the stop (where the last scan's overshoot above 99 %
 //! is not a merit).
@@ -13,7 +14,8 @@
 //! and its parameters are drawn by TPE from the trials of the earlier batches only, with a
 //! generator seeded from (`sampler_seed`, `t`). So the trials of a batch are independent
 //! given the earlier batches, and the result does not depend on how they are spread: shard
-//! `I/N` runs the trials `t` with `t mod N = I`; it reads the trials already in its `--out`
+//! `I/N` runs the trials whose index, scrambled as `bench` scrambles run indices
+//! ([`Shard::contains`]), is `I` modulo `N`; it reads the trials already in its `--out`
 //! and in the other shards' directories (`--with`), runs those of its trials whose earlier
 //! batches are complete, and stops, saying so, at the first one that must wait for another
 //! shard. Re-running every shard (with `--with` the others) until none has trials left, then

@@ -56,7 +56,8 @@ pub struct Args {
     /// earlier trial, as Hyperopt; more lets shards run a batch in parallel).
     #[arg(long, default_value = "1", allow_negative_numbers = true)]
     pub batch: usize,
-    /// Run only the trials t with t mod N = I (0 <= I < N).
+    /// Run only shard I of N (0 <= I < N): the trials whose scrambled index is I modulo N, as
+    /// bench splits runs.
     #[arg(long)]
     pub shard: Option<String>,
     /// Other shards' directories whose trials count (comma-separated).
