@@ -640,3 +640,41 @@ fn fragrance_intensity_is_capped_at_one() {
     assert_eq!(fragrance(0.5, f32::INFINITY, 0.9), 0.5);
     assert_eq!(fragrance(0.5, f32::NAN, 0.9), 0.5);
 }
+
+/// A tuning replaces its own method's parameters and no other's: the tuned run differs from
+/// the Table 4.1 run on the same start and seed, and a tuning of another method leaves the
+/// run exactly as Table 4.1's.
+#[test]
+fn a_tuning_applies_to_its_own_method_only() {
+    let mut problem = TestFunction::new(Function::Rastrigin, 4).unwrap();
+    let start = initial(&problem, 0);
+    let rules = StopRules {
+        max_generations: 20,
+        patience: None,
+        max_evaluations: None,
+    };
+    let history = |opt: &mut AnyOptimizer, problem: &mut TestFunction| {
+        run(opt, problem, &start, &rules, &mut seeded(7)).unwrap();
+        opt.history().to_vec()
+    };
+    let tuned = Tuning::Xboa(xboa::XboaParams {
+        a: 0.3,
+        c: 0.9,
+        p_c: 0.1,
+    });
+    let mut table = Method::Xboa.build(20, 20);
+    let mut with_own = Method::Xboa.build_tuned(Some(tuned), 20, 20);
+    let mut with_other = Method::Boa.build_tuned(Some(tuned), 20, 20);
+    let mut boa = Method::Boa.build(20, 20);
+    assert_eq!(with_own.method(), Method::Xboa);
+    assert_eq!(with_other.method(), Method::Boa);
+    assert_eq!(tuned.method(), Method::Xboa);
+    assert_ne!(
+        history(&mut with_own, &mut problem),
+        history(&mut table, &mut problem)
+    );
+    assert_eq!(
+        history(&mut with_other, &mut problem),
+        history(&mut boa, &mut problem)
+    );
+}
