@@ -86,6 +86,24 @@ pub struct Args {
     /// decisions; see docs/simulator.md).
     #[arg(long)]
     pub mcap: Option<PathBuf>,
+    /// Serve the mission live to Foxglove on this address (host:port, e.g. 127.0.0.1:8765):
+    /// Foxglove → Open connection → Foxglove WebSocket → ws://HOST:PORT. The run is then paced
+    /// to --live-speed. Off by default.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub live: Option<String>,
+    /// With --live: simulated seconds per wall-clock second (more than 0, at most 1000).
+    #[arg(long, default_value = "1", requires = "live", value_parser = live_speed)]
+    pub live_speed: f64,
+}
+
+/// `--live-speed`: a number above 0 and at most 1000.
+fn live_speed(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) if x > 0.0 && x <= 1000.0 => Ok(x),
+        _ => Err(format!(
+            "expected simulated seconds per second, above 0 and at most 1000, got '{text}'"
+        )),
+    }
 }
 
 fn number<T: std::str::FromStr>(option: &str, text: &str, what: &str) -> Result<T, String> {
@@ -180,6 +198,13 @@ pub fn run(args: Args) -> ExitCode {
         args.frames.as_deref(),
         args.png.as_deref(),
         args.mcap.as_deref(),
+        args.live
+            .as_ref()
+            .map(|addr| crate::record::LiveOptions {
+                addr: addr.clone(),
+                speed: args.live_speed,
+            })
+            .as_ref(),
     ) {
         Ok(report) => {
             let text = if args.json {
@@ -230,6 +255,8 @@ mod tests {
             png: None,
             frames: None,
             mcap: None,
+            live: None,
+            live_speed: 1.0,
         }
     }
 
