@@ -203,7 +203,7 @@ pub fn execute_recorded(
                 return;
             }
             frame += 1;
-            let img = render::render_grid(&r.map().grid, &r.tracks(), scale);
+            let img = render::render_grid_picture(&r.map().grid, &r.tracks(), scale);
             if let Err(e) = render::save_png(&img, &frame_path(dir, frame)) {
                 frame_error = Some(format!("--frames: {e}"));
             }
@@ -218,7 +218,7 @@ pub fn execute_recorded(
     }
     if let Some(path) = png {
         let tracks: Vec<Track> = runner.tracks();
-        let img = render::render_grid(&runner.map().grid, &tracks, scale);
+        let img = render::render_grid_picture(&runner.map().grid, &tracks, scale);
         render::save_png(&img, path).map_err(|e| Failure::Output(format!("--png: {e}")))?;
     }
     Ok(report)
