@@ -375,7 +375,23 @@ fn run(args: RunArgs) -> ExitCode {
             _ => Start::New,
         },
     };
-    let mission = runtime::recording_mission_driver(options.log_dir.clone(), args.live);
+    // The live view listens before anything is connected: an address it cannot use refuses
+    // the run at once.
+    let live = match args.live.as_deref().map(papillon::live::LiveServer::bind) {
+        None => None,
+        Some(Ok(server)) => {
+            tracing::info!(
+                url = %format_args!("ws://{}", server.local_addr()),
+                "live view: open this in Foxglove (Open connection, Foxglove WebSocket)"
+            );
+            Some(server)
+        }
+        Some(Err(e)) => {
+            eprintln!("papillon: --live {e}");
+            return ExitCode::from(1);
+        }
+    };
+    let mission = runtime::recording_mission_driver(options.log_dir.clone(), live);
     let result = runtime().block_on(runtime::run_with(
         options,
         runtime::laser_codec,

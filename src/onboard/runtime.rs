@@ -50,27 +50,15 @@ pub type Saved = (MissionState, Option<MapImage>);
 /// [`mission_driver`], the mission recorded into `log_dir` ([`super::record`]: `mission.mcap`,
 /// or the next free `mission-N.mcap` when resuming): what the binary passes to [`run_with`].
 /// A recording that cannot be created refuses the run, naming the file.
-/// With `live` (`host:port`), the same messages are also served live to Foxglove
-/// ([`crate::live`]); an address that cannot be listened on refuses the run, naming it.
+/// With `live` (`papillon run --live`, bound before anything is connected), the same messages
+/// are also served live to Foxglove ([`crate::live`]).
 pub fn recording_mission_driver(
     log_dir: PathBuf,
-    live: Option<String>,
+    live: Option<crate::live::LiveServer>,
 ) -> impl FnOnce(&BoardConfig, Option<&Saved>) -> Result<Box<dyn MissionDriver>, String> {
     move |board, resume| {
         let path = super::record::recording_path(&log_dir, resume.is_some());
         let mission_time_s = resume.map_or(0.0, |(s, _)| s.mission_time_s);
-        let live = match live {
-            Some(addr) => {
-                let server =
-                    crate::live::LiveServer::bind(&addr).map_err(|e| format!("--live {e}"))?;
-                tracing::info!(
-                    url = %format_args!("ws://{}", server.local_addr()),
-                    "live view: open this in Foxglove (Foxglove WebSocket)"
-                );
-                Some(server)
-            }
-            None => None,
-        };
         let recording = super::record::MissionRecording::create(&path, mission_time_s, live)?;
         let mission = super::mission::CoreMission::recorded(board, resume, Some(recording))?;
         Ok(Box::new(mission))
