@@ -67,6 +67,15 @@ fn clap_error_line(e: &clap::Error) -> String {
         .take_while(|l| !l.trim().is_empty())
         .map(str::trim)
         .collect();
-    let line = first.join(" ");
+    let mut line = first.join(" ");
+    // clap's suggestion for a near miss (`tip: a similar value exists: 'xboa'`) stays on the
+    // line.
+    for tip in text
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("tip:"))
+    {
+        line.push_str(&format!(" ({tip})"));
+    }
     line.strip_prefix("error: ").unwrap_or(&line).to_string()
 }

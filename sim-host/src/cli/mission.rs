@@ -15,8 +15,10 @@ use crate::scenario::{
     ScenarioSpec, Setup, Slip, Strategy, objective_from_name, selector_from_name,
 };
 
-/// Arguments of `papillon-sim mission` (kept as text and checked by [`setup_from_args`], so
-/// every problem is reported on one line naming the option).
+/// Arguments of `papillon-sim mission`: the options with a fixed set of values are checked by
+/// clap (their values listed in `--help`, a near miss answered with clap's suggestion); the
+/// others are kept as text and checked by [`setup_from_args`], so every problem is reported on
+/// one line naming the option.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// World: house, empty, factory, lab, or a map file (.csv, .png, .pgm, .map, .yaml).
@@ -25,13 +27,15 @@ pub struct Args {
     /// Number of robots sharing the map (1 to 8).
     #[arg(long, default_value = "1", allow_negative_numbers = true)]
     pub robots: String,
-    /// Target selector: xboa boa mboa aboa saboa ga pso gwo abc cmaes nearest-frontier
-    /// frontier-utility.
-    #[arg(long, default_value = "xboa")]
+    /// Target selector: an optimizer on the objective, or a frontier rule.
+    #[arg(long, default_value = "xboa", value_parser = [
+        "xboa", "boa", "mboa", "aboa", "saboa", "ga", "pso", "gwo", "abc", "cmaes",
+        "nearest-frontier", "frontier-utility",
+    ])]
     pub method: String,
     /// What the optimizers maximise: efficient (reachable frontier viewpoints, gain
     /// discounted by energy; the default) or thesis (the thesis's objective, for reproduction).
-    #[arg(long, default_value = "efficient")]
+    #[arg(long, default_value = "efficient", value_parser = ["efficient", "thesis"])]
     pub objective: String,
     /// Population of the optimizer.
     #[arg(long, default_value = "5", allow_negative_numbers = true)]
@@ -40,7 +44,7 @@ pub struct Args {
     #[arg(long, default_value = "30", allow_negative_numbers = true)]
     pub gens: String,
     /// Strategy: short (one target per decision) or long (several, see --targets).
-    #[arg(long, default_value = "short")]
+    #[arg(long, default_value = "short", value_parser = ["short", "long"])]
     pub strategy: String,
     /// Targets per decision, k (short: 1; long: default 3, at most 8).
     #[arg(long, allow_negative_numbers = true)]
@@ -60,10 +64,10 @@ pub struct Args {
     /// what the thesis saw), full (also heading and distance random walks, see
     /// docs/simulator.md), realistic (also per-robot wheel-diameter and wheelbase errors and
     /// fast-turn slip, see sim-host/src/odometry_error.rs) or none.
-    #[arg(long, default_value = "thesis")]
+    #[arg(long, default_value = "thesis", value_parser = ["thesis", "full", "realistic", "none"])]
     pub slip: String,
     /// Scan-to-map matching before each scan is integrated: on or off.
-    #[arg(long, default_value = "off")]
+    #[arg(long, default_value = "off", value_parser = ["on", "off"])]
     pub localize: String,
     /// Range noise of the simulated laser, as a fraction of the range (standard deviation of
     /// Gaussian noise): default the thesis's 0.05; a SICK LMS1xx is nearer 0.003 (about 12 mm
