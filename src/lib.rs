@@ -19,7 +19,8 @@
 //!   [`files`] (host only): bounded reads of every input file.
 //! - [`wire`]: ARCOS, SICK LMS1xx (CoLa-A) and LMS200 wire formats.
 //! - `record` (feature `record`, host only): mission recordings as MCAP with Foxglove's
-//!   schemas.
+//!   schemas; `live` (feature `live`, host only): the same messages served live to Foxglove
+//!   over a WebSocket.
 //! - `onboard` (feature `onboard`): the runtime around the core on the robot.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![warn(missing_docs)]
@@ -34,6 +35,8 @@ pub mod geometry;
 pub mod grid;
 #[cfg(feature = "std")]
 mod heap;
+#[cfg(feature = "live")]
+pub mod live;
 pub mod localize;
 #[cfg(feature = "std")]
 pub mod mapfile;

@@ -19,6 +19,17 @@ use papillon::onboard::runtime::{self, ProbeOptions, RunOptions, Start};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// How log lines on standard error are written: `text` (one line each; colours only on a
+    /// terminal) or `json` (one JSON object per line). Which lines: `RUST_LOG` (e.g.
+    /// `RUST_LOG=debug`, `RUST_LOG=papillon::onboard::mission=debug`; default `info`).
+    #[arg(long, global = true, value_enum, default_value_t = LogFormat::Text)]
+    log_format: LogFormat,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum LogFormat {
+    Text,
+    Json,
 }
 
 #[derive(Subcommand)]
@@ -82,6 +93,11 @@ struct RunArgs {
     /// files are first moved to `<log-dir>/previous-N/`.
     #[arg(long, conflicts_with = "resume")]
     fresh: bool,
+    /// Serve the mission live to Foxglove on this address (host:port, e.g. 127.0.0.1:8765;
+    /// 0.0.0.0:8765 to watch from another machine): Foxglove → Open connection → Foxglove
+    /// WebSocket → ws://HOST:PORT. Off by default: without it nothing listens.
+    #[arg(long, value_name = "HOST:PORT")]
+    live: Option<String>,
 }
 
 /// Exit code for a missing or unreadable file.
@@ -104,11 +120,15 @@ fn main() -> ExitCode {
         Command::Check { board } => check(&board),
         Command::Ports => ports(),
         Command::Probe(args) => {
-            init_logging();
+            if let Err(code) = init_logging(cli.log_format) {
+                return code;
+            }
             probe(args)
         }
         Command::Run(args) => {
-            init_logging();
+            if let Err(code) = init_logging(cli.log_format) {
+                return code;
+            }
             run(args)
         }
     }
@@ -126,17 +146,45 @@ fn clap_error_line(e: &clap::Error) -> String {
         .take_while(|l| !l.trim().is_empty())
         .map(str::trim)
         .collect();
-    let line = first.join(" ");
+    let mut line = first.join(" ");
+    // clap's suggestion for a near miss (`tip: a similar value exists: 'xboa'`) stays on the
+    // line.
+    for tip in text
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("tip:"))
+    {
+        line.push_str(&format!(" ({tip})"));
+    }
     line.strip_prefix("error: ").unwrap_or(&line).to_string()
 }
 
-fn init_logging() {
-    // Colours only on a terminal: a log file of the progress lines stays plain text.
-    let _ = tracing_subscriber::fmt()
+/// Log lines on standard error: filtered by `RUST_LOG` (default `info`), as text (colours only
+/// on a terminal: a log file of the progress lines stays plain text) or JSON. A `RUST_LOG` that
+/// does not parse is one line naming it.
+fn init_logging(format: LogFormat) -> Result<(), ExitCode> {
+    use tracing_subscriber::EnvFilter;
+    use tracing_subscriber::filter::LevelFilter;
+    let filter = EnvFilter::builder()
+        .with_default_directive(LevelFilter::INFO.into())
+        .from_env()
+        .map_err(|e| {
+            eprintln!(
+                "papillon: RUST_LOG: {e} (for example RUST_LOG=debug or RUST_LOG=papillon=debug)"
+            );
+            ExitCode::from(EXIT_FILE)
+        })?;
+    let builder = tracing_subscriber::fmt()
         .with_writer(std::io::stderr)
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-        .with_target(false)
-        .try_init();
+        .with_env_filter(filter)
+        .with_target(false);
+    let _ = match format {
+        LogFormat::Text => builder
+            .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+            .try_init(),
+        LogFormat::Json => builder.json().with_ansi(false).try_init(),
+    };
+    Ok(())
 }
 
 /// Reads and parses a board file; prints one line and returns the exit code on failure.
@@ -336,7 +384,23 @@ fn run(args: RunArgs) -> ExitCode {
             _ => Start::New,
         },
     };
-    let mission = runtime::recording_mission_driver(options.log_dir.clone());
+    // The live view listens before anything is connected: an address it cannot use refuses
+    // the run at once.
+    let live = match args.live.as_deref().map(papillon::live::LiveServer::bind) {
+        None => None,
+        Some(Ok(server)) => {
+            tracing::info!(
+                url = %format_args!("ws://{}", server.local_addr()),
+                "live view: open this in Foxglove (Open connection, Foxglove WebSocket)"
+            );
+            Some(server)
+        }
+        Some(Err(e)) => {
+            eprintln!("papillon: --live {e}");
+            return ExitCode::from(1);
+        }
+    };
+    let mission = runtime::recording_mission_driver(options.log_dir.clone(), live);
     let result = runtime().block_on(runtime::run_with(
         options,
         runtime::laser_codec,

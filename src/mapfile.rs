@@ -1,17 +1,27 @@
-//! Map files in the ROS `map_server` format: a PGM image plus a YAML description.
+//! Map files in the ROS `map_server` format: an image (PGM or PNG) plus a YAML description.
+//! The one reader and writer of map files: `papillon-sim mission`/`serve --map x.yaml` and
+//! plain images (`--map x.pgm`), `papillon-sim score --robot-map`, and the onboard map that
+//! `papillon run --resume` reads back (`onboard::persist`) all go through here.
 //!
-//! Format (ROS wiki, `map_server`): the YAML names the `image`, its `resolution` \[m/pixel\],
-//! the `origin` `[x, y, yaw]` of the lower-left pixel \[m, rad\], `negate`, `occupied_thresh`,
-//! `free_thresh` and `mode`. A pixel value `v` of maximum `maxval` reads as occupancy
-//! `p = (maxval - v) / maxval` (or `v / maxval` when `negate`); Occupied if
-//! `p > occupied_thresh`, Free if `p < free_thresh`, Unknown otherwise. Written maps use 254
-//! free, 0 occupied, 205 unknown (`mode: trinary`). Image row 0 is the north edge, grid row 0
-//! the south edge, so rows are flipped both ways.
+//! Format (ROS wiki, `map_server`; nav2 `map_io`): the YAML names the `image`, its
+//! `resolution` \[m/pixel\], the `origin` `[x, y, yaw]` of the lower-left pixel \[m, rad\],
+//! `negate`, `occupied_thresh`, `free_thresh` and `mode`. A pixel value `v` of maximum
+//! `maxval` reads as occupancy `p = (maxval - v) / maxval` (or `v / maxval` when `negate`);
+//! Occupied if `p > occupied_thresh`, Free if `p < free_thresh`, Unknown otherwise. `mode:
+//! trinary` (the default) and `mode: scale` read the same three classes (the grid has no
+//! shades), except that under `scale` a transparent pixel (PNG alpha below full) is Unknown;
+//! `mode: raw` and a rotated origin (yaw not 0) are refused with an error saying so. Written
+//! maps use 254 free, 0 occupied, 205 unknown (`mode: trinary`), as `map_saver` writes. Image
+//! row 0 is the north edge, grid row 0 the south edge, so rows are flipped both ways.
 //!
-//! Both binary (P5) and ASCII (P2) PGM are read; P5 is written. The YAML subset (one
-//! `key: value` per line, `#` comments, the origin as a `[a, b, c]` list) is parsed here.
-//! Writes are atomic (temporary file, fsync, rename), image first, so a crash leaves either the
-//! old map or the new one. Errors name the file and what is wrong.
+//! Images: binary (P5) and ASCII (P2) PGM, header comments allowed (GIMP writes one), 8 or 16
+//! bits; PNG in grey, grey+alpha, RGB or RGBA (colour read as its luma). P5 is written. The
+//! YAML is read in the forms map_saver, hand-editing and other tools give it: one
+//! `key: value` per line (block style) or the whole document as one `{key: value, ...}`
+//! (flow style, over any number of lines); the origin as `[x, y, yaw]` (also over several
+//! lines) or as a block list of `- x` lines; `#` comments; quoted image names; `---`. Writes
+//! are atomic (temporary file, fsync, rename), image first, so a crash leaves either the old
+//! map or the new one. Errors name the file (and the YAML line) and what is wrong.
 
 use std::fmt;
 use std::fs;
@@ -119,6 +129,13 @@ pub enum MapFileError {
         /// Byte offset of the pixel.
         offset: usize,
     },
+    /// A PNG that cannot be decoded, or is too large.
+    BadImage {
+        /// The image file.
+        path: PathBuf,
+        /// Why.
+        what: String,
+    },
     /// Something valid in ROS but not supported here (rotated origin, raw mode).
     Unsupported {
         /// The YAML file.
@@ -161,9 +178,10 @@ impl fmt::Display for MapFileError {
             ),
             BadMagic { path, found } => write!(
                 f,
-                "{}: not a PGM image: starts with `{found}`, expected `P5` or `P2`",
+                "{}: not a PGM image: starts with `{found}`, expected `P5` or `P2` (or a PNG)",
                 path.display()
             ),
+            BadImage { path, what } => write!(f, "{}: not a readable PNG: {what}", path.display()),
             BadHeader {
                 path,
                 offset,
@@ -253,30 +271,39 @@ pub fn write_map_image(map: &MapImage, yaml_path: &Path) -> Result<(), MapFileEr
         });
     }
     let pgm_path = yaml_path.with_extension("pgm");
+    write_atomically(&pgm_path, &encode_pgm(map))?;
+    let image_name = pgm_path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    write_atomically(yaml_path, yaml_text(&g, &image_name).as_bytes())
+}
+
+/// A map's binary PGM (P5, maxval 255): 254 free, 0 occupied, 205 unknown, first row north.
+/// `map.cells` must hold `geometry.cell_count()` classes (missing ones are written unknown).
+pub fn encode_pgm(map: &MapImage) -> Vec<u8> {
+    let g = map.geometry;
     let mut pgm = format!("P5\n{} {}\n255\n", g.width, g.height).into_bytes();
     pgm.reserve(g.cell_count());
     for image_row in 0..g.height {
         let row = g.height - 1 - image_row;
         pgm.extend(
-            map.cells[row * g.width..(row + 1) * g.width]
-                .iter()
-                .map(|c| match c {
-                    CellClass::Free => PIXEL_FREE,
-                    CellClass::Occupied => PIXEL_OCCUPIED,
-                    CellClass::Unknown => PIXEL_UNKNOWN,
-                }),
+            (0..g.width).map(|col| match map.cells.get(row * g.width + col) {
+                Some(CellClass::Free) => PIXEL_FREE,
+                Some(CellClass::Occupied) => PIXEL_OCCUPIED,
+                _ => PIXEL_UNKNOWN,
+            }),
         );
     }
-    write_atomically(&pgm_path, &pgm)?;
-    let image_name = pgm_path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let yaml = format!(
+    pgm
+}
+
+/// The YAML beside a map written by [`encode_pgm`] as `image_name` (what map_saver writes).
+pub fn yaml_text(g: &GridGeometry, image_name: &str) -> String {
+    format!(
         "image: {image_name}\nresolution: {}\norigin: [{}, {}, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\nmode: trinary\n",
         g.resolution_m, g.origin.x, g.origin.y
-    );
-    write_atomically(yaml_path, yaml.as_bytes())
+    )
 }
 
 /// Temporary file beside the target, fsync, rename over the target, fsync the directory.
@@ -327,22 +354,11 @@ pub fn parse_map(
     let mut negate = false;
     let mut occupied_thresh: Option<f32> = None;
     let mut free_thresh: Option<f32> = None;
+    let mut scale = false;
     // The known keys seen, to refuse one given twice (the second would win silently).
     let mut seen: Vec<String> = Vec::new();
-    for (n, raw) in text.lines().enumerate() {
-        let line = n + 1;
-        let content = raw.split('#').next().unwrap_or("").trim();
-        if content.is_empty() {
-            continue;
-        }
-        let Some((key, value)) = content.split_once(':') else {
-            return Err(MapFileError::BadLine {
-                path: path(),
-                line,
-                found: raw.to_string(),
-            });
-        };
-        let (key, value) = (key.trim(), value.trim());
+    for (line, key, value) in yaml_entries(yaml_path, text)? {
+        let (key, value) = (key.as_str(), value.as_str());
         let bad = |expected| MapFileError::BadValue {
             path: path(),
             line,
@@ -420,8 +436,9 @@ pub fn parse_map(
                 }
                 origin = Some(o);
             }
-            "mode" => match value {
-                "trinary" | "scale" => {}
+            "mode" => match value.trim_matches(|c| c == '"' || c == '\'') {
+                "trinary" => scale = false,
+                "scale" => scale = true,
                 other => {
                     return Err(MapFileError::Unsupported {
                         path: path(),
@@ -471,10 +488,10 @@ pub fn parse_map(
         _ => PathBuf::from(&image),
     };
     let bytes = load_image(&image_path)?;
-    let pgm = parse_pgm(&image_path, &bytes)?;
+    let raster = decode_image(&image_path, &bytes)?;
     let geometry = GridGeometry::new(
-        pgm.width,
-        pgm.height,
+        raster.width,
+        raster.height,
         resolution,
         Point2::new(origin[0], origin[1]),
     )
@@ -482,37 +499,300 @@ pub fn parse_map(
         path: path(),
         source,
     })?;
-    let maxval = pgm.maxval as f32;
-    let mut cells = vec![CellClass::Unknown; geometry.cell_count()];
-    for (k, &v) in pgm.pixels.iter().enumerate() {
-        let (image_row, col) = (k / pgm.width, k % pgm.width);
-        let row = pgm.height - 1 - image_row;
+    let thresholds = Thresholds {
+        negate,
+        occupied: occupied_thresh,
+        free: free_thresh,
+        scale,
+    };
+    Ok(MapImage {
+        geometry,
+        cells: classify(&raster, thresholds),
+    })
+}
+
+/// How pixels become classes (the YAML's `negate`, `occupied_thresh`, `free_thresh`, `mode`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Thresholds {
+    /// Whether white is occupied (`negate: 1`).
+    pub negate: bool,
+    /// Occupied above this occupancy.
+    pub occupied: f32,
+    /// Free below this occupancy.
+    pub free: f32,
+    /// `mode: scale`: a transparent pixel (alpha below full) is unknown.
+    pub scale: bool,
+}
+
+impl Default for Thresholds {
+    /// map_server's usual values (`map_saver`'s YAML): occupied above 0.65, free below 0.196,
+    /// trinary.
+    fn default() -> Self {
+        Self {
+            negate: false,
+            occupied: 0.65,
+            free: 0.196,
+            scale: false,
+        }
+    }
+}
+
+/// One class per pixel, in flat-index order (grid row 0 south = the image's last row).
+fn classify(raster: &Raster, t: Thresholds) -> Vec<CellClass> {
+    let maxval = raster.maxval as f32;
+    let mut cells = vec![CellClass::Unknown; raster.width * raster.height];
+    for (k, &v) in raster.pixels.iter().enumerate() {
+        let (image_row, col) = (k / raster.width, k % raster.width);
+        let row = raster.height - 1 - image_row;
         let v = v as f32;
-        let p = if negate {
+        let p = if t.negate {
             v / maxval
         } else {
             (maxval - v) / maxval
         };
-        cells[row * pgm.width + col] = if p > occupied_thresh {
+        let transparent = t.scale && raster.transparent.get(k).copied().unwrap_or(false);
+        cells[row * raster.width + col] = if transparent {
+            CellClass::Unknown
+        } else if p > t.occupied {
             CellClass::Occupied
-        } else if p < free_thresh {
+        } else if p < t.free {
             CellClass::Free
         } else {
             CellClass::Unknown
         };
     }
-    Ok(MapImage { geometry, cells })
+    cells
 }
 
-struct Pgm {
+/// Reads a map image given without a YAML (`papillon-sim mission --map plan.pgm`): one pixel
+/// per cell of `resolution_m`, the south-west corner at `origin`, classified with
+/// [`Thresholds::default`] (so map_saver's grey 205 is unknown, not free).
+pub fn read_image(
+    image_path: &Path,
+    resolution_m: f32,
+    origin: Point2,
+) -> Result<MapImage, MapFileError> {
+    let bytes = crate::files::read_limited(image_path, crate::files::MAP_MAX_BYTES)
+        .map_err(io_err(image_path))?;
+    decode_map_image(image_path, &bytes, resolution_m, origin)
+}
+
+/// [`read_image`] on the bytes of `image_path` (which errors name).
+pub fn decode_map_image(
+    image_path: &Path,
+    bytes: &[u8],
+    resolution_m: f32,
+    origin: Point2,
+) -> Result<MapImage, MapFileError> {
+    let raster = decode_image(image_path, bytes)?;
+    let geometry =
+        GridGeometry::new(raster.width, raster.height, resolution_m, origin).map_err(|source| {
+            MapFileError::BadGeometry {
+                path: image_path.to_path_buf(),
+                source,
+            }
+        })?;
+    Ok(MapImage {
+        geometry,
+        cells: classify(&raster, Thresholds::default()),
+    })
+}
+
+/// Most pixels a PNG map may have (its header is read first: a small file may decode to
+/// gigabytes). 64 Mi pixels is a 400 m square at 5 cm.
+pub const MAX_IMAGE_PIXELS: u64 = 64 * 1024 * 1024;
+
+/// An image's grey values, first row north.
+struct Raster {
     width: usize,
     height: usize,
     maxval: u16,
     pixels: Vec<u16>,
+    /// Per pixel, whether it is transparent (alpha below full); empty without alpha.
+    transparent: Vec<bool>,
+}
+
+/// A PGM (P5 or P2) or a PNG (grey, grey+alpha, RGB or RGBA; colour read as its luma, as
+/// map_server averages the channels of a grey-looking map).
+fn decode_image(path: &Path, bytes: &[u8]) -> Result<Raster, MapFileError> {
+    const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+    if !bytes.starts_with(PNG_SIGNATURE) {
+        return parse_pgm(path, bytes);
+    }
+    let bad = |e: image::ImageError| MapFileError::BadImage {
+        path: path.to_path_buf(),
+        what: e.to_string(),
+    };
+    let reader =
+        || image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Png);
+    let (w, h) = reader().into_dimensions().map_err(bad)?;
+    if u64::from(w) * u64::from(h) > MAX_IMAGE_PIXELS {
+        return Err(MapFileError::BadImage {
+            path: path.to_path_buf(),
+            what: format!("{w} x {h} pixels, more than {MAX_IMAGE_PIXELS}"),
+        });
+    }
+    let image = reader().decode().map_err(bad)?;
+    let has_alpha = image.color().has_alpha();
+    let grey = image.to_luma_alpha8();
+    let (width, height) = (grey.width() as usize, grey.height() as usize);
+    if width == 0 || height == 0 {
+        return Err(MapFileError::BadImage {
+            path: path.to_path_buf(),
+            what: "the image has no pixels".into(),
+        });
+    }
+    let pixels = grey.pixels().map(|p| u16::from(p.0[0])).collect();
+    let transparent = if has_alpha {
+        grey.pixels().map(|p| p.0[1] < 255).collect()
+    } else {
+        Vec::new()
+    };
+    Ok(Raster {
+        width,
+        height,
+        maxval: 255,
+        pixels,
+        transparent,
+    })
+}
+
+/// The YAML's `key: value` entries with their line numbers, from block style (one `key: value`
+/// per line; a list either `[a, b, c]`, also over several lines, or as `- a` lines under the
+/// key) or flow style (the whole document one `{key: value, ...}`, over any number of lines).
+/// `#` starts a comment at the start of a line or after a space, outside quotes (YAML's rule);
+/// `---` and `...` (document markers) are skipped.
+fn yaml_entries(path: &Path, text: &str) -> Result<Vec<(usize, String, String)>, MapFileError> {
+    let lines: Vec<(usize, &str, String)> = text
+        .lines()
+        .enumerate()
+        .map(|(n, raw)| (n + 1, raw, strip_comment(raw).trim().to_string()))
+        .filter(|(_, _, c)| !c.is_empty() && c != "---" && c != "...")
+        .collect();
+    let bad_line = |line: usize, raw: &str| MapFileError::BadLine {
+        path: path.to_path_buf(),
+        line,
+        found: raw.to_string(),
+    };
+    // Flow style: one mapping in braces.
+    if let Some((first_line, _, first)) = lines.first()
+        && first.starts_with('{')
+    {
+        let mut joined = String::new();
+        let mut line_of_char = Vec::new();
+        for (line, _, content) in &lines {
+            for c in content.chars().chain([' ']) {
+                joined.push(c);
+                line_of_char.push(*line);
+            }
+        }
+        let inner = joined.trim_end();
+        let Some(inner) = inner.strip_prefix('{').and_then(|i| i.strip_suffix('}')) else {
+            return Err(MapFileError::BadLine {
+                path: path.to_path_buf(),
+                line: *first_line,
+                found: "a `{` without its closing `}`".into(),
+            });
+        };
+        let mut entries = Vec::new();
+        for (start, item) in split_top_level(inner) {
+            let item_trim = item.trim();
+            if item_trim.is_empty() {
+                continue;
+            }
+            let line = line_of_char
+                .get(1 + start + (item.len() - item.trim_start().len()))
+                .copied()
+                .unwrap_or(*first_line);
+            let (key, value) = item_trim
+                .split_once(':')
+                .ok_or_else(|| bad_line(line, item_trim))?;
+            entries.push((line, key.trim().to_string(), value.trim().to_string()));
+        }
+        return Ok(entries);
+    }
+    let mut entries: Vec<(usize, String, String)> = Vec::new();
+    let mut k = 0;
+    while k < lines.len() {
+        let (line, raw, content) = &lines[k];
+        k += 1;
+        if content.starts_with('-') {
+            // A `- item` with no key above it to belong to.
+            return Err(bad_line(*line, raw));
+        }
+        let (key, value) = content
+            .split_once(':')
+            .ok_or_else(|| bad_line(*line, raw))?;
+        let mut value = value.trim().to_string();
+        if value.is_empty() {
+            // A block list: the `- item` lines that follow.
+            let mut items = Vec::new();
+            while let Some((_, _, c)) = lines.get(k)
+                && let Some(item) = c.strip_prefix('-')
+            {
+                items.push(item.trim().to_string());
+                k += 1;
+            }
+            if !items.is_empty() {
+                value = format!("[{}]", items.join(", "));
+            }
+        } else if value.starts_with('[') && !value.contains(']') {
+            // A flow list over several lines.
+            while let Some((_, _, c)) = lines.get(k) {
+                value.push(' ');
+                value.push_str(c);
+                k += 1;
+                if c.contains(']') {
+                    break;
+                }
+            }
+        }
+        entries.push((*line, key.trim().to_string(), value));
+    }
+    Ok(entries)
+}
+
+/// `line` without its comment: from a `#` at the start or after whitespace, outside quotes.
+fn strip_comment(line: &str) -> &str {
+    let mut quote: Option<char> = None;
+    let mut previous_blank = true;
+    for (i, c) in line.char_indices() {
+        match quote {
+            Some(q) if c == q => quote = None,
+            Some(_) => {}
+            None if c == '"' || c == '\'' => quote = Some(c),
+            None if c == '#' && previous_blank => return &line[..i],
+            None => {}
+        }
+        previous_blank = c.is_whitespace();
+    }
+    line
+}
+
+/// `text` split at the commas outside brackets and quotes, each piece with its byte offset.
+fn split_top_level(text: &str) -> Vec<(usize, &str)> {
+    let mut pieces = Vec::new();
+    let (mut depth, mut quote, mut start) = (0i32, None::<char>, 0);
+    for (i, c) in text.char_indices() {
+        match (quote, c) {
+            (Some(q), _) if c == q => quote = None,
+            (Some(_), _) => {}
+            (None, '"' | '\'') => quote = Some(c),
+            (None, '[' | '{') => depth += 1,
+            (None, ']' | '}') => depth -= 1,
+            (None, ',') if depth == 0 => {
+                pieces.push((start, &text[start..i]));
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    pieces.push((start, &text[start..]));
+    pieces
 }
 
 /// Parses a P5 or P2 PGM.
-fn parse_pgm(path: &Path, bytes: &[u8]) -> Result<Pgm, MapFileError> {
+fn parse_pgm(path: &Path, bytes: &[u8]) -> Result<Raster, MapFileError> {
     let p = || path.to_path_buf();
     let ascii = match bytes.get(..2) {
         Some(b"P5") => false,
@@ -627,11 +907,12 @@ fn parse_pgm(path: &Path, bytes: &[u8]) -> Result<Pgm, MapFileError> {
             found_pixels: pixels.len(),
         });
     }
-    Ok(Pgm {
+    Ok(Raster {
         width,
         height,
         maxval: maxval as u16,
         pixels,
+        transparent: Vec::new(),
     })
 }
 
@@ -757,5 +1038,187 @@ mod tests {
         let dir = temp_dir("missing");
         let e = read_map(&dir.join("none.yaml")).unwrap_err().to_string();
         assert!(e.contains("none.yaml"), "{e}");
+    }
+
+    /// A small map with every class, written by [`write_map_image`].
+    fn sample(dir: &Path) -> MapImage {
+        let geometry = GridGeometry::new(5, 4, 0.05, Point2::new(-10.0, -7.5)).unwrap();
+        use CellClass::*;
+        let cells = [Free, Occupied, Unknown]
+            .iter()
+            .cycle()
+            .take(geometry.cell_count() + 1)
+            .skip(1)
+            .copied()
+            .collect();
+        let map = MapImage { geometry, cells };
+        write_map_image(&map, &dir.join("map.yaml")).unwrap();
+        map
+    }
+
+    /// The written PGM's grey values, first row north.
+    fn written_pixels(dir: &Path) -> (usize, usize, Vec<u8>) {
+        let bytes = fs::read(dir.join("map.pgm")).unwrap();
+        let raster = parse_pgm(Path::new("map.pgm"), &bytes).unwrap();
+        let pixels = raster.pixels.iter().map(|&v| v as u8).collect();
+        (raster.width, raster.height, pixels)
+    }
+
+    #[test]
+    fn map_saver_files_read_back() {
+        let dir = temp_dir("map-saver");
+        let map = sample(&dir);
+        let (w, h, pixels) = written_pixels(&dir);
+        // ROS 1 map_saver: a creator comment in the PGM header, six-decimal numbers, no mode.
+        let mut pgm =
+            format!("P5\n# CREATOR: map_saver.cpp 0.050 m/pix\n{w} {h}\n255\n").into_bytes();
+        pgm.extend(&pixels);
+        fs::write(dir.join("ros1.pgm"), pgm).unwrap();
+        fs::write(
+            dir.join("ros1.yaml"),
+            "image: ros1.pgm\nresolution: 0.050000\norigin: [-10.000000, -7.500000, 0.000000]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n\n",
+        )
+        .unwrap();
+        assert_eq!(read_map(&dir.join("ros1.yaml")).unwrap(), map);
+        // Mode first, integers in the origin, a PNG (nav2's map_saver can write one).
+        let png = image::GrayImage::from_raw(w as u32, h as u32, pixels.clone()).unwrap();
+        png.save(dir.join("nav2.png")).unwrap();
+        fs::write(
+            dir.join("nav2.yaml"),
+            "image: nav2.png\nmode: trinary\nresolution: 0.05\norigin: [-10, -7.5, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+        )
+        .unwrap();
+        assert_eq!(read_map(&dir.join("nav2.yaml")).unwrap(), map);
+        // nav2's default free_thresh 0.25 is above the occupancy of the grey 205 (0.196): the
+        // thresholds are honoured, unknown reads free.
+        let yaml = fs::read_to_string(dir.join("nav2.yaml")).unwrap();
+        fs::write(dir.join("nav2.yaml"), yaml.replace("0.196", "0.25")).unwrap();
+        let loose = read_map(&dir.join("nav2.yaml")).unwrap();
+        assert!(!loose.cells.contains(&CellClass::Unknown));
+        assert_eq!(
+            loose
+                .cells
+                .iter()
+                .filter(|&&c| c == CellClass::Occupied)
+                .count(),
+            map.cells
+                .iter()
+                .filter(|&&c| c == CellClass::Occupied)
+                .count()
+        );
+    }
+
+    #[test]
+    fn gimp_edits_read_back() {
+        let dir = temp_dir("gimp");
+        let map = sample(&dir);
+        let (w, h, pixels) = written_pixels(&dir);
+        let yaml = fs::read_to_string(dir.join("map.yaml")).unwrap();
+        // GIMP's PNM export: its comment line, then the same pixels.
+        let mut pgm = format!("P5\n# Created by GIMP version 2.10.38 PNM plug-in\n{w} {h}\n255\n")
+            .into_bytes();
+        pgm.extend(&pixels);
+        fs::write(dir.join("map.pgm"), pgm).unwrap();
+        assert_eq!(read_map(&dir.join("map.yaml")).unwrap(), map);
+        // GIMP's PNG export of the same image in colour with an opaque alpha channel.
+        let rgba = image::RgbaImage::from_fn(w as u32, h as u32, |x, y| {
+            let v = pixels[y as usize * w + x as usize];
+            image::Rgba([v, v, v, 255])
+        });
+        rgba.save(dir.join("map.png")).unwrap();
+        fs::write(dir.join("png.yaml"), yaml.replace("map.pgm", "map.png")).unwrap();
+        assert_eq!(read_map(&dir.join("png.yaml")).unwrap(), map);
+        // Under `mode: scale` a transparent pixel (erased in GIMP) is unknown; under trinary
+        // alpha is ignored.
+        let mut erased = rgba.clone();
+        erased.put_pixel(0, 0, image::Rgba([254, 254, 254, 0]));
+        erased.save(dir.join("map.png")).unwrap();
+        let trinary = read_map(&dir.join("png.yaml")).unwrap();
+        let north_west = (h - 1) * w;
+        assert_eq!(trinary.cells[north_west], CellClass::Free);
+        fs::write(
+            dir.join("png.yaml"),
+            yaml.replace("map.pgm", "map.png")
+                .replace("mode: trinary", "mode: scale"),
+        )
+        .unwrap();
+        let scale = read_map(&dir.join("png.yaml")).unwrap();
+        assert_eq!(scale.cells[north_west], CellClass::Unknown);
+        assert_eq!(scale.cells[..north_west], map.cells[..north_west]);
+        // A 16-bit PGM (maxval 65535) of the same map.
+        let mut wide = format!("P5\n{w} {h}\n65535\n").into_bytes();
+        for &v in &pixels {
+            wide.extend((u16::from(v) * 257).to_be_bytes());
+        }
+        fs::write(dir.join("map.pgm"), wide).unwrap();
+        assert_eq!(read_map(&dir.join("map.yaml")).unwrap(), map);
+    }
+
+    #[test]
+    fn hand_edited_yaml_reads_back() {
+        let dir = temp_dir("hand");
+        let map = sample(&dir);
+        let (w, h, pixels) = written_pixels(&dir);
+        let read = |name: &str, text: &str| {
+            fs::write(dir.join(name), text).unwrap();
+            read_map(&dir.join(name))
+        };
+        // Block style with comments, a quoted image name, a block-list origin, `---`.
+        let block = "---\n# the lab, saved by hand\nimage: \"map.pgm\"   # the picture\nresolution: 0.05\norigin:\n  - -10.0\n  - -7.5\n  - 0.0\nnegate: false\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+        assert_eq!(read("block.yaml", block).unwrap(), map);
+        // Flow style, over several lines, keys in another order.
+        let flow = "{resolution: 0.05, image: map.pgm,\n  origin: [-10.0, -7.5, 0.0], # south-west\n  negate: 0, occupied_thresh: 0.65, free_thresh: 0.196, mode: trinary}\n";
+        assert_eq!(read("flow.yaml", flow).unwrap(), map);
+        // An origin list over several lines.
+        let multi = "image: map.pgm\nresolution: 0.05\norigin: [-10.0,\n         -7.5, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+        assert_eq!(read("multi.yaml", multi).unwrap(), map);
+        // negate 1 with the image inverted (white walls on black floor) is the same map.
+        let mut inverted = format!("P5\n{w} {h}\n255\n").into_bytes();
+        inverted.extend(pixels.iter().map(|v| 255 - v));
+        fs::write(dir.join("inv.pgm"), inverted).unwrap();
+        let negated = "image: inv.pgm\nresolution: 0.05\norigin: [-10.0, -7.5, 0.0]\nnegate: 1\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+        assert_eq!(read("neg.yaml", negated).unwrap(), map);
+        // Thresholds are honoured: with free_thresh above 205's occupancy (0.196), the
+        // unknown grey reads free.
+        let loose = block.replace("free_thresh: 0.196", "free_thresh: 0.2");
+        let m = read("loose.yaml", &loose).unwrap();
+        assert!(!m.cells.contains(&CellClass::Unknown));
+        // What is not supported is a clear error naming the file and line.
+        let rotated = block.replace("  - 0.0", "  - 1.57");
+        let e = read("rot.yaml", &rotated).unwrap_err().to_string();
+        assert!(e.contains("rot.yaml") && e.contains("rotated"), "{e}");
+        let raw = format!("{block}mode: raw\n");
+        let e = read("raw.yaml", &raw).unwrap_err().to_string();
+        assert!(e.contains("raw.yaml") && e.contains("mode `raw`"), "{e}");
+        let e = read("open.yaml", "{image: map.pgm, resolution: 0.05\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("open.yaml:1") && e.contains("`}`"), "{e}");
+        let e = read("dash.yaml", "- image: map.pgm\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("dash.yaml:1"), "{e}");
+    }
+
+    #[test]
+    fn a_plain_image_reads_unknown_grey_as_unknown() {
+        let m = decode_map_image(
+            Path::new("plain.pgm"),
+            b"P2\n3 1\n255\n0 205 254\n",
+            0.1,
+            Point2::default(),
+        )
+        .unwrap();
+        use CellClass::*;
+        assert_eq!(m.cells, [Occupied, Unknown, Free]);
+        let e = decode_map_image(
+            Path::new("x.png"),
+            b"\x89PNG\r\n\x1a\nbroken",
+            0.1,
+            Point2::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("x.png: not a readable PNG"), "{e}");
     }
 }

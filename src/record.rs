@@ -171,9 +171,14 @@ fn occupancy(class: CellClass) -> i8 {
     }
 }
 
-/// An MCAP recording of a mission (see the module documentation for the channels).
+/// An MCAP recording of a mission (see the module documentation for the channels), and/or
+/// its live view ([`Self::with_live`]).
 pub struct Recorder<W: Write + Seek> {
-    writer: mcap::Writer<W>,
+    /// The MCAP file; `None` for a live view alone ([`Recorder::live_only`]).
+    writer: Option<mcap::Writer<W>>,
+    /// The live view and its channel ids by topic.
+    #[cfg(feature = "live")]
+    live: Option<(crate::live::LiveServer, BTreeMap<String, u32>)>,
     robots: usize,
     base_ns: u64,
     schemas: BTreeMap<&'static str, u16>,
@@ -202,6 +207,21 @@ impl Recorder<BufWriter<File>> {
         Self::new(BufWriter::new(file), robots, base_ns)
             .map_err(|e| format!("{}: {e}", path.display()))
     }
+
+    /// A live view of `robots` robots alone, no file (see [`Self::with_live`]).
+    #[cfg(feature = "live")]
+    pub fn live_only(live: crate::live::LiveServer, robots: usize, base_ns: u64) -> Self {
+        Self {
+            writer: None,
+            live: Some((live, BTreeMap::new())),
+            robots: robots.max(1),
+            base_ns,
+            schemas: BTreeMap::new(),
+            channels: BTreeMap::new(),
+            sequence: 0,
+            last_path: vec![Vec::new(); robots.max(1)],
+        }
+    }
 }
 
 impl<W: Write + Seek> Recorder<W> {
@@ -212,7 +232,9 @@ impl<W: Write + Seek> Recorder<W> {
             .library(concat!("papillon ", env!("CARGO_PKG_VERSION")))
             .create(w)?;
         Ok(Self {
-            writer,
+            writer: Some(writer),
+            #[cfg(feature = "live")]
+            live: None,
             robots: robots.max(1),
             base_ns,
             schemas: BTreeMap::new(),
@@ -220,6 +242,19 @@ impl<W: Write + Seek> Recorder<W> {
             sequence: 0,
             last_path: vec![Vec::new(); robots.max(1)],
         })
+    }
+
+    /// Also publishes every message to the live view `live` ([`crate::live`]).
+    #[cfg(feature = "live")]
+    pub fn with_live(mut self, live: crate::live::LiveServer) -> Self {
+        self.live = Some((live, BTreeMap::new()));
+        self
+    }
+
+    /// The live view's address, when there is one.
+    #[cfg(feature = "live")]
+    pub fn live_addr(&self) -> Option<std::net::SocketAddr> {
+        self.live.as_ref().map(|(l, _)| l.local_addr())
     }
 
     /// The topic of robot `robot`'s channel `name`.
@@ -243,6 +278,24 @@ impl<W: Write + Seek> Recorder<W> {
         t_ns: u64,
         message: &Value,
     ) -> Result<(), RecordError> {
+        let data = serde_json::to_vec(message).map_err(io::Error::other)?;
+        self.sequence = self.sequence.wrapping_add(1);
+        #[cfg(feature = "live")]
+        if let Some((live, ids)) = &mut self.live {
+            let id = match ids.get(topic) {
+                Some(&id) => id,
+                None => {
+                    let schema = schema(schema_name).to_string();
+                    let id = live.add_channel(topic, schema_name, &schema);
+                    ids.insert(topic.to_string(), id);
+                    id
+                }
+            };
+            live.publish(id, t_ns, &data);
+        }
+        let Some(writer) = &mut self.writer else {
+            return Ok(());
+        };
         let channel_id = match self.channels.get(topic) {
             Some(&id) => id,
             None => {
@@ -251,21 +304,17 @@ impl<W: Write + Seek> Recorder<W> {
                     None => {
                         let data =
                             serde_json::to_vec(&schema(schema_name)).map_err(io::Error::other)?;
-                        let id = self.writer.add_schema(schema_name, "jsonschema", &data)?;
+                        let id = writer.add_schema(schema_name, "jsonschema", &data)?;
                         self.schemas.insert(schema_name, id);
                         id
                     }
                 };
-                let id = self
-                    .writer
-                    .add_channel(schema_id, topic, "json", &BTreeMap::new())?;
+                let id = writer.add_channel(schema_id, topic, "json", &BTreeMap::new())?;
                 self.channels.insert(topic.to_string(), id);
                 id
             }
         };
-        let data = serde_json::to_vec(message).map_err(io::Error::other)?;
-        self.sequence = self.sequence.wrapping_add(1);
-        self.writer.write_to_known_channel(
+        writer.write_to_known_channel(
             &MessageHeader {
                 channel_id,
                 sequence: self.sequence,
@@ -456,10 +505,11 @@ impl<W: Write + Seek> Recorder<W> {
     }
 
     /// Writes the summary and the footer and flushes the file.
-    pub fn finish(mut self) -> Result<(), RecordError> {
-        self.writer.finish()?;
-        let mut inner = self.writer.into_inner();
-        inner.flush()?;
+    pub fn finish(self) -> Result<(), RecordError> {
+        if let Some(mut writer) = self.writer {
+            writer.finish()?;
+            writer.into_inner().flush()?;
+        }
         Ok(())
     }
 }
@@ -497,7 +547,7 @@ mod tests {
             .unwrap();
         assert_eq!(rec.messages(), 7);
         let bytes = {
-            let mut w = rec.writer;
+            let mut w = rec.writer.unwrap();
             w.finish().unwrap();
             w.into_inner().into_inner()
         };

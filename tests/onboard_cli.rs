@@ -440,3 +440,60 @@ fn probe_names_the_flag_of_an_address_it_cannot_use() {
     );
     assert_last_line_names(&out, &["--tcp", "nohost"]);
 }
+
+/// `run --live` on an address in use is refused at once, naming the flag, before the program
+/// tries to reach the robot (port 1 on loopback would be retried for a long time); a bad
+/// `RUST_LOG` is one line naming it; `--log-format json` writes JSON lines.
+#[test]
+fn live_address_rust_log_and_log_format_are_checked_first() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap().to_string();
+    let log = std::env::temp_dir().join(format!("papillon-cli-{}-live", std::process::id()));
+    let run = |extra: &[&str], env: Option<&str>| {
+        let mut c = Command::new(BIN);
+        c.args(["run", "--board", &board("sim.json"), "--tcp", "127.0.0.1:1"])
+            .args(extra)
+            .arg("--log-dir")
+            .arg(&log);
+        if let Some(v) = env {
+            c.env("RUST_LOG", v);
+        }
+        c
+    };
+    let started = std::time::Instant::now();
+    let out = run(&["--live", &addr], None).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.starts_with(&format!("papillon: --live {addr}: cannot listen")),
+        "{err}"
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(started.elapsed() < std::time::Duration::from_secs(10));
+
+    let out = run(&[], Some("papillon=[")).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.starts_with("papillon: RUST_LOG: "), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+
+    // JSON lines: the first retry to reach the robot is logged as an object; stop there.
+    let mut child = run(&["--log-format", "json"], Some("info"))
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    std::io::BufRead::read_line(
+        &mut std::io::BufReader::new(child.stderr.take().unwrap()),
+        &mut line,
+    )
+    .unwrap();
+    let _ = child.kill();
+    let _ = child.wait();
+    let v: serde_json::Value =
+        serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"));
+    assert_eq!(v["level"], "WARN", "{line}");
+    assert!(v["fields"]["message"].is_string(), "{line}");
+    assert!(!line.contains('\u{1b}'), "no escape codes: {line}");
+    let _ = std::fs::remove_dir_all(&log);
+}

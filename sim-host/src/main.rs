@@ -19,7 +19,7 @@ enum Command {
     /// Run an experiment (a sweep of missions) in parallel, or merge its shards.
     Bench(cli::bench::Args),
     /// Run a whole exploration mission in simulated time (one or several robots).
-    Mission(cli::mission::Args),
+    Mission(Box<cli::mission::Args>),
     /// Run the optimizers on standard test functions.
     Optimize(cli::optimize::Args),
     /// Solve a Moving AI path-finding benchmark with Papillon's A*.
@@ -48,7 +48,7 @@ fn main() -> ExitCode {
     };
     match cli.command {
         Command::Bench(args) => cli::bench::run(args),
-        Command::Mission(args) => cli::mission::run(args),
+        Command::Mission(args) => cli::mission::run(*args),
         Command::Optimize(args) => cli::optimize::run(args),
         Command::Plan(args) => cli::plan::run(args),
         Command::Serve(args) => cli::serve::run(args),
@@ -71,6 +71,15 @@ fn clap_error_line(e: &clap::Error) -> String {
         .take_while(|l| !l.trim().is_empty())
         .map(str::trim)
         .collect();
-    let line = first.join(" ");
+    let mut line = first.join(" ");
+    // clap's suggestion for a near miss (`tip: a similar value exists: 'xboa'`) stays on the
+    // line.
+    for tip in text
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("tip:"))
+    {
+        line.push_str(&format!(" ({tip})"));
+    }
     line.strip_prefix("error: ").unwrap_or(&line).to_string()
 }

@@ -170,16 +170,17 @@ pub fn execute(
     frames: Option<&Path>,
     png: Option<&Path>,
 ) -> Result<RunReport, Failure> {
-    execute_recorded(setup, frames, png, None)
+    execute_recorded(setup, frames, png, None, None)
 }
 
-/// [`execute`], also recording the mission as MCAP into `mcap` when given
-/// ([`crate::record`]).
+/// [`execute`], also recording the mission as MCAP into `mcap` when given and serving it live
+/// when `live` is given ([`crate::record`]).
 pub fn execute_recorded(
     setup: &Setup,
     frames: Option<&Path>,
     png: Option<&Path>,
     mcap: Option<&Path>,
+    live: Option<&crate::record::LiveOptions>,
 ) -> Result<RunReport, Failure> {
     let scale = picture_scale(&setup.world);
     let mut runner = Runner::new(setup.world.clone(), Dynamics::new(), setup.run.clone())
@@ -189,13 +190,7 @@ pub fn execute_recorded(
             Failure::Output(format!("--frames: {}: cannot create: {e}", dir.display()))
         })?;
     }
-    let mut recorder = match mcap {
-        Some(path) => Some(
-            RunRecorder::create(path, setup.run.robots)
-                .map_err(|e| Failure::Output(format!("--mcap: {e}")))?,
-        ),
-        None => None,
-    };
+    let mut recorder = RunRecorder::open(mcap, live, setup.run.robots).map_err(Failure::Output)?;
     let mut frame = 0usize;
     let mut frame_error: Option<String> = None;
     let report = runner
@@ -208,7 +203,7 @@ pub fn execute_recorded(
                 return;
             }
             frame += 1;
-            let img = render::render_grid(&r.map().grid, &r.tracks(), scale);
+            let img = render::render_grid_picture(&r.map().grid, &r.tracks(), scale);
             if let Err(e) = render::save_png(&img, &frame_path(dir, frame)) {
                 frame_error = Some(format!("--frames: {e}"));
             }
@@ -223,7 +218,7 @@ pub fn execute_recorded(
     }
     if let Some(path) = png {
         let tracks: Vec<Track> = runner.tracks();
-        let img = render::render_grid(&runner.map().grid, &tracks, scale);
+        let img = render::render_grid_picture(&runner.map().grid, &tracks, scale);
         render::save_png(&img, path).map_err(|e| Failure::Output(format!("--png: {e}")))?;
     }
     Ok(report)

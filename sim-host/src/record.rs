@@ -11,10 +11,14 @@
 //!   map (`/map`): the map only once per decision (and at the start and the end), which keeps
 //!   the file small;
 //! - at the end, the final map.
+//!
+//! With `--live ADDR` the same messages are served live to Foxglove ([`papillon::live`]) and
+//! the run is paced to `--live-speed` simulated seconds per second, so that a viewer sees it.
 
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
+use std::time::{Duration, Instant};
 
 use papillon::mission::MissionEvent;
 use papillon::record::{PoseSource, Recorder};
@@ -30,6 +34,19 @@ pub struct RunRecorder {
     error: Option<String>,
     /// Whether the map was recorded at the start.
     started: bool,
+    /// With a live view: the wall clock at the start and the simulated seconds per wall-clock
+    /// second, to pace the run so that a viewer sees it happen.
+    pace: Option<(Instant, f64)>,
+}
+
+/// `papillon-sim mission --live ADDR --live-speed X`: the live view's address and the
+/// simulated seconds per wall-clock second.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LiveOptions {
+    /// `host:port` to listen on.
+    pub addr: String,
+    /// Simulated seconds per wall-clock second (> 0).
+    pub speed: f64,
 }
 
 impl RunRecorder {
@@ -39,11 +56,54 @@ impl RunRecorder {
             recorder: Recorder::create(path, robots, 0)?,
             error: None,
             started: false,
+            pace: None,
         })
+    }
+
+    /// A recording into `mcap` (when given) and/or served live (when `live` is given: the run
+    /// is then paced at `live.speed` simulated seconds per second). The error names the file
+    /// or the address (prefixed with its option).
+    pub fn open(
+        mcap: Option<&Path>,
+        live: Option<&LiveOptions>,
+        robots: usize,
+    ) -> Result<Option<Self>, String> {
+        let server = match live {
+            Some(l) => {
+                Some(papillon::live::LiveServer::bind(&l.addr).map_err(|e| format!("--live {e}"))?)
+            }
+            None => None,
+        };
+        let recorder = match (mcap, server) {
+            (None, None) => return Ok(None),
+            (Some(path), None) => Recorder::create(path, robots, 0),
+            (Some(path), Some(server)) => {
+                Recorder::create(path, robots, 0).map(|r| r.with_live(server))
+            }
+            (None, Some(server)) => Ok(Recorder::live_only(server, robots, 0)),
+        }
+        .map_err(|e| format!("--mcap: {e}"))?;
+        if let Some(addr) = recorder.live_addr() {
+            eprintln!("live view: ws://{addr} (Foxglove: Open connection → Foxglove WebSocket)");
+        }
+        Ok(Some(Self {
+            recorder,
+            error: None,
+            started: false,
+            pace: live.map(|l| (Instant::now(), l.speed)),
+        }))
     }
 
     /// Records what `progress` says happened in `runner`.
     pub fn observe(&mut self, runner: &Runner, progress: Progress) {
+        if let Some((start, speed)) = self.pace
+            && matches!(progress, Progress::Controlled)
+        {
+            let due = Duration::from_secs_f64(runner.sim_time_s() / speed);
+            if let Some(wait) = due.checked_sub(start.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
         if self.error.is_some() {
             return;
         }

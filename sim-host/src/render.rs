@@ -2,15 +2,19 @@
 //! with free cells white, unknown grey and occupied black, each robot's trajectory drawn in
 //! its own colour and the targets it chose marked with a small ring in that colour.
 //!
-//! One cell is `scale` x `scale` pixels; the top image row is the map's north edge. Lines are
-//! drawn with Bresenham's algorithm (Bresenham, "Algorithm for computer control of a digital
-//! plotter", IBM Systems Journal 4(1), 1965); anything outside the image is clipped.
+//! One cell is `scale` x `scale` pixels; the top image row is the map's north edge. The cells
+//! are filled pixel by pixel; lines, rings and text are drawn by plotters (its bitmap backend
+//! on the image's own buffer). Segments are first clipped to the image (Liang & Barsky, below)
+//! so that far-off points cost nothing. [`render_picture`] adds what a person needs to read
+//! the map (`papillon-sim mission --png`, `--frames`): each robot's start (a square) and last
+//! position (a filled disc), and below the map a scale bar and a legend.
 
 use std::path::Path;
 
 use image::{Rgb, RgbImage};
 use papillon::geometry::Point2;
 use papillon::grid::{CellClass, GridGeometry, OccupancyGrid};
+use plotters::prelude::*;
 
 /// Colour of a free cell.
 pub const FREE: Rgb<u8> = Rgb([255, 255, 255]);
@@ -34,6 +38,10 @@ pub const ROBOT_COLOURS: [Rgb<u8>; 8] = [
 /// The colour of robot `index`.
 pub fn robot_colour(index: usize) -> Rgb<u8> {
     ROBOT_COLOURS[index % ROBOT_COLOURS.len()]
+}
+
+fn rgb(c: Rgb<u8>) -> RGBColor {
+    RGBColor(c.0[0], c.0[1], c.0[2])
 }
 
 /// What to draw for one robot, in the map frame \[m\].
@@ -72,24 +80,204 @@ pub fn render_classes(
             }
         }
     }
-    let to_px = |p: Point2| -> (i64, i64) {
+    let to_px = pixel_of(geometry, scale);
+    let (iw, ih) = (img.width(), img.height());
+    let radius = (2 * scale as i32).max(3);
+    let area = BitMapBackend::with_buffer(&mut img, (iw, ih)).into_drawing_area();
+    for (k, track) in tracks.iter().enumerate() {
+        let colour = rgb(robot_colour(k));
+        for pair in track.trajectory.windows(2) {
+            if let Some((a, b)) = clip(to_px(pair[0]), to_px(pair[1]), iw as i64, ih as i64) {
+                let _ = area.draw(&PathElement::new(
+                    vec![small(a), small(b)],
+                    colour.stroke_width(1),
+                ));
+            }
+        }
+        if let [only] = track.trajectory[..] {
+            let _ = area.draw_pixel(small(to_px(only)), &colour);
+        }
+        for &t in &track.targets {
+            if let Some(centre) = near(to_px(t), iw, ih, radius) {
+                // Two pixels thick: radius and radius - 1.
+                for r in [radius, radius - 1] {
+                    let _ = area.draw(&Circle::new(centre, r, colour.stroke_width(1)));
+                }
+            }
+        }
+    }
+    let _ = area.present();
+    drop(area);
+    img
+}
+
+/// Map frame \[m\] to image pixels (x right, y down).
+fn pixel_of(geometry: &GridGeometry, scale: u32) -> impl Fn(Point2) -> (i64, i64) + '_ {
+    let h = geometry.height as u32;
+    move |p: Point2| {
         let x = (p.x - geometry.origin.x) / geometry.resolution_m * scale as f32;
         let y = (p.y - geometry.origin.y) / geometry.resolution_m * scale as f32;
         (x.floor() as i64, (h * scale) as i64 - 1 - y.floor() as i64)
-    };
-    for (k, track) in tracks.iter().enumerate() {
-        let colour = robot_colour(k);
-        for pair in track.trajectory.windows(2) {
-            line(&mut img, to_px(pair[0]), to_px(pair[1]), colour);
-        }
-        if let [only] = track.trajectory[..] {
-            put(&mut img, to_px(only), colour);
-        }
-        let radius = (2 * scale as i64).max(3);
-        for &t in &track.targets {
-            ring(&mut img, to_px(t), radius, colour);
+    }
+}
+
+/// A clipped point as plotters' coordinates (clipped points fit in an `i32`).
+fn small((x, y): (i64, i64)) -> (i32, i32) {
+    (
+        x.clamp(i32::MIN as i64, i32::MAX as i64) as i32,
+        y.clamp(i32::MIN as i64, i32::MAX as i64) as i32,
+    )
+}
+
+/// `p` when a mark of `radius` around it can touch the `w` x `h` image.
+fn near((x, y): (i64, i64), w: u32, h: u32, radius: i32) -> Option<(i32, i32)> {
+    let r = radius as i64;
+    (x >= -r && y >= -r && x < w as i64 + r && y < h as i64 + r).then(|| small((x, y)))
+}
+
+/// Height of the band under the map with the scale bar and the legend \[px\].
+pub const LEGEND_HEIGHT: u32 = 46;
+/// Narrowest picture \[px\]: the legend's width.
+pub const MIN_PICTURE_WIDTH: u32 = 600;
+
+/// A scale bar's length for a map drawn at `px_per_m` pixels per metre: the round length (1,
+/// 2 or 5 times a power of ten, 1 cm to 5 km) nearest to 120 pixels \[m\].
+pub fn scale_bar_m(px_per_m: f32) -> f32 {
+    let mut best = 1.0f32;
+    for exponent in -2..=3 {
+        for m in [1.0f32, 2.0, 5.0] {
+            let len = m * 10f32.powi(exponent);
+            if ((len * px_per_m) - 120.0).abs() < ((best * px_per_m) - 120.0).abs() {
+                best = len;
+            }
         }
     }
+    best
+}
+
+/// [`render_classes`] with what a person needs to read it: each robot's start (an outlined
+/// square) and last position (a filled disc with a white rim) in its colour, and below the map
+/// a band with a scale bar and a legend (free, unknown, occupied, trajectory, start, robot,
+/// targets). The picture is at least [`MIN_PICTURE_WIDTH`] wide (the map on the left, white
+/// beside it).
+pub fn render_picture(
+    geometry: &GridGeometry,
+    classes: impl Fn(usize) -> CellClass,
+    tracks: &[Track],
+    scale: u32,
+) -> RgbImage {
+    let scale = scale.max(1);
+    let map = render_classes(geometry, classes, tracks, scale);
+    let width = map.width().max(MIN_PICTURE_WIDTH);
+    let height = map.height() + LEGEND_HEIGHT;
+    let mut img = RgbImage::from_pixel(width, height, FREE);
+    image::imageops::replace(&mut img, &map, 0, 0);
+    crate::bench::plot::register_font();
+    let to_px = pixel_of(geometry, scale);
+    let (mw, mh) = (map.width(), map.height());
+    let area = BitMapBackend::with_buffer(&mut img, (width, height)).into_drawing_area();
+    let mark = (3 * scale as i32).max(5);
+    for (k, track) in tracks.iter().enumerate() {
+        let colour = rgb(robot_colour(k));
+        if let Some(&start) = track.trajectory.first()
+            && let Some((x, y)) = near(to_px(start), mw, mh, mark)
+        {
+            let _ = area.draw(&Rectangle::new(
+                [(x - mark, y - mark), (x + mark, y + mark)],
+                colour.stroke_width(2),
+            ));
+        }
+        if let Some(&now) = track.trajectory.last()
+            && let Some(centre) = near(to_px(now), mw, mh, mark)
+        {
+            let _ = area.draw(&Circle::new(centre, mark + 1, WHITE.filled()));
+            let _ = area.draw(&Circle::new(centre, mark, colour.filled()));
+        }
+    }
+    // The band: a rule, the scale bar, the legend.
+    let top = mh as i32;
+    let _ = area.draw(&PathElement::new(
+        vec![(0, top), (width as i32, top)],
+        BLACK.stroke_width(1),
+    ));
+    let font = (crate::bench::plot::FAMILY, 13).into_font().color(&BLACK);
+    let px_per_m = scale as f32 / geometry.resolution_m;
+    let bar_m = scale_bar_m(px_per_m);
+    let bar_px = (bar_m * px_per_m).round() as i32;
+    let (x0, y_bar) = (10, top + 14);
+    let _ = area.draw(&Rectangle::new(
+        [(x0, y_bar - 2), (x0 + bar_px, y_bar + 2)],
+        BLACK.filled(),
+    ));
+    for x in [x0, x0 + bar_px] {
+        let _ = area.draw(&PathElement::new(
+            vec![(x, y_bar - 6), (x, y_bar + 6)],
+            BLACK.stroke_width(2),
+        ));
+    }
+    let label = if bar_m >= 1.0 {
+        format!("{bar_m} m")
+    } else {
+        format!("{} cm", (bar_m * 100.0).round())
+    };
+    let _ = area.draw(&Text::new(label, (x0, y_bar + 10), font.clone()));
+    // Legend: swatches, then marks in the first robot's colour.
+    let mut x = (x0 + bar_px + 30).max(120);
+    let y = top + 8;
+    let swatch = |x: i32, colour: RGBColor, name: &str| {
+        let _ = area.draw(&Rectangle::new([(x, y), (x + 12, y + 12)], colour.filled()));
+        let _ = area.draw(&Rectangle::new(
+            [(x, y), (x + 12, y + 12)],
+            BLACK.stroke_width(1),
+        ));
+        let _ = area.draw(&Text::new(name.to_string(), (x + 16, y), font.clone()));
+        x + 16 + 8 * name.len() as i32 + 12
+    };
+    x = swatch(x, rgb(FREE), "free");
+    x = swatch(x, rgb(UNKNOWN), "unknown");
+    let _ = swatch(x, rgb(OCCUPIED), "occupied");
+    let (mut x, y) = ((x0 + bar_px + 30).max(120), top + 27);
+    let c = rgb(robot_colour(0));
+    let robots = tracks.len();
+    let names: [(&str, u8); 4] = [
+        (
+            if robots > 1 {
+                "trajectories"
+            } else {
+                "trajectory"
+            },
+            0,
+        ),
+        ("start", 1),
+        ("robot", 2),
+        ("targets", 3),
+    ];
+    for (name, kind) in names {
+        let (cx, cy) = (x + 6, y + 6);
+        let _ = match kind {
+            0 => area.draw(&PathElement::new(
+                vec![(x, cy), (x + 12, cy)],
+                c.stroke_width(2),
+            )),
+            1 => area.draw(&Rectangle::new(
+                [(x, y), (x + 12, y + 12)],
+                c.stroke_width(2),
+            )),
+            2 => area.draw(&Circle::new((cx, cy), 6, c.filled())),
+            _ => area.draw(&Circle::new((cx, cy), 5, c.stroke_width(2))),
+        };
+        let _ = area.draw(&Text::new(name.to_string(), (x + 16, y), font.clone()));
+        x += 16 + 8 * name.len() as i32 + 12;
+    }
+    if robots > 1 {
+        let _ = area.draw(&Text::new(
+            format!("({robots} robots)"),
+            (x, y),
+            font.clone(),
+        ));
+    }
+    let _ = area.present();
+    drop(area);
     img
 }
 
@@ -102,40 +290,20 @@ pub fn render_grid<const N: usize>(
     render_classes(grid.geometry(), |i| grid.class(i), tracks, scale)
 }
 
+/// Renders a core occupancy grid with tracks and what a person needs to read it
+/// ([`render_picture`]).
+pub fn render_grid_picture<const N: usize>(
+    grid: &OccupancyGrid<N>,
+    tracks: &[Track],
+    scale: u32,
+) -> RgbImage {
+    render_picture(grid.geometry(), |i| grid.class(i), tracks, scale)
+}
+
 /// Writes an image as PNG; the error names the file.
 pub fn save_png(img: &RgbImage, path: &Path) -> Result<(), String> {
     img.save_with_format(path, image::ImageFormat::Png)
         .map_err(|e| format!("{}: cannot write PNG: {e}", path.display()))
-}
-
-fn put(img: &mut RgbImage, (x, y): (i64, i64), colour: Rgb<u8>) {
-    if x >= 0 && y >= 0 && (x as u32) < img.width() && (y as u32) < img.height() {
-        img.put_pixel(x as u32, y as u32, colour);
-    }
-}
-
-fn line(img: &mut RgbImage, a: (i64, i64), b: (i64, i64), colour: Rgb<u8>) {
-    let Some(((x0, y0), (x1, y1))) = clip(a, b, img.width() as i64, img.height() as i64) else {
-        return;
-    };
-    let (dx, dy) = ((x1 - x0).abs(), -(y1 - y0).abs());
-    let (sx, sy) = (if x0 < x1 { 1 } else { -1 }, if y0 < y1 { 1 } else { -1 });
-    let (mut x, mut y, mut err) = (x0, y0, dx + dy);
-    loop {
-        put(img, (x, y), colour);
-        if x == x1 && y == y1 {
-            break;
-        }
-        let e2 = 2 * err;
-        if e2 >= dy {
-            err += dy;
-            x += sx;
-        }
-        if e2 <= dx {
-            err += dx;
-            y += sy;
-        }
-    }
 }
 
 /// Clips segment `a`-`b` to the rectangle `[-1, w] x [-1, h]` (Liang & Barsky, "A new concept
@@ -168,34 +336,6 @@ fn clip(a: (i64, i64), b: (i64, i64), w: i64, h: i64) -> Option<((i64, i64), (i6
     }
     let at = |t: f64| ((x0 + t * dx).round() as i64, (y0 + t * dy).round() as i64);
     Some((at(t0), at(t1)))
-}
-
-fn ring(img: &mut RgbImage, (cx, cy): (i64, i64), radius: i64, colour: Rgb<u8>) {
-    // Midpoint circle, two pixels thick.
-    for r in [radius, radius - 1] {
-        let (mut x, mut y, mut d) = (r, 0i64, 1 - r);
-        while x >= y {
-            for (px, py) in [
-                (x, y),
-                (y, x),
-                (-y, x),
-                (-x, y),
-                (-x, -y),
-                (-y, -x),
-                (y, -x),
-                (x, -y),
-            ] {
-                put(img, (cx + px, cy + py), colour);
-            }
-            y += 1;
-            if d < 0 {
-                d += 2 * y + 1;
-            } else {
-                x -= 1;
-                d += 2 * (y - x) + 1;
-            }
-        }
-    }
 }
 
 #[cfg(test)]
@@ -278,5 +418,45 @@ mod tests {
         std::fs::remove_file(&p).unwrap();
         let e = save_png(&img, Path::new("/no/such/dir/x.png")).unwrap_err();
         assert!(e.starts_with("/no/such/dir/x.png: cannot write PNG"), "{e}");
+    }
+    #[test]
+    fn a_picture_has_marks_a_scale_bar_and_a_legend() {
+        let g = geometry(); // 20 x 10 cells of 0.5 m
+        let tracks = vec![Track {
+            trajectory: vec![Point2::new(0.25, 4.25), Point2::new(5.25, 4.25)],
+            targets: vec![Point2::new(7.0, 6.0)],
+        }];
+        let img = render_picture(&g, |_| CellClass::Free, &tracks, 4);
+        assert_eq!(
+            (img.width(), img.height()),
+            (MIN_PICTURE_WIDTH, 40 + LEGEND_HEIGHT)
+        );
+        let red = robot_colour(0);
+        // The robot's last position: a filled disc in its colour.
+        let (rx, ry) = (
+            (5.25 + 1.0) / 0.5 * 4.0,
+            40.0 - 1.0 - (4.25 - 2.0) / 0.5 * 4.0,
+        );
+        assert_eq!(*img.get_pixel(rx as u32, ry as u32), red);
+        assert_eq!(*img.get_pixel(rx as u32 + 2, ry as u32 + 2), red);
+        // The start: an outlined square (hollow) around the first position.
+        let (sx, sy) = ((0.25 + 1.0) / 0.5 * 4.0, ry);
+        assert_eq!(*img.get_pixel(sx as u32, sy as u32 - 12), red);
+        assert_ne!(*img.get_pixel(sx as u32 - 6, sy as u32 - 6), red);
+        // The scale bar: 8 px per metre, so 10 m (80 px, nearest to 120 of 5, 10, 20 m).
+        assert_eq!(scale_bar_m(8.0), 10.0);
+        assert_eq!(scale_bar_m(200.0), 0.5);
+        let bar_y = 40 + 14;
+        assert_eq!(*img.get_pixel(10 + 40, bar_y), OCCUPIED);
+        assert_eq!(*img.get_pixel(10 + 80 + 5, bar_y), FREE);
+        // The legend's grey swatch and some text in the band.
+        let band: Vec<&Rgb<u8>> = (40..img.height())
+            .flat_map(|y| (0..img.width()).map(move |x| (x, y)))
+            .map(|(x, y)| img.get_pixel(x, y))
+            .collect();
+        assert!(band.iter().any(|&&p| p == UNKNOWN));
+        assert!(band.iter().any(|&&p| p == red));
+        let dark = band.iter().filter(|p| p.0[0] < 100 && p.0[1] < 100).count();
+        assert!(dark > 300, "text and the bar: {dark} dark pixels");
     }
 }

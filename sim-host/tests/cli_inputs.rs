@@ -542,3 +542,25 @@ fn a_map_that_is_a_named_pipe_without_a_writer_is_refused() {
     assert_refused(&out, &[fifo.to_str().unwrap(), "named pipe"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Issue 22: options with a fixed set of values are typed by clap: `--help` lists them, and a
+/// near miss is one line naming the flag, the values and clap's suggestion.
+#[test]
+fn fixed_choices_are_listed_and_a_near_miss_gets_a_suggestion() {
+    let out = sim(&["mission", "--method", "xbao"], Duration::from_secs(20));
+    let err = assert_refused(&out, &["--method", "possible values", "xboa"]);
+    assert!(err.contains("tip: a similar value exists: 'xboa'"), "{err}");
+    let out = sim(&["mission", "--slip", "ice"], Duration::from_secs(20));
+    assert_refused(&out, &["--slip", "thesis", "realistic"]);
+    let out = sim(&["mission", "--help"], Duration::from_secs(20));
+    let help = String::from_utf8_lossy(&out.stdout);
+    for values in [
+        "[possible values: xboa, boa, mboa, aboa, saboa, ga, pso, gwo, abc, cmaes, nearest-frontier, frontier-utility]",
+        "[possible values: efficient, thesis]",
+        "[possible values: short, long]",
+        "[possible values: thesis, full, realistic, none]",
+        "[possible values: on, off]",
+    ] {
+        assert!(help.contains(values), "{values} not in:\n{help}");
+    }
+}

@@ -160,3 +160,107 @@ fn an_unwritable_recording_is_one_line_naming_the_option() {
     );
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
 }
+
+/// `papillon-sim mission --live 127.0.0.1:0`: a WebSocket client (tungstenite, not Papillon's
+/// server code) connects with the `foxglove.websocket.v1` subprotocol, is advertised the
+/// mission's channels, subscribes to the estimated pose and the map and receives them as
+/// Foxglove message data while the mission runs.
+#[test]
+fn a_live_mission_is_served_to_a_foxglove_websocket_client() {
+    use std::io::{BufRead, BufReader};
+    use tungstenite::Message;
+    use tungstenite::client::IntoClientRequest;
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_papillon-sim"))
+        .args([
+            "mission",
+            "--map",
+            "lab",
+            "--battery",
+            "25",
+            "--live",
+            "127.0.0.1:0",
+            "--live-speed",
+            "5",
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    stderr.read_line(&mut line).unwrap();
+    let url = line
+        .split_whitespace()
+        .find(|w| w.starts_with("ws://"))
+        .unwrap_or_else(|| panic!("no address in {line:?}"))
+        .to_string();
+    let mut request = url.as_str().into_client_request().unwrap();
+    request.headers_mut().insert(
+        "Sec-WebSocket-Protocol",
+        tungstenite::http::HeaderValue::from_static("foxglove.websocket.v1"),
+    );
+    let (mut ws, response) = tungstenite::connect(request).unwrap();
+    assert_eq!(
+        response.headers()["Sec-WebSocket-Protocol"],
+        "foxglove.websocket.v1"
+    );
+    if let tungstenite::stream::MaybeTlsStream::Plain(s) = ws.get_ref() {
+        s.set_read_timeout(Some(std::time::Duration::from_secs(30)))
+            .unwrap();
+    }
+    let mut channels: BTreeMap<String, (u64, String)> = BTreeMap::new();
+    let mut subscribed: BTreeMap<u64, String> = BTreeMap::new();
+    let mut received: BTreeMap<String, Vec<serde_json::Value>> = BTreeMap::new();
+    let mut first = true;
+    while received.get("/pose/estimated").is_none_or(|v| v.len() < 3)
+        || !received.contains_key("/map")
+    {
+        match ws.read().unwrap() {
+            Message::Text(text) => {
+                let m: serde_json::Value = serde_json::from_str(text.as_str()).unwrap();
+                if first {
+                    assert_eq!(m["op"], "serverInfo", "{m}");
+                    first = false;
+                    continue;
+                }
+                assert_eq!(m["op"], "advertise", "{m}");
+                for c in m["channels"].as_array().unwrap() {
+                    let topic = c["topic"].as_str().unwrap().to_string();
+                    let id = c["id"].as_u64().unwrap();
+                    assert_eq!(c["encoding"], "json");
+                    assert_eq!(c["schemaEncoding"], "jsonschema");
+                    channels.insert(topic.clone(), (id, c["schemaName"].to_string()));
+                    if topic == "/pose/estimated" || topic == "/map" {
+                        let sub = 100 + id;
+                        subscribed.insert(sub, topic);
+                        ws.send(Message::text(
+                            serde_json::json!({"op": "subscribe",
+                                "subscriptions": [{"id": sub, "channelId": id}]})
+                            .to_string(),
+                        ))
+                        .unwrap();
+                    }
+                }
+            }
+            Message::Binary(b) => {
+                assert_eq!(b[0], 1, "message data");
+                let sub = u32::from_le_bytes(b[1..5].try_into().unwrap()) as u64;
+                let topic = subscribed.get(&sub).expect("a subscribed id").clone();
+                let m: serde_json::Value = serde_json::from_slice(&b[13..]).unwrap();
+                received.entry(topic).or_default().push(m);
+            }
+            _ => {}
+        }
+    }
+    assert_eq!(channels["/map"].1, "\"foxglove.Grid\"");
+    assert_eq!(channels["/pose/estimated"].1, "\"foxglove.PoseInFrame\"");
+    let pose = &received["/pose/estimated"][0];
+    assert_eq!(pose["frame_id"], "map");
+    assert!(pose["pose"]["position"]["x"].is_number(), "{pose}");
+    assert!(received["/map"][0]["column_count"].as_u64().unwrap() > 0);
+    drop(ws);
+    // The mission goes on without its viewer and ends by itself.
+    let status = child.wait().unwrap();
+    assert!(status.success());
+}

@@ -559,6 +559,7 @@ impl Worker {
             let pose = match self.history.at(t_scan) {
                 PoseAt::Later => break,
                 PoseAt::TooOld => {
+                    tracing::debug!(t_scan, "scan older than the odometry history: dropped");
                     self.pending.pop_front();
                     self.scans_dropped += 1;
                     continue;
@@ -573,6 +574,7 @@ impl Worker {
                 .turn_rate_at(t_scan)
                 .is_some_and(|r| r > max_turn_rate);
             if turning {
+                tracing::debug!(t_scan, "robot turning: scan not mapped (safety only)");
                 mission.on_scan_unmapped(time(t_scan), &scan);
                 self.scans_unmapped += 1;
             } else {
@@ -636,6 +638,17 @@ impl Worker {
                 } => {
                     out.last_plan_s = Some(t_s);
                     let first = targets.first().copied().unwrap_or(Point2::new(0.0, 0.0));
+                    tracing::debug!(
+                        t_s,
+                        targets = targets.len(),
+                        target_x_m = first.x,
+                        target_y_m = first.y,
+                        path_length_m,
+                        predicted_gain_cells,
+                        evaluations,
+                        compute_ms,
+                        "decision"
+                    );
                     out.telemetry.push(TelemetryRecord {
                         t_s,
                         kind: "decision",
@@ -661,6 +674,7 @@ impl Worker {
                     }
                 }
                 MissionEvent::Replanned { cause } => {
+                    tracing::debug!(t_s, ?cause, "replanned");
                     out.last_plan_s = Some(t_s);
                     out.telemetry.push(TelemetryRecord {
                         t_s,
@@ -671,11 +685,14 @@ impl Worker {
                 MissionEvent::FaultCleared => {
                     out.last_plan_s = Some(t_s);
                 }
-                MissionEvent::Fault(reason) => out.telemetry.push(TelemetryRecord {
-                    t_s,
-                    kind: "mission_fault",
-                    fields: serde_json::json!({ "reason": format!("{reason:?}") }),
-                }),
+                MissionEvent::Fault(reason) => {
+                    tracing::debug!(t_s, ?reason, "mission fault");
+                    out.telemetry.push(TelemetryRecord {
+                        t_s,
+                        kind: "mission_fault",
+                        fields: serde_json::json!({ "reason": format!("{reason:?}") }),
+                    })
+                }
                 MissionEvent::Done(reason) => {
                     out.done = Some(done_name(*reason));
                     out.telemetry.push(TelemetryRecord {

@@ -15,19 +15,17 @@
 //! - `telemetry.jsonl`: one JSON object per line ([`Telemetry`]);
 //! - `map.png`: the final map, written at exit.
 //!
-//! **Integration point:** the map is written through [`MapImage`], built from the core grid by
-//! [`MapImage::from_grid`]; when `papillon::mapfile` lands on main, [`StateStore::save`]'s map
-//! write (`write_map`) becomes one call to it.
+//! The map files are read and written by [`crate::mapfile`] (the one map reader and writer);
+//! [`MapImage`] is the mission's copy of the map between saves.
 
 use std::fs::{self, File};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use crate::files::{
-    Existing, MAP_MAX_BYTES, TEXT_MAX_BYTES, create_temporary, open_log, read_limited,
-    read_limited_to_string,
-};
-use crate::grid::{CellClass, OccupancyGrid};
+use crate::files::{Existing, MAP_MAX_BYTES, create_temporary, open_log, read_limited};
+use crate::geometry::Point2;
+use crate::grid::{CellClass, GridGeometry, OccupancyGrid};
+use crate::mapfile;
 
 /// Writes `bytes` to `path` atomically (temporary file, fsync, rename, fsync of the directory).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
@@ -155,6 +153,16 @@ pub const PGM_FREE: u8 = 254;
 /// PGM value of an unknown cell.
 pub const PGM_UNKNOWN: u8 = 205;
 
+/// The class of a pixel of a [`MapImage`] (the values [`MapImage::from_grid`] writes; others
+/// as the nearest of them).
+fn pixel_class(p: u8) -> CellClass {
+    match p {
+        PGM_OCCUPIED..=50 => CellClass::Occupied,
+        200..=210 => CellClass::Unknown,
+        _ => CellClass::Free,
+    }
+}
+
 /// A map as an image: one byte per cell, rows from north to south.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapImage {
@@ -227,86 +235,88 @@ impl MapImage {
         for (i, &p) in self.pixels.iter().enumerate() {
             let (image_row, col) = (i / self.width, i % self.width);
             let row = self.height - 1 - image_row;
-            let class = match p {
-                PGM_OCCUPIED..=50 => CellClass::Occupied,
-                200..=210 => CellClass::Unknown,
-                _ => CellClass::Free,
-            };
-            grid.set_class(row * g.width + col, class, &mut ());
+            grid.set_class(row * g.width + col, pixel_class(p), &mut ());
         }
         Ok(())
     }
 
-    /// Binary PGM (P5) bytes.
+    /// This map in the map files' terms ([`crate::mapfile`]); an error when its pixels do
+    /// not make its grid.
+    pub fn to_map_file(&self) -> Result<mapfile::MapImage, PersistError> {
+        let geometry = GridGeometry::new(
+            self.width,
+            self.height,
+            self.resolution_m,
+            Point2::new(self.origin_x_m, self.origin_y_m),
+        )
+        .map_err(|e| PersistError::Corrupt(format!("map: {e}")))?;
+        if self.pixels.len() != geometry.cell_count() {
+            return Err(PersistError::Corrupt(
+                "map size does not match its pixels".into(),
+            ));
+        }
+        let mut cells = vec![CellClass::Unknown; geometry.cell_count()];
+        for (i, &p) in self.pixels.iter().enumerate() {
+            let (image_row, col) = (i / self.width, i % self.width);
+            let row = self.height - 1 - image_row;
+            cells[row * self.width + col] = pixel_class(p);
+        }
+        Ok(mapfile::MapImage { geometry, cells })
+    }
+
+    /// A map read from map files ([`crate::mapfile`]).
+    pub fn from_map_file(map: &mapfile::MapImage) -> Self {
+        let g = map.geometry;
+        let mut pixels = Vec::with_capacity(g.cell_count());
+        for row in (0..g.height).rev() {
+            for col in 0..g.width {
+                pixels.push(match map.cells[row * g.width + col] {
+                    CellClass::Occupied => PGM_OCCUPIED,
+                    CellClass::Free => PGM_FREE,
+                    CellClass::Unknown => PGM_UNKNOWN,
+                });
+            }
+        }
+        Self {
+            width: g.width,
+            height: g.height,
+            resolution_m: g.resolution_m,
+            origin_x_m: g.origin.x,
+            origin_y_m: g.origin.y,
+            pixels,
+        }
+    }
+
+    /// Binary PGM (P5) bytes, as [`mapfile::encode_pgm`] writes them.
     pub fn to_pgm(&self) -> Vec<u8> {
         let mut out = format!("P5\n{} {}\n255\n", self.width, self.height).into_bytes();
-        out.extend_from_slice(&self.pixels);
+        out.extend(self.pixels.iter().map(|&p| match pixel_class(p) {
+            CellClass::Occupied => PGM_OCCUPIED,
+            CellClass::Free => PGM_FREE,
+            CellClass::Unknown => PGM_UNKNOWN,
+        }));
         out
     }
 
-    /// The map_server YAML beside `image` (a file name in the same directory).
+    /// The map_server YAML beside `image` (a file name in the same directory), as
+    /// [`mapfile::yaml_text`] writes it.
     pub fn to_yaml(&self, image: &str) -> String {
-        format!(
-            "image: {image}\nresolution: {}\norigin: [{}, {}, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
-            self.resolution_m, self.origin_x_m, self.origin_y_m
-        )
+        let g = GridGeometry {
+            width: self.width,
+            height: self.height,
+            resolution_m: self.resolution_m,
+            origin: Point2::new(self.origin_x_m, self.origin_y_m),
+        };
+        mapfile::yaml_text(&g, image)
     }
 
-    /// Parses a binary PGM written by [`MapImage::to_pgm`] plus the YAML's resolution and
-    /// origin.
+    /// Parses an image (PGM or PNG) and its YAML with the map files' reader
+    /// ([`mapfile::parse_map`]: comments, thresholds, negate, flow or block style); errors name
+    /// `map.yaml` or `map.pgm`.
     pub fn from_pgm_yaml(pgm: &[u8], yaml: &str) -> Result<Self, PersistError> {
-        let bad = |what: &str| PersistError::Corrupt(format!("map.pgm: {what}"));
-        let mut fields = Vec::new();
-        let mut pos = 0;
-        while fields.len() < 4 {
-            while pos < pgm.len() && pgm[pos].is_ascii_whitespace() {
-                pos += 1;
-            }
-            let start = pos;
-            while pos < pgm.len() && !pgm[pos].is_ascii_whitespace() {
-                pos += 1;
-            }
-            if start == pos {
-                return Err(bad("truncated header"));
-            }
-            fields.push(String::from_utf8_lossy(&pgm[start..pos]).into_owned());
-        }
-        pos += 1; // the single whitespace byte after maxval
-        if fields[0] != "P5" || fields[3] != "255" {
-            return Err(bad("expected a binary P5 image with maxval 255"));
-        }
-        let width: usize = fields[1].parse().map_err(|_| bad("bad width"))?;
-        let height: usize = fields[2].parse().map_err(|_| bad("bad height"))?;
-        let pixels = pgm.get(pos..).unwrap_or_default();
-        if pixels.len() != width.saturating_mul(height) {
-            return Err(bad("pixel count does not match width x height"));
-        }
-        let yaml_bad = |what: &str| PersistError::Corrupt(format!("map.yaml: {what}"));
-        let value = |key: &str| {
-            yaml.lines()
-                .find_map(|l| l.strip_prefix(key).map(str::trim))
-                .ok_or_else(|| yaml_bad(&format!("missing {key}")))
-        };
-        let resolution_m: f32 = value("resolution:")?
-            .parse()
-            .map_err(|_| yaml_bad("bad resolution"))?;
-        let origin = value("origin:")?;
-        let nums: Vec<f32> = origin
-            .trim_matches(|c| c == '[' || c == ']')
-            .split(',')
-            .filter_map(|s| s.trim().parse().ok())
-            .collect();
-        if nums.len() != 3 {
-            return Err(yaml_bad("origin must be [x, y, yaw]"));
-        }
-        Ok(Self {
-            width,
-            height,
-            resolution_m,
-            origin_x_m: nums[0],
-            origin_y_m: nums[1],
-            pixels: pixels.to_vec(),
-        })
+        let map = mapfile::parse_map(Path::new("map.yaml"), yaml, |_| Ok(pgm.to_vec()))
+            .map_err(|e| PersistError::Corrupt(e.to_string()))?;
+        Ok(Self::from_map_file(&map))
     }
 
     /// Writes the map as a PNG (grey levels as in the PGM).
@@ -450,20 +460,15 @@ impl StateStore {
                 state_path.display()
             )));
         }
-        let map = match (
-            read_limited(&self.dir.join("map.pgm"), MAP_MAX_BYTES),
-            read_limited_to_string(&self.dir.join("map.yaml"), TEXT_MAX_BYTES),
-        ) {
-            (Ok(pgm), Ok(yaml)) => Some(MapImage::from_pgm_yaml(&pgm, &yaml).map_err(|e| {
-                match e {
-                    // The map's own errors name `map.pgm` or `map.yaml`; say where they are.
-                    PersistError::Corrupt(what) => {
-                        PersistError::Corrupt(format!("{}/{what}", self.dir.display()))
-                    }
-                    other => other,
-                }
-            })?),
-            _ => None,
+        // The map through the map files' reader: `map.yaml` and the image it names (a map
+        // edited by hand, or saved as PNG, reads back too); errors name the file.
+        let yaml_path = self.dir.join("map.yaml");
+        let map = if yaml_path.exists() {
+            let map =
+                mapfile::read_map(&yaml_path).map_err(|e| PersistError::Corrupt(e.to_string()))?;
+            Some(MapImage::from_map_file(&map))
+        } else {
+            None
         };
         Ok(Some((state, map)))
     }

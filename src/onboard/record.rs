@@ -14,7 +14,10 @@
 //!   summary and footer. A recording cut short (`kill -9`, a power cut) keeps every complete
 //!   chunk: MCAP readers read it up to there.
 //!
-//! A write error stops the recording (logged once), never the mission.
+//! With `papillon run --live ADDR` the same messages are served live ([`crate::live`]).
+//!
+//! A write error stops the recording (logged once), never the mission (and with it the live
+//! view).
 
 use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -59,14 +62,23 @@ impl std::fmt::Debug for MissionRecording {
 
 impl MissionRecording {
     /// Creates `path`; mission time `mission_time_s` is now (so the file's times are the wall
-    /// clock). The error names the file.
-    pub fn create(path: &Path, mission_time_s: f64) -> Result<Self, String> {
+    /// clock). With `live`, every message is also served to the live view. The error names the
+    /// file.
+    pub fn create(
+        path: &Path,
+        mission_time_s: f64,
+        live: Option<crate::live::LiveServer>,
+    ) -> Result<Self, String> {
         let now_ns = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .map_or(0, |d| d.as_nanos() as u64);
         let base_ns = now_ns.saturating_sub((mission_time_s.max(0.0) * 1e9) as u64);
+        let mut recorder = Recorder::create(path, 1, base_ns)?;
+        if let Some(live) = live {
+            recorder = recorder.with_live(live);
+        }
         Ok(Self {
-            recorder: Some(Recorder::create(path, 1, base_ns)?),
+            recorder: Some(recorder),
             path: path.to_path_buf(),
             started: false,
         })

@@ -50,13 +50,16 @@ pub type Saved = (MissionState, Option<MapImage>);
 /// [`mission_driver`], the mission recorded into `log_dir` ([`super::record`]: `mission.mcap`,
 /// or the next free `mission-N.mcap` when resuming): what the binary passes to [`run_with`].
 /// A recording that cannot be created refuses the run, naming the file.
+/// With `live` (`papillon run --live`, bound before anything is connected), the same messages
+/// are also served live to Foxglove ([`crate::live`]).
 pub fn recording_mission_driver(
     log_dir: PathBuf,
+    live: Option<crate::live::LiveServer>,
 ) -> impl FnOnce(&BoardConfig, Option<&Saved>) -> Result<Box<dyn MissionDriver>, String> {
     move |board, resume| {
         let path = super::record::recording_path(&log_dir, resume.is_some());
         let mission_time_s = resume.map_or(0.0, |(s, _)| s.mission_time_s);
-        let recording = super::record::MissionRecording::create(&path, mission_time_s)?;
+        let recording = super::record::MissionRecording::create(&path, mission_time_s, live)?;
         let mission = super::mission::CoreMission::recorded(board, resume, Some(recording))?;
         Ok(Box::new(mission))
     }
@@ -580,11 +583,13 @@ pub async fn run_with(
         if let Some(map) = map {
             map.write_png(&options.log_dir.join("map.png"))?;
         }
-        outcome
+        // The session's last figures are recorded at the mission time it ended.
+        (outcome, now_s(epoch))
     };
+    let (outcome, end_s) = outcome;
     let stats = client.stop_and_close().await;
     if let Ok(stats) = &stats {
-        telemetry.link_stats(0.0, stats)?;
+        telemetry.link_stats(end_s, stats)?;
         tracing::info!(%stats.codec, "robot stopped, motors disabled, session closed");
     }
     telemetry.flush()?;

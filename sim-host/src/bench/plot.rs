@@ -24,15 +24,15 @@ use super::record::RunRecord;
 use super::summary::GroupKey;
 
 /// The embedded font (Bitstream Vera licence, see `assets/fonts/LICENSE-DejaVu.txt`).
-static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
+pub(crate) static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
 /// The family name plots ask for.
-const FAMILY: &str = "sans-serif";
+pub(crate) const FAMILY: &str = "sans-serif";
 /// Picture size \[px\].
 const SIZE: (u32, u32) = (960, 640);
 /// Points of the common steps grid the coverage curves are resampled on.
 const GRID_POINTS: usize = 200;
 
-fn register_font() {
+pub(crate) fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The font is valid (checked by the tests); a failure only loses the text.

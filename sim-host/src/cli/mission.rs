@@ -15,8 +15,10 @@ use crate::scenario::{
     ScenarioSpec, Setup, Slip, Strategy, objective_from_name, selector_from_name,
 };
 
-/// Arguments of `papillon-sim mission` (kept as text and checked by [`setup_from_args`], so
-/// every problem is reported on one line naming the option).
+/// Arguments of `papillon-sim mission`: the options with a fixed set of values are checked by
+/// clap (their values listed in `--help`, a near miss answered with clap's suggestion); the
+/// others are kept as text and checked by [`setup_from_args`], so every problem is reported on
+/// one line naming the option.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// World: house, empty, factory, lab, or a map file (.csv, .png, .pgm, .map, .yaml).
@@ -25,13 +27,15 @@ pub struct Args {
     /// Number of robots sharing the map (1 to 8).
     #[arg(long, default_value = "1", allow_negative_numbers = true)]
     pub robots: String,
-    /// Target selector: xboa boa mboa aboa saboa ga pso gwo abc cmaes nearest-frontier
-    /// frontier-utility.
-    #[arg(long, default_value = "xboa")]
+    /// Target selector: an optimizer on the objective, or a frontier rule.
+    #[arg(long, default_value = "xboa", value_parser = [
+        "xboa", "boa", "mboa", "aboa", "saboa", "ga", "pso", "gwo", "abc", "cmaes",
+        "nearest-frontier", "frontier-utility",
+    ])]
     pub method: String,
     /// What the optimizers maximise: efficient (reachable frontier viewpoints, gain
     /// discounted by energy; the default) or thesis (the thesis's objective, for reproduction).
-    #[arg(long, default_value = "efficient")]
+    #[arg(long, default_value = "efficient", value_parser = ["efficient", "thesis"])]
     pub objective: String,
     /// Population of the optimizer.
     #[arg(long, default_value = "5", allow_negative_numbers = true)]
@@ -40,7 +44,7 @@ pub struct Args {
     #[arg(long, default_value = "30", allow_negative_numbers = true)]
     pub gens: String,
     /// Strategy: short (one target per decision) or long (several, see --targets).
-    #[arg(long, default_value = "short")]
+    #[arg(long, default_value = "short", value_parser = ["short", "long"])]
     pub strategy: String,
     /// Targets per decision, k (short: 1; long: default 3, at most 8).
     #[arg(long, allow_negative_numbers = true)]
@@ -60,10 +64,10 @@ pub struct Args {
     /// what the thesis saw), full (also heading and distance random walks, see
     /// docs/simulator.md), realistic (also per-robot wheel-diameter and wheelbase errors and
     /// fast-turn slip, see sim-host/src/odometry_error.rs) or none.
-    #[arg(long, default_value = "thesis")]
+    #[arg(long, default_value = "thesis", value_parser = ["thesis", "full", "realistic", "none"])]
     pub slip: String,
     /// Scan-to-map matching before each scan is integrated: on or off.
-    #[arg(long, default_value = "off")]
+    #[arg(long, default_value = "off", value_parser = ["on", "off"])]
     pub localize: String,
     /// Range noise of the simulated laser, as a fraction of the range (standard deviation of
     /// Gaussian noise): default the thesis's 0.05; a SICK LMS1xx is nearer 0.003 (about 12 mm
@@ -86,6 +90,24 @@ pub struct Args {
     /// decisions; see docs/simulator.md).
     #[arg(long)]
     pub mcap: Option<PathBuf>,
+    /// Serve the mission live to Foxglove on this address (host:port, e.g. 127.0.0.1:8765):
+    /// Foxglove → Open connection → Foxglove WebSocket → ws://HOST:PORT. The run is then paced
+    /// to --live-speed. Off by default.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub live: Option<String>,
+    /// With --live: simulated seconds per wall-clock second (more than 0, at most 1000).
+    #[arg(long, default_value = "1", requires = "live", value_parser = live_speed)]
+    pub live_speed: f64,
+}
+
+/// `--live-speed`: a number above 0 and at most 1000.
+fn live_speed(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) if x > 0.0 && x <= 1000.0 => Ok(x),
+        _ => Err(format!(
+            "expected simulated seconds per second, above 0 and at most 1000, got '{text}'"
+        )),
+    }
 }
 
 fn number<T: std::str::FromStr>(option: &str, text: &str, what: &str) -> Result<T, String> {
@@ -181,6 +203,13 @@ pub fn run(args: Args) -> ExitCode {
         args.frames.as_deref(),
         args.png.as_deref(),
         args.mcap.as_deref(),
+        args.live
+            .as_ref()
+            .map(|addr| crate::record::LiveOptions {
+                addr: addr.clone(),
+                speed: args.live_speed,
+            })
+            .as_ref(),
     ) {
         Ok(report) => {
             let text = if args.json {
@@ -231,6 +260,8 @@ mod tests {
             png: None,
             frames: None,
             mcap: None,
+            live: None,
+            live_speed: 1.0,
         }
     }
 
