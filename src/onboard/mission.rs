@@ -829,6 +829,10 @@ fn done_name(reason: DoneReason) -> &'static str {
         DoneReason::CoverageReached => "CoverageReached",
         DoneReason::BatteryExhausted => "BatteryExhausted",
         DoneReason::NothingReachable => "NothingReachable",
+        DoneReason::VoltageLow => "VoltageLow",
+        // The onboard program ends a mission itself only when decisions stop adding to the
+        // map ([`Stall`]).
+        DoneReason::Requested => END_NOTHING_OBSERVABLE,
     }
 }
 
