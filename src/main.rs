@@ -82,6 +82,10 @@ struct RunArgs {
     /// files are first moved to `<log-dir>/previous-N/`.
     #[arg(long, conflicts_with = "resume")]
     fresh: bool,
+    /// When the mission ends (explored, energy budget or battery voltage low), drive back to
+    /// the start position first (the board's $.mission.return_to_start).
+    #[arg(long)]
+    return_to_start: bool,
 }
 
 /// Exit code for a missing or unreadable file.
@@ -298,6 +302,9 @@ fn run(args: RunArgs) -> ExitCode {
             Some(t) => board.link.tcp = Some(t),
             None => return too_long("--tcp"),
         }
+    }
+    if args.return_to_start {
+        board.mission.return_to_start = Some(true);
     }
     if let Some(laser) = &args.laser {
         match Address::new(laser) {

@@ -182,6 +182,10 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     s.max_input_age = core::time::Duration::from_secs_f32(board.safety.stale_timeout_s);
     s.min_clearance_m = board.safety.obstacle_stop_m;
     s.backoff_distance_m = board.safety.back_off_m;
+    let v = &mut config.voltage;
+    v.low_v = m.low_voltage_v.unwrap_or(v.low_v);
+    v.hold_s = m.low_voltage_hold_s.unwrap_or(v.hold_s);
+    config.return_to_start = m.return_to_start.unwrap_or(false);
     config.validate().map_err(|e| format!("$.mission: {e}"))?;
     Ok(config)
 }
@@ -512,6 +516,27 @@ impl Worker {
                 }
                 self.integrate_pending(flags)?;
                 if let Some(m) = &mut self.mission {
+                    let volts = battery_v(&status);
+                    if m.on_battery_voltage(time(t_s), volts) {
+                        let v = m.config().voltage;
+                        tracing::warn!(
+                            battery_v = volts,
+                            low_v = v.low_v,
+                            hold_s = v.hold_s,
+                            return_to_start = m.config().return_to_start,
+                            "battery voltage low: the mission ends"
+                        );
+                        lock(&self.out).telemetry.push(TelemetryRecord {
+                            t_s,
+                            kind: "battery_low",
+                            fields: serde_json::json!({
+                                "battery_v": volts,
+                                "low_v": v.low_v,
+                                "hold_s": v.hold_s,
+                                "return_to_start": m.config().return_to_start,
+                            }),
+                        });
+                    }
                     m.on_odometry(time(t_s), pose_odom, flags);
                     if let Some(rec) = &mut self.recording {
                         rec.status(t_s, pose_odom, m.pose_map(), m.path(), &self.map.grid);
@@ -676,6 +701,19 @@ impl Worker {
                     kind: "mission_fault",
                     fields: serde_json::json!({ "reason": format!("{reason:?}") }),
                 }),
+                MissionEvent::Returning(reason) => {
+                    out.last_plan_s = Some(t_s);
+                    out.telemetry.push(TelemetryRecord {
+                        t_s,
+                        kind: "returning",
+                        fields: serde_json::json!({
+                            "reason": done_name(*reason),
+                            "start_distance_m": start_distance_m(mission),
+                            "battery_v": mission.voltage().last_v(),
+                            "battery_steps": mission.battery_steps(),
+                        }),
+                    });
+                }
                 MissionEvent::Done(reason) => {
                     out.done = Some(done_name(*reason));
                     out.telemetry.push(TelemetryRecord {
@@ -683,6 +721,8 @@ impl Worker {
                         kind: "done",
                         fields: serde_json::json!({
                             "reason": done_name(*reason),
+                            "start_distance_m": start_distance_m(mission),
+                            "battery_v": mission.voltage().last_v(),
                             "battery_steps": mission.battery_steps(),
                             "decisions": stats.decisions,
                             "replans": stats.replans,
@@ -698,10 +738,15 @@ impl Worker {
             .events
             .iter()
             .any(|e| matches!(e, MissionEvent::Decided { .. }));
-        if decided
+        let stalled = decided
             && out.done.is_none()
-            && self.stall.on_decision(known_cells(&self.map), stats.steps)
-        {
+            && mission.returning().is_none()
+            && self.stall.on_decision(known_cells(&self.map), stats.steps);
+        if stalled && self.config.return_to_start {
+            // The end of an explored building, by the way back to the start: the core turns
+            // back at its next step (reported `NothingObservable` when it is there).
+            mission.end(DoneReason::Requested);
+        } else if stalled {
             out.done = Some(END_NOTHING_OBSERVABLE);
             out.telemetry.push(TelemetryRecord {
                 t_s,
@@ -788,6 +833,8 @@ impl Worker {
             kind: "mission",
             fields: serde_json::json!({
                 "state": format!("{:?}", mission.state()),
+                "returning": mission.returning().is_some(),
+                "battery_v": mission.voltage().last_v(),
                 "battery_steps": mission.battery_steps(),
                 "decisions": stats.decisions,
                 "failed_decisions": stats.failed_decisions,
@@ -823,6 +870,23 @@ fn known_cells(map: &Map) -> usize {
 
 /// The `done` reason of an onboard end: decisions stopped adding to the map.
 pub const END_NOTHING_OBSERVABLE: &str = "NothingObservable";
+
+/// The battery voltage a status packet reports \[V\] (the 16-bit BATTERYX10 when the firmware
+/// sends it, else the 8-bit BATTERY; both in 0.1 V).
+fn battery_v(status: &StatusPacket) -> f32 {
+    f32::from(
+        status
+            .extras
+            .battery_dv_x10
+            .unwrap_or(u16::from(status.battery_dv)),
+    ) * 0.1
+}
+
+/// How far the mission's pose estimate is from its start \[m\].
+fn start_distance_m(mission: &Mission<GRID_CELLS>) -> f32 {
+    let start = mission.start_pose_map().position();
+    mission.pose_map().position().distance(start)
+}
 
 fn done_name(reason: DoneReason) -> &'static str {
     match reason {

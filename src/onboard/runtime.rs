@@ -754,6 +754,15 @@ impl Progress {
                 reason = %record.fields["reason"].as_str().unwrap_or("?"),
                 "mission done"
             ),
+            "returning" => tracing::info!(
+                t_s = format_args!("{:.0}", record.t_s),
+                reason = %record.fields["reason"].as_str().unwrap_or("?"),
+                start_distance_m = format_args!(
+                    "{:.1}",
+                    record.fields["start_distance_m"].as_f64().unwrap_or(0.0)
+                ),
+                "mission ended: returning to the start"
+            ),
             _ => {}
         }
     }
