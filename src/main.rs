@@ -55,6 +55,17 @@ struct ProbeArgs {
     /// Drive a 0.5 m square at 100 mm/s and report the odometry (keep clear of the robot).
     #[arg(long)]
     drive: bool,
+    /// Serial speed [baud]; by default 9600, 19200, 38400, 57600 and 115200 are tried in turn
+    /// until the robot answers.
+    #[arg(long, value_parser = ["9600", "19200", "38400", "57600", "115200"])]
+    baud: Option<String>,
+    /// Also check the laser with one scan (beam count and ranges): host:port of an LMS1xx, or
+    /// the serial device of an LMS200 (with --board naming an LMS200).
+    #[arg(long)]
+    laser: Option<String>,
+    /// Board file describing the laser for --laser (default: a P3-DX's LMS1xx, 541 beams).
+    #[arg(long, requires = "laser")]
+    board: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -255,10 +266,33 @@ fn probe(args: ProbeArgs) -> ExitCode {
         (None, Some(port)) => format!("--port {port}"),
         (None, None) => "--port or --tcp".to_string(),
     };
+    let laser = match &args.laser {
+        None => None,
+        Some(address) => {
+            let mut board = match &args.board {
+                Some(path) => match load_board(path) {
+                    Ok(b) => b,
+                    Err(code) => return code,
+                },
+                None => BoardConfig::default(),
+            };
+            let Some(a) = Address::new(address) else {
+                return too_long("--laser");
+            };
+            if board.laser_model() == Some(papillon::config::LaserModel::Lms200) {
+                board.laser.port = Some(a);
+            } else {
+                board.laser.address = Some(a);
+            }
+            Some(board)
+        }
+    };
     let options = ProbeOptions {
         port: args.target.port.unwrap_or_default(),
         tcp: args.target.tcp,
         drive: args.drive,
+        baud: args.baud.and_then(|b| b.parse().ok()),
+        laser,
     };
     let result = runtime().block_on(async {
         let mut out = std::io::stdout();
