@@ -832,7 +832,7 @@ pub const PROBE_SYNC_TIMEOUT: Duration = Duration::from_millis(400);
 /// Opens the link and runs the ARCOS handshake: at `options.baud`, or at each of
 /// [`PROBE_BAUD_RATES`] in turn until the robot answers (over TCP, once). Writes one line per
 /// speed tried.
-async fn probe_connect(
+pub(super) async fn probe_connect(
     options: &ProbeOptions,
     out: &mut impl io::Write,
 ) -> Result<ArcosClient, RuntimeError> {
@@ -1050,7 +1050,7 @@ fn pose_text(p: crate::geometry::Pose2) -> String {
     )
 }
 
-async fn next_status(
+pub(super) async fn next_status(
     client: &mut ArcosClient,
     wait: Duration,
 ) -> Result<Option<StatusPacket>, RuntimeError> {
