@@ -86,6 +86,10 @@ pub struct Args {
     /// decisions; see docs/simulator.md).
     #[arg(long)]
     pub mcap: Option<PathBuf>,
+    /// When a robot's mission ends, drive it back to its start position first (the core's
+    /// return to start, as `papillon run --return-to-start`).
+    #[arg(long)]
+    pub return_to_start: bool,
 }
 
 fn number<T: std::str::FromStr>(option: &str, text: &str, what: &str) -> Result<T, String> {
@@ -169,7 +173,10 @@ pub fn setup_from_args(args: &Args) -> Result<Setup, String> {
 /// Runs the command.
 pub fn run(args: Args) -> ExitCode {
     let setup = match setup_from_args(&args) {
-        Ok(s) => s,
+        Ok(mut s) => {
+            s.run.mission.return_to_start = args.return_to_start;
+            s
+        }
         Err(e) => {
             eprintln!("papillon-sim mission: {e}");
             return ExitCode::from(2);
@@ -230,6 +237,7 @@ mod tests {
             png: None,
             frames: None,
             mcap: None,
+            return_to_start: false,
         }
     }
 
