@@ -37,6 +37,9 @@ fn calibrate_recovers_the_wheel_diameter_ratio_and_the_wheelbase_error_within_20
             &errors,
             "--truth-log",
             truth.to_str().unwrap(),
+            // In the middle of the 24 m empty world: room for both squares.
+            "--start",
+            "12,12,0",
         ],
     );
     // A 2 m square at 400 mm/s keeps the test short; the emulated wheelbase is 357 mm.

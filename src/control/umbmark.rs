@@ -92,9 +92,9 @@ pub fn estimate(
         return Err(UmbmarkError::MissingDirection);
     }
     let finite = |e: &ReturnError| e.x_m.is_finite() && e.y_m.is_finite();
-    if !(side_m.is_finite() && side_m > 0.0 && wheelbase_m.is_finite() && wheelbase_m > 0.0)
-        || !cw.iter().chain(ccw).all(finite)
-    {
+    let lengths_ok =
+        side_m.is_finite() && side_m > 0.0 && wheelbase_m.is_finite() && wheelbase_m > 0.0;
+    if !(lengths_ok && cw.iter().chain(ccw).all(finite)) {
         return Err(UmbmarkError::BadInput);
     }
     let centre = |runs: &[ReturnError]| {

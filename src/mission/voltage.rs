@@ -140,16 +140,10 @@ mod tests {
         let c = VoltageConfig::default();
         let mut w = VoltageWatch::new();
         // Hovering just around the threshold (below, then 0.1 V above): the spell goes on.
-        let mut s = 0.0;
         let mut tripped = false;
-        while s < 6.0 {
-            let v = if (s * 10.0) as u32 % 2 == 0 {
-                11.45
-            } else {
-                11.6
-            };
-            tripped |= w.update(&c, t(s), v);
-            s += 0.1;
+        for i in 0..60u32 {
+            let v = if i.is_multiple_of(2) { 11.45 } else { 11.6 };
+            tripped |= w.update(&c, t(i as f32 * 0.1), v);
         }
         assert!(tripped);
         // Back above low + hysteresis between short dips: never.

@@ -76,6 +76,23 @@ pub struct Args {
     /// wheelbase, e.g. `1.02,0.97`; each from 0.8 to 1.2. Default: perfect wheels.
     #[arg(long, value_parser = wheel_errors)]
     pub wheel_errors: Option<(f32, f32)>,
+    /// Robot 0's start pose `X,Y,THETA` [m, m, rad] instead of the world's (1 m from its
+    /// south-west corner, heading east), e.g. `12,12,0`.
+    #[arg(long, value_parser = start_pose, allow_negative_numbers = true)]
+    pub start: Option<papillon::geometry::Pose2>,
+}
+
+/// `X,Y,THETA`, finite numbers.
+fn start_pose(s: &str) -> Result<papillon::geometry::Pose2, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<Vec<f32>>>()
+        .ok_or_else(|| format!("expected X,Y,THETA as numbers (e.g. 12,12,0), found {s:?}"))?;
+    match v[..] {
+        [x, y, theta] => Ok(papillon::geometry::Pose2::new(x, y, theta)),
+        _ => Err(format!("expected X,Y,THETA (three numbers), found {s:?}")),
+    }
 }
 
 /// `ED,EB`, each a ratio from 0.8 to 1.2.
@@ -157,6 +174,7 @@ impl From<Args> for ServeConfig {
             laser_noise_fraction: a.laser_noise,
             baud: a.baud.and_then(|b| b.parse().ok()),
             wheel_errors: a.wheel_errors,
+            start: a.start,
         }
     }
 }

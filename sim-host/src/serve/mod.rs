@@ -104,6 +104,8 @@ pub struct ServeConfig {
     /// [`crate::odometry_error`]): right over left wheel diameter, effective over nominal
     /// wheelbase. `None`: perfect wheels.
     pub wheel_errors: Option<(f32, f32)>,
+    /// Robot 0's start pose \[m, m, rad\] instead of the world's.
+    pub start: Option<papillon::geometry::Pose2>,
 }
 
 /// An endpoint the server opened, for the announcement line.
@@ -208,8 +210,14 @@ impl Server {
     /// Loads the world, places the robots, opens every endpoint and starts the threads; the
     /// error is one line.
     pub fn start(config: &ServeConfig) -> Result<Self, String> {
-        let world = World::load(&config.map, MAP_RESOLUTION_M)
+        let mut world = World::load(&config.map, MAP_RESOLUTION_M)
             .map_err(|e| format!("cannot load map {:?}: {e}", config.map))?;
+        if let Some(start) = config.start {
+            world.set_start(start);
+            if let Some(why) = world.start_outside() {
+                return Err(format!("--start: {why}"));
+            }
+        }
         let n = config.robots;
         // The thesis's slip (a slide of about 1.5 cm at the end of each move), as the mission
         // runner uses: the core has no scan matching, so the full default slip smears its map.
