@@ -146,6 +146,10 @@ pub struct RobotConfig {
     /// `Eb` (Borenstein & Feng 1996; `papillon calibrate` measures it); absent: 1.
     #[serde(default)]
     pub wheelbase_ratio: Option<f32>,
+    /// The nominal wheelbase `papillon calibrate` computed the corrections with \[m\];
+    /// absent: 0.33.
+    #[serde(default)]
+    pub wheelbase_m: Option<f32>,
 }
 
 /// The link to the robot's microcontroller.
@@ -399,6 +403,7 @@ impl Default for BoardConfig {
                 rot_accel_deg_s2: 100.0,
                 wheel_diameter_ratio: None,
                 wheelbase_ratio: None,
+                wheelbase_m: None,
             },
             link: LinkConfig {
                 port: address("/dev/ttyS0"),

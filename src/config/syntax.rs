@@ -46,6 +46,7 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
         false,
         Kind::Optional(&Kind::Number),
     ),
+    ("$.robot.wheelbase_m", false, Kind::Optional(&Kind::Number)),
     ("$.link", true, Kind::Object),
     ("$.link.port", true, Kind::Str(64)),
     ("$.link.tcp", false, Kind::Optional(&Kind::Str(64))),

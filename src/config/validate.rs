@@ -80,6 +80,11 @@ impl BoardConfig {
                 );
             }
         }
+        if let Some(b) = robot.wheelbase_m
+            && !(b.is_finite() && (0.1..=1.0).contains(&b))
+        {
+            r("$.robot.wheelbase_m", "must be from 0.1 to 1 m");
+        }
     }
 
     fn validate_link(&self, r: &mut impl FnMut(&str, &str)) {

@@ -90,8 +90,8 @@ pub async fn calibrate_with(
     )?;
     writeln!(
         out,
-        "proposed board settings ($.robot): \"wheel_diameter_ratio\": {:.4}, \"wheelbase_ratio\": {:.4}",
-        errors.ed, errors.eb
+        "proposed board settings ($.robot): \"wheel_diameter_ratio\": {:.4}, \"wheelbase_ratio\": {:.4}, \"wheelbase_m\": {:.3}",
+        errors.ed, errors.eb, options.wheelbase_m
     )?;
     Ok(errors)
 }

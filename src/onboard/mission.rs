@@ -64,6 +64,10 @@ use crate::optim::Method;
 use crate::sensor::Scan;
 use crate::wire::arcos::StatusPacket;
 
+/// The nominal wheelbase the odometry corrections are computed with when the board names
+/// none (`papillon calibrate --wheelbase-mm`'s default) \[m\].
+pub const DEFAULT_WHEELBASE_M: f32 = 0.33;
+
 /// Cells the onboard grid can hold (512 x 512: 51 m square at 10 cm).
 pub const GRID_CELLS: usize = 1 << 18;
 /// The mission steps after each status packet (the P3-DX sends one every 100 ms), at most
@@ -312,6 +316,11 @@ impl CoreMission {
             rng: crate::random::seeded(board.mission.seed),
             mission: None,
             odometry: ArcosOdometry::new(),
+            correction: crate::control::umbmark::OdometryCorrection::new(
+                board.robot.wheel_diameter_ratio.unwrap_or(1.0),
+                board.robot.wheelbase_ratio.unwrap_or(1.0),
+                board.robot.wheelbase_m.unwrap_or(DEFAULT_WHEELBASE_M),
+            ),
             resume: resume.is_some().then_some(saved.clone()),
             base: saved,
             out: Arc::clone(&out),
@@ -438,6 +447,8 @@ struct Worker {
     /// Built at the first status packet (the start pose depends on it when resuming).
     mission: Option<Mission<GRID_CELLS>>,
     odometry: ArcosOdometry,
+    /// The board's odometry corrections (`papillon calibrate`), applied to every reading.
+    correction: crate::control::umbmark::OdometryCorrection,
     /// The saved state when resuming.
     resume: Option<SavedState>,
     /// Counters and trajectory carried over from a resumed mission.
@@ -498,9 +509,10 @@ impl Worker {
     fn handle(&mut self, input: Input) -> Result<(), String> {
         match input {
             Input::Status(t_s, status) => {
-                let pose_odom = self
+                let raw = self
                     .odometry
                     .update(status.x_pos, status.y_pos, status.th_pos);
+                let pose_odom = self.correction.apply(raw);
                 self.last_flags = RobotFlags::from_sip(status.stall_bumpers, status.flags);
                 self.last_status_s = t_s;
                 self.history.push(t_s, pose_odom);
@@ -555,7 +567,7 @@ impl Worker {
                 if let Some(m) = &mut self.mission {
                     let mut flags = self.last_flags;
                     flags.motors_enabled = false;
-                    m.on_odometry(time(self.last_status_s), self.odometry.pose_odom(), flags);
+                    m.on_odometry(time(self.last_status_s), self.correction.pose(), flags);
                 }
             }
             Input::Reconnected => {
@@ -645,7 +657,7 @@ impl Worker {
         if self.force_fault {
             // The core has seen the fault for one period; give it the real flags back.
             self.force_fault = false;
-            let pose_odom = self.odometry.pose_odom();
+            let pose_odom = self.correction.pose();
             mission.on_odometry(time(self.last_status_s), pose_odom, self.last_flags);
         }
         let stats = mission.stats();
@@ -805,7 +817,7 @@ impl Worker {
         let stats = mission.stats();
         let known = known_cells(&self.map);
         let base = self.base.counters;
-        let o = self.odometry.pose_odom();
+        let o = self.correction.pose();
         let state = SavedState {
             version: STATE_VERSION,
             mission_time_s: t_s,
