@@ -137,6 +137,19 @@ pub struct RobotConfig {
     pub decel_mm_s2: f32,
     /// Rotational acceleration and deceleration sent as SETRA \[deg/s²\].
     pub rot_accel_deg_s2: f32,
+    /// Odometry correction: the ratio of the right and left wheels' effective diameters,
+    /// `Ed = D_R / D_L` (Borenstein & Feng 1996; `papillon calibrate` measures it); absent:
+    /// 1, no correction.
+    #[serde(default)]
+    pub wheel_diameter_ratio: Option<f32>,
+    /// Odometry correction: the effective wheelbase over the one the firmware assumes,
+    /// `Eb` (Borenstein & Feng 1996; `papillon calibrate` measures it); absent: 1.
+    #[serde(default)]
+    pub wheelbase_ratio: Option<f32>,
+    /// The nominal wheelbase `papillon calibrate` computed the corrections with \[m\];
+    /// absent: 0.33.
+    #[serde(default)]
+    pub wheelbase_m: Option<f32>,
 }
 
 /// The link to the robot's microcontroller.
@@ -293,6 +306,17 @@ pub struct MissionConfig {
     pub coverage_target: f32,
     /// Seed of the mission's random number generator.
     pub seed: u64,
+    /// Battery voltage below which the mission ends once it stays there for
+    /// `low_voltage_hold_s` (and until it is back 0.3 V above) \[V\]; absent: 11.5 V; 0: off.
+    #[serde(default)]
+    pub low_voltage_v: Option<f32>,
+    /// How long the voltage must stay low before the mission ends \[s\]; absent: 5 s.
+    #[serde(default)]
+    pub low_voltage_hold_s: Option<f32>,
+    /// Drive back to the start position when the mission ends (`papillon run
+    /// --return-to-start` sets it too); absent: false.
+    #[serde(default)]
+    pub return_to_start: Option<bool>,
 }
 
 /// PID gains of the path follower.
@@ -377,6 +401,9 @@ impl Default for BoardConfig {
                 accel_mm_s2: 300.0,
                 decel_mm_s2: 300.0,
                 rot_accel_deg_s2: 100.0,
+                wheel_diameter_ratio: None,
+                wheelbase_ratio: None,
+                wheelbase_m: None,
             },
             link: LinkConfig {
                 port: address("/dev/ttyS0"),
@@ -420,6 +447,9 @@ impl Default for BoardConfig {
                 reserve_steps: 20.0,
                 coverage_target: 0.95,
                 seed: 1,
+                low_voltage_v: None,
+                low_voltage_hold_s: None,
+                return_to_start: None,
             },
             pid: PidConfig {
                 heading_kp: 2.0,

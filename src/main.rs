@@ -1,7 +1,8 @@
 //! `papillon`: the onboard program of a Pioneer P3-DX.
 //!
 //! Subcommands: `check` (validate a board file), `ports` (list serial ports), `probe` (talk to
-//! a robot and print what it reports), `run` (an autonomous mission). See docs/user-guide.md.
+//! a robot and print what it reports), `run` (an autonomous mission), `calibrate` (UMBmark
+//! odometry calibration). See docs/user-guide.md.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -46,6 +47,34 @@ enum Command {
     Probe(ProbeArgs),
     /// Run an autonomous mission.
     Run(RunArgs),
+    /// Run the UMBmark square (Borenstein & Feng 1996) clockwise and counter-clockwise and
+    /// propose the board's odometry corrections. The robot drives blind: clear a 5 m square.
+    Calibrate(CalibrateArgs),
+}
+
+#[derive(Args)]
+struct CalibrateArgs {
+    #[command(flatten)]
+    target: Target,
+    /// Serial speed [baud]; by default the usual speeds are tried in turn.
+    #[arg(long, value_parser = ["9600", "19200", "38400", "57600", "115200"])]
+    baud: Option<String>,
+    /// Side of the square [m] (4 in the paper).
+    #[arg(long, default_value_t = 4.0)]
+    side_m: f32,
+    /// Runs in each direction (5 in the paper).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=20))]
+    runs: u32,
+    /// Cruise speed on the legs [mm/s].
+    #[arg(long, default_value_t = 200, value_parser = clap::value_parser!(i16).range(50..=400))]
+    speed_mm_s: i16,
+    /// The robot's nominal wheelbase (wheel track) [mm], as its odometry assumes it.
+    #[arg(long, default_value_t = 330.0)]
+    wheelbase_mm: f32,
+    /// Read the true end positions from `papillon-sim serve --truth-log FILE` instead of
+    /// asking for them.
+    #[arg(long)]
+    truth_log: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -66,6 +95,17 @@ struct ProbeArgs {
     /// Drive a 0.5 m square at 100 mm/s and report the odometry (keep clear of the robot).
     #[arg(long)]
     drive: bool,
+    /// Serial speed [baud]; by default 9600, 19200, 38400, 57600 and 115200 are tried in turn
+    /// until the robot answers.
+    #[arg(long, value_parser = ["9600", "19200", "38400", "57600", "115200"])]
+    baud: Option<String>,
+    /// Also check the laser with one scan (beam count and ranges): host:port of an LMS1xx, or
+    /// the serial device of an LMS200 (with --board naming an LMS200).
+    #[arg(long)]
+    laser: Option<String>,
+    /// Board file describing the laser for --laser (default: a P3-DX's LMS1xx, 541 beams).
+    #[arg(long, requires = "laser")]
+    board: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -98,6 +138,10 @@ struct RunArgs {
     /// WebSocket → ws://HOST:PORT. Off by default: without it nothing listens.
     #[arg(long, value_name = "HOST:PORT")]
     live: Option<String>,
+    /// When the mission ends (explored, energy budget or battery voltage low), drive back to
+    /// the start position first (the board's $.mission.return_to_start).
+    #[arg(long)]
+    return_to_start: bool,
 }
 
 /// Exit code for a missing or unreadable file.
@@ -131,6 +175,12 @@ fn main() -> ExitCode {
             }
             run(args)
         }
+        Command::Calibrate(args) => {
+            if let Err(code) = init_logging(cli.log_format) {
+                return code;
+            }
+            calibrate(args)
+        }
     }
 }
 
@@ -138,7 +188,7 @@ fn main() -> ExitCode {
 /// argument, the flags it names), without its `error: ` prefix.
 fn clap_error_line(e: &clap::Error) -> String {
     if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
-        return "a subcommand is missing: check, ports, probe or run (see papillon --help)".into();
+        return "a subcommand is missing: check, ports, probe, run or calibrate (see papillon --help)".into();
     }
     let text = e.to_string();
     let first: Vec<&str> = text
@@ -299,10 +349,33 @@ fn probe(args: ProbeArgs) -> ExitCode {
         (None, Some(port)) => format!("--port {port}"),
         (None, None) => "--port or --tcp".to_string(),
     };
+    let laser = match &args.laser {
+        None => None,
+        Some(address) => {
+            let mut board = match &args.board {
+                Some(path) => match load_board(path) {
+                    Ok(b) => b,
+                    Err(code) => return code,
+                },
+                None => BoardConfig::default(),
+            };
+            let Some(a) = Address::new(address) else {
+                return too_long("--laser");
+            };
+            if board.laser_model() == Some(papillon::config::LaserModel::Lms200) {
+                board.laser.port = Some(a);
+            } else {
+                board.laser.address = Some(a);
+            }
+            Some(board)
+        }
+    };
     let options = ProbeOptions {
         port: args.target.port.unwrap_or_default(),
         tcp: args.target.tcp,
         drive: args.drive,
+        baud: args.baud.and_then(|b| b.parse().ok()),
+        laser,
     };
     let result = runtime().block_on(async {
         let mut out = std::io::stdout();
@@ -346,6 +419,9 @@ fn run(args: RunArgs) -> ExitCode {
             Some(t) => board.link.tcp = Some(t),
             None => return too_long("--tcp"),
         }
+    }
+    if args.return_to_start {
+        board.mission.return_to_start = Some(true);
     }
     if let Some(laser) = &args.laser {
         match Address::new(laser) {
@@ -409,6 +485,52 @@ fn run(args: RunArgs) -> ExitCode {
     ));
     match result {
         Ok(_) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("papillon: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn calibrate(args: CalibrateArgs) -> ExitCode {
+    if !(args.side_m.is_finite() && (1.0..=10.0).contains(&args.side_m)) {
+        eprintln!("papillon: --side-m must be from 1 to 10 m");
+        return ExitCode::from(EXIT_FILE);
+    }
+    if !(args.wheelbase_mm.is_finite() && (100.0..=1000.0).contains(&args.wheelbase_mm)) {
+        eprintln!("papillon: --wheelbase-mm must be from 100 to 1000 mm");
+        return ExitCode::from(EXIT_FILE);
+    }
+    let options = papillon::onboard::calibrate::CalibrateOptions {
+        link: ProbeOptions {
+            port: args.target.port.unwrap_or_default(),
+            tcp: args.target.tcp,
+            drive: false,
+            baud: args.baud.and_then(|b| b.parse().ok()),
+            laser: None,
+        },
+        side_m: args.side_m,
+        runs: args.runs,
+        speed_mm_s: args.speed_mm_s,
+        wheelbase_m: args.wheelbase_mm / 1000.0,
+        truth: match args.truth_log {
+            Some(p) => papillon::onboard::calibrate::Truth::TruthLog(p),
+            None => papillon::onboard::calibrate::Truth::Ask,
+        },
+    };
+    let result = runtime().block_on(async {
+        let mut out = std::io::stdout();
+        let mut input = std::io::stdin().lock();
+        tokio::select! {
+            r = papillon::onboard::calibrate::calibrate_with(&options, &mut input, &mut out) => r.map(|_| ()),
+            _ = runtime::shutdown_signal() => {
+                eprintln!("papillon: calibrate interrupted");
+                Ok(())
+            }
+        }
+    });
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("papillon: {e}");
             ExitCode::from(1)

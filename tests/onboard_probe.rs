@@ -163,3 +163,64 @@ fn probe_drive_reports_the_same_square_on_a_p3dx_and_a_p3dx_sh() {
     std::fs::remove_dir_all(&dir_sh).unwrap();
     std::fs::remove_dir_all(&dir_old).unwrap();
 }
+
+/// First contact at an unknown speed: the emulated microcontroller answers only at 38400 baud
+/// (`serve --baud`, read from the pty's line settings as the client set them); `probe`,
+/// starting at 9600, finds it, and checks the laser with one scan.
+#[test]
+fn probe_finds_a_robot_at_38400_baud_and_checks_the_laser() {
+    let dir = temp_dir("probe-baud");
+    let link = dir.join("robot0");
+    let sim = Sim::start("lab", Some(&link), &["--baud", "38400"]);
+    let out = wait_bounded(
+        papillon(
+            &[
+                "probe",
+                "--port",
+                link.to_str().unwrap(),
+                "--laser",
+                &sim.laser(),
+            ],
+            &dir,
+        ),
+        Duration::from_secs(40),
+    );
+    let text = stdout_of(&out);
+    assert_identity_and_status(&text);
+    assert!(text.contains("baud: no answer at 9600 baud"), "{text}");
+    assert!(text.contains("baud: no answer at 19200 baud"), "{text}");
+    assert!(
+        text.contains("baud: the robot answers at 38400 baud"),
+        "{text}"
+    );
+    assert!(text.contains(" @ 38400 baud"), "{text}");
+    assert!(!text.contains("57600"), "{text}");
+    // One scan of the LMS1xx the board describes (541 beams), with returns from the lab's
+    // walls.
+    let laser = text
+        .lines()
+        .find(|l| l.starts_with("laser: lms1xx at "))
+        .unwrap_or_else(|| panic!("no laser line in {text}"));
+    assert!(
+        laser.contains("one scan of 541 beams (as the board's 541)"),
+        "{laser}"
+    );
+    assert!(
+        laser.contains(" m to ") && !laser.contains(" 0 returns"),
+        "{laser}"
+    );
+
+    // Forced to the wrong speed, the probe fails and names the flag to check.
+    let out = wait_bounded(
+        papillon(
+            &["probe", "--port", link.to_str().unwrap(), "--baud", "9600"],
+            &dir,
+        ),
+        Duration::from_secs(40),
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("--port"), "{stderr}");
+    drop(sim);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

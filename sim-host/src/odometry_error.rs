@@ -98,6 +98,17 @@ pub struct DrawnWheels {
 }
 
 impl DrawnWheels {
+    /// Wheels with exactly these systematic errors (`ed`: right over left diameter; `eb`:
+    /// effective over nominal wheelbase) and no fast-turn slip.
+    pub const fn exact(ed: f32, eb: f32) -> Self {
+        Self {
+            ed,
+            eb,
+            fast_turn_deg_s: 0.0,
+            fast_turn_var_rad2_per_rad: 0.0,
+        }
+    }
+
     /// Perfect wheels.
     pub const PERFECT: Self = Self {
         ed: 1.0,

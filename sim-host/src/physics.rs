@@ -334,6 +334,11 @@ impl RobotBody {
         &self.wheels
     }
 
+    /// Replaces the drawn systematic wheel errors (`papillon-sim serve --wheel-errors`).
+    pub fn set_wheels(&mut self, wheels: DrawnWheels) {
+        self.wheels = wheels;
+    }
+
     /// Commands a translational speed \[mm/s\] (positive forward) and a turn rate \[deg/s\]
     /// (positive counter-clockwise), clamped to the limits; reached under the acceleration
     /// limits.

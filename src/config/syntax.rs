@@ -17,6 +17,8 @@ pub(super) enum Kind {
     Whole(u64),
     /// Any number.
     Number,
+    /// `true` or `false`.
+    Bool,
     /// `null` or the inner kind.
     Optional(&'static Kind),
 }
@@ -34,6 +36,17 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
     ("$.robot.accel_mm_s2", true, Kind::Number),
     ("$.robot.decel_mm_s2", true, Kind::Number),
     ("$.robot.rot_accel_deg_s2", true, Kind::Number),
+    (
+        "$.robot.wheel_diameter_ratio",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.robot.wheelbase_ratio",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    ("$.robot.wheelbase_m", false, Kind::Optional(&Kind::Number)),
     ("$.link", true, Kind::Object),
     ("$.link.port", true, Kind::Str(64)),
     ("$.link.tcp", false, Kind::Optional(&Kind::Str(64))),
@@ -76,6 +89,21 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
     ("$.mission.reserve_steps", true, Kind::Number),
     ("$.mission.coverage_target", true, Kind::Number),
     ("$.mission.seed", true, Kind::Whole(u64::MAX)),
+    (
+        "$.mission.low_voltage_v",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.mission.low_voltage_hold_s",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.mission.return_to_start",
+        false,
+        Kind::Optional(&Kind::Bool),
+    ),
     ("$.pid", true, Kind::Object),
     ("$.pid.heading_kp", true, Kind::Number),
     ("$.pid.heading_ki", true, Kind::Number),
@@ -464,6 +492,9 @@ fn mismatch(kind: Kind, token: &[u8]) -> Option<Expected> {
                 _ => "a whole number from 0 to 18446744073709551615",
             };
             (!fits).then_some(Expected::Kind(what))
+        }
+        Kind::Bool => {
+            (token != b"true" && token != b"false").then_some(Expected::Kind("true or false"))
         }
         Kind::Number => {
             let fits = matches!(token.first(), Some(b'-' | b'0'..=b'9'))

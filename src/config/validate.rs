@@ -67,6 +67,24 @@ impl BoardConfig {
                 r(path, "must be in (0, 32767] (an ARCOS integer argument)");
             }
         }
+        for (path, v) in [
+            ("$.robot.wheel_diameter_ratio", robot.wheel_diameter_ratio),
+            ("$.robot.wheelbase_ratio", robot.wheelbase_ratio),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && (MIN_ODOMETRY_RATIO..=MAX_ODOMETRY_RATIO).contains(&v))
+            {
+                r(
+                    path,
+                    "must be a ratio from 0.8 to 1.2 (a correction of a few percent at most; see papillon calibrate)",
+                );
+            }
+        }
+        if let Some(b) = robot.wheelbase_m
+            && !(b.is_finite() && (0.1..=1.0).contains(&b))
+        {
+            r("$.robot.wheelbase_m", "must be from 0.1 to 1 m");
+        }
     }
 
     fn validate_link(&self, r: &mut impl FnMut(&str, &str)) {
@@ -268,6 +286,20 @@ impl BoardConfig {
         if !(positive(m.coverage_target) && m.coverage_target <= 1.0) {
             r("$.mission.coverage_target", "must be a fraction in (0, 1]");
         }
+        if let Some(v) = m.low_voltage_v
+            && !(v == 0.0
+                || (v.is_finite() && (MIN_LOW_VOLTAGE_V..=MAX_LOW_VOLTAGE_V).contains(&v)))
+        {
+            r(
+                "$.mission.low_voltage_v",
+                "must be 0 (off) or a voltage from 6 to 30 [V] (a P3-DX runs on 12 V)",
+            );
+        }
+        if let Some(s) = m.low_voltage_hold_s
+            && !(s.is_finite() && (0.0..=MAX_LOW_VOLTAGE_HOLD_S).contains(&s))
+        {
+            r("$.mission.low_voltage_hold_s", "must be from 0 to 600 [s]");
+        }
     }
 
     fn validate_pid(&self, r: &mut impl FnMut(&str, &str)) {
@@ -323,6 +355,15 @@ impl BoardConfig {
 /// Largest PID gain: the gains act on metres and radians, where 1000 already saturates the
 /// motors at a millimetre's error.
 const MAX_GAIN: f32 = 1000.0;
+
+/// Range of `$.mission.low_voltage_v` when not 0 \[V\].
+const MIN_LOW_VOLTAGE_V: f32 = 6.0;
+const MAX_LOW_VOLTAGE_V: f32 = 30.0;
+/// Longest `$.mission.low_voltage_hold_s` \[s\].
+const MAX_LOW_VOLTAGE_HOLD_S: f32 = 600.0;
+/// Range of the odometry corrections `$.robot.wheel_diameter_ratio` and `wheelbase_ratio`.
+const MIN_ODOMETRY_RATIO: f32 = 0.8;
+const MAX_ODOMETRY_RATIO: f32 = 1.2;
 
 fn positive(v: f32) -> bool {
     v.is_finite() && v > 0.0

@@ -24,6 +24,7 @@ pub mod pid;
 pub mod safety;
 #[cfg(test)]
 pub mod sim_double;
+pub mod umbmark;
 
 use core::time::Duration;
 

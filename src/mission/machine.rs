@@ -127,6 +127,13 @@ pub struct Mission<const N: usize> {
     contacts: heapless::Deque<(Point2, Point2, Time), MAX_CONTACTS>,
     last_step: Option<Time>,
     localizer: crate::localize::Tracker,
+    /// The battery-voltage watch ([`MissionConfig::voltage`]).
+    voltage: super::VoltageWatch,
+    /// An end asked for by [`Mission::end`], taken at the next step.
+    end_request: Option<DoneReason>,
+    /// The mission has ended for this reason and drives back to the start position
+    /// ([`MissionConfig::return_to_start`]).
+    homing: Option<DoneReason>,
 }
 
 impl<const N: usize> core::fmt::Debug for Mission<N> {
@@ -184,6 +191,9 @@ impl<const N: usize> Mission<N> {
             contacts: heapless::Deque::new(),
             last_step: None,
             localizer: crate::localize::Tracker::new(),
+            voltage: super::VoltageWatch::new(),
+            end_request: None,
+            homing: None,
             config,
         })
     }
@@ -294,6 +304,37 @@ impl<const N: usize> Mission<N> {
             _ => {}
         }
         Ok(())
+    }
+
+    /// The battery voltage the robot reports at `now` \[V\] (every status packet): the
+    /// mission ends with [`DoneReason::VoltageLow`] once it stays low
+    /// ([`MissionConfig::voltage`]). Returns `true` at the reading that trips the watch, so
+    /// that the caller can log it.
+    pub fn on_battery_voltage(&mut self, now: Time, volts: f32) -> bool {
+        self.voltage.update(&self.config.voltage, now, volts)
+    }
+
+    /// The battery-voltage watch (latest reading, tripped).
+    pub fn voltage(&self) -> &super::VoltageWatch {
+        &self.voltage
+    }
+
+    /// Ends the mission for `reason` at the next step (after driving back to the start with
+    /// [`MissionConfig::return_to_start`]). Ignored once the mission is done or returning.
+    pub fn end(&mut self, reason: DoneReason) {
+        if self.homing.is_none() && !matches!(self.phase, Phase::Done(_)) {
+            self.end_request.get_or_insert(reason);
+        }
+    }
+
+    /// Why the mission ended, while it drives back to its start position.
+    pub fn returning(&self) -> Option<DoneReason> {
+        self.homing
+    }
+
+    /// The start pose (map frame).
+    pub fn start_pose_map(&self) -> Pose2 {
+        self.senses.start_map
     }
 
     /// What the mission is doing.
@@ -453,16 +494,24 @@ impl<const N: usize> Mission<N> {
             events.push(MissionEvent::FaultCleared);
             self.enter_replanning(ReplanCause::FaultCleared);
         }
-        // The end of the mission.
-        if self.senses.battery_steps <= self.config.explore.reserve_steps {
-            return self.finish(DoneReason::BatteryExhausted, events);
-        }
-        if self
-            .senses
-            .coverage
-            .is_some_and(|c| c >= self.config.coverage_target)
-        {
-            return self.finish(DoneReason::CoverageReached, events);
+        // The end of the mission (on the way back to the start it has ended already).
+        if self.homing.is_none() {
+            if self.voltage.tripped() {
+                return self.finish(DoneReason::VoltageLow, events);
+            }
+            if let Some(reason) = self.end_request.take() {
+                return self.finish(reason, events);
+            }
+            if self.senses.battery_steps <= self.config.explore.reserve_steps {
+                return self.finish(DoneReason::BatteryExhausted, events);
+            }
+            if self
+                .senses
+                .coverage
+                .is_some_and(|c| c >= self.config.coverage_target)
+            {
+                return self.finish(DoneReason::CoverageReached, events);
+            }
         }
         if let Phase::Escaping(escape) = self.phase
             && let Some(cmd) = self.escape_step(now, escape)
@@ -498,7 +547,30 @@ impl<const N: usize> Mission<N> {
         MotionCommand::ZERO
     }
 
+    /// Ends the mission for `reason`; with [`MissionConfig::return_to_start`] (and the robot
+    /// away from its start), first drives back: the start becomes a go-to goal and the
+    /// mission decides again (the caller's loop plans it in this period when it can).
     fn finish(&mut self, reason: DoneReason, events: &mut Events<'_>) -> MotionCommand {
+        let start = self.senses.start_map.position();
+        let away = self.senses.pose_map.position().distance(start)
+            > self.config.follower.position_tolerance_m;
+        let reason = match self.homing {
+            // The way back ended (there, or given up): the end is the one that sent it back.
+            Some(first) => first,
+            None if self.config.return_to_start && away => {
+                self.homing = Some(reason);
+                self.end_request = None;
+                self.follower.clear();
+                self.errand.targets.clear();
+                self.ahead = None;
+                self.goal.set(&[start]);
+                self.phase = Phase::Deciding;
+                events.push(MissionEvent::Returning(reason));
+                return MotionCommand::ZERO;
+            }
+            None => reason,
+        };
+        self.homing = None;
         self.phase = Phase::Done(reason);
         self.follower.clear();
         self.errand.targets.clear();

@@ -51,7 +51,15 @@
 //!   there until it has passed. The lower id replans at once (and, while the other robot
 //!   still blocks the only way, waits for it to step aside). This is the thesis's "solve
 //!   conflict" routine.
-//! - **Done(reason)**: coverage target reached, battery exhausted, or nothing reachable left.
+//! - **Done(reason)**: coverage target reached, battery exhausted, nothing reachable left, the
+//!   battery voltage low ([`voltage`]: below a threshold for a hold time, with hysteresis), or
+//!   ended by the caller ([`Mission::end`]).
+//! - **Returning**: with [`MissionConfig::return_to_start`], an end first sends the robot
+//!   back to its start position as a go-to goal (same planner, follower, replans and safety
+//!   monitor; the energy budget and coverage no longer end it); Done follows on arrival, or
+//!   when the way back cannot be found ([`MissionConfig::max_failed_decisions`] attempts).
+//!   The heading is not restored. Reported as Rotating/Driving/Replanning, with
+//!   [`Mission::returning`] giving the reason.
 //! - **Fault(reason)**: e-stop, motors disabled, stale odometry or scan: zero velocity. When
 //!   it clears the mission replans from the current pose; the old path is never resumed.
 //!
@@ -96,6 +104,7 @@
 pub mod footprint;
 mod machine;
 mod shared;
+pub mod voltage;
 
 #[cfg(all(test, feature = "std"))]
 mod tests;
@@ -104,6 +113,7 @@ pub use machine::Mission;
 pub use shared::{
     MAX_FRONTIERS, MAX_ROBOTS, MAX_SHARED_WAYPOINTS, RobotMark, SharedMap, Workspace,
 };
+pub use voltage::{VoltageConfig, VoltageWatch};
 
 use crate::control::command::{Limits, RobotCommand};
 use crate::control::follower::{FollowerConfig, FollowerError};
@@ -185,6 +195,13 @@ pub struct MissionConfig {
     pub decide_ahead_m: f32,
     /// Scan-to-map matching before each scan is integrated (off by default).
     pub localize: crate::localize::LocalizeConfig,
+    /// The battery-voltage watch, fed by [`Mission::on_battery_voltage`] (a caller that
+    /// reports no voltage, as the simulator's runner, is never stopped by it).
+    pub voltage: VoltageConfig,
+    /// When the mission ends (coverage, battery, nothing reachable, low voltage, or
+    /// [`Mission::end`]), drive back to the start position first, with the same planner and
+    /// safety monitor, then report [`MissionEvent::Done`].
+    pub return_to_start: bool,
 }
 
 impl Default for MissionConfig {
@@ -216,6 +233,8 @@ impl Default for MissionConfig {
             decide_while_driving: false,
             decide_ahead_m: 0.6,
             localize: crate::localize::LocalizeConfig::default(),
+            voltage: VoltageConfig::default(),
+            return_to_start: false,
         }
     }
 }
@@ -238,6 +257,16 @@ impl MissionConfig {
         }
         if !(self.coverage_target > 0.0 && self.coverage_target <= 1.0) {
             return bad("coverage_target", self.coverage_target);
+        }
+        let v = &self.voltage;
+        for (field, value) in [
+            ("voltage.low_v", v.low_v),
+            ("voltage.hysteresis_v", v.hysteresis_v),
+            ("voltage.hold_s", v.hold_s),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return bad(field, value);
+            }
         }
         if !(self.stuck_timeout_s.is_finite() && self.stuck_timeout_s > 0.0) {
             return bad("stuck_timeout_s", self.stuck_timeout_s);
@@ -285,6 +314,10 @@ pub enum DoneReason {
     BatteryExhausted,
     /// No Unknown cell is reachable any more.
     NothingReachable,
+    /// The battery voltage stayed below [`VoltageConfig::low_v`] for [`VoltageConfig::hold_s`].
+    VoltageLow,
+    /// The caller ended the mission ([`Mission::end`]).
+    Requested,
 }
 
 /// Why the robot is stopped.
@@ -350,6 +383,10 @@ pub enum MissionEvent {
     Fault(FaultReason),
     /// The fault cleared; the mission replans.
     FaultCleared,
+    /// The mission has ended for `reason` and drives back to its start position
+    /// ([`MissionConfig::return_to_start`]); [`MissionEvent::Done`] follows on arrival, or
+    /// once the way back is found blocked too often.
+    Returning(DoneReason),
     /// The mission ended.
     Done(DoneReason),
 }

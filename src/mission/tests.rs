@@ -1349,3 +1349,198 @@ fn the_mission_plans_its_paths_through_the_planner_it_is_given() {
     assert_eq!(plain.bots[0].mission.stats(), stats);
     assert_eq!(plain.bots[0].true_pose(), counted.bots[0].true_pose());
 }
+
+/// Runs robot 0 until Done or `max_s`, feeding `volts(t)` as its battery voltage every
+/// period; returns when the mission tripped on the voltage (if it did).
+fn run_with_voltage(sim: &mut Sim, max_s: f32, volts: impl Fn(f32) -> f32) -> Option<f32> {
+    let mut tripped_at = None;
+    while sim.secs() < max_s {
+        let t = sim.secs();
+        let now = sim.now;
+        if sim.bots[0].mission.on_battery_voltage(now, volts(t)) {
+            tripped_at = Some(t);
+        }
+        sim.period();
+        let bot = &sim.bots[0];
+        let p = bot.true_pose().position();
+        assert!(sim.world.clearance(p) > 0.18, "hit a wall at {p:?}");
+        if matches!(bot.mission.state(), MissionState::Done(_)) {
+            break;
+        }
+    }
+    tripped_at
+}
+
+fn events_of(bot: &Bot) -> Vec<MissionEvent> {
+    bot.log.iter().map(|(_, e)| e.clone()).collect()
+}
+
+/// Return to start: the battery (or the end of exploring) ends the mission, the robot drives back to where it started
+/// (same planner, follower and safety monitor: no wall touched), then the mission is done
+/// with the battery as its reason.
+#[test]
+fn with_return_to_start_an_ended_mission_drives_back_to_its_start() {
+    for seed in [3, 9] {
+        let config = MissionConfig {
+            battery_steps: 40.0,
+            explore: crate::explore::ExploreConfig {
+                reserve_steps: 4.0,
+                ..crate::explore::ExploreConfig::default()
+            },
+            return_to_start: true,
+            ..frontier_config()
+        };
+        let start = Pose2::new(1.0, 1.0, 0.3);
+        let mut sim = Sim::new(two_rooms(), &config, seed);
+        sim.add(config, start, Slip::thesis());
+        run_with_voltage(&mut sim, 900.0, |_| 0.0);
+        let bot = &sim.bots[0];
+        let events = events_of(bot);
+        // The end (the battery, or the two rooms explored first) sent it back, and is the
+        // mission's reason once it is there.
+        let (returning, reason) = events
+            .iter()
+            .enumerate()
+            .find_map(|(i, e)| match e {
+                MissionEvent::Returning(r) => Some((i, *r)),
+                _ => None,
+            })
+            .expect("a Returning event");
+        assert_eq!(
+            bot.mission.state(),
+            MissionState::Done(reason),
+            "seed {seed}"
+        );
+        // It had gone somewhere first.
+        assert!(bot.mission.stats().distance_m > 5.0, "seed {seed}");
+        assert!(
+            events[returning..]
+                .iter()
+                .any(|e| matches!(e, MissionEvent::Decided { .. })),
+            "seed {seed}: the way back is planned"
+        );
+        let home = bot.mission.pose_map().position().distance(start.position());
+        assert!(home <= 0.1, "seed {seed}: estimate {home} m from the start");
+        let truth = bot.true_pose().position().distance(start.position());
+        assert!(truth <= 0.5, "seed {seed}: {truth} m from the start");
+        assert_eq!(bot.mission.returning(), None);
+    }
+}
+
+/// Voltage: a sag under load (1.5 s below the threshold at a time) never ends the mission; a
+/// voltage that stays low ends it after the hold time, with `VoltageLow`, and (with return to
+/// start) only once the robot is back.
+#[test]
+fn a_low_voltage_ends_the_mission_only_when_it_stays_low() {
+    let config = MissionConfig {
+        return_to_start: true,
+        ..frontier_config()
+    };
+    let start = Pose2::new(1.0, 1.0, 0.3);
+    let mut sim = Sim::new(two_rooms(), &config, 5);
+    sim.add(config.clone(), start, Slip::thesis());
+    // 12.4 V, sagging to 11.0 V for 1.5 s of every 4 s, for 30 s; then 11.3 V for good.
+    let low_from_s = 30.0;
+    let volts = |t: f32| {
+        if t >= low_from_s {
+            11.3
+        } else if t % 4.0 < 1.5 {
+            11.0
+        } else {
+            12.4
+        }
+    };
+    let tripped = run_with_voltage(&mut sim, 600.0, volts).expect("the watch tripped");
+    let hold = config.voltage.hold_s;
+    assert!(
+        tripped >= low_from_s + hold && tripped <= low_from_s + hold + 0.2,
+        "tripped at {tripped} s"
+    );
+    let bot = &sim.bots[0];
+    assert_eq!(
+        bot.mission.state(),
+        MissionState::Done(DoneReason::VoltageLow)
+    );
+    let events = events_of(bot);
+    let returning = bot
+        .log
+        .iter()
+        .find(|(_, e)| *e == MissionEvent::Returning(DoneReason::VoltageLow))
+        .map(|(t, _)| t.as_secs_f64() as f32)
+        .expect("a Returning event");
+    assert!(returning >= tripped && returning <= tripped + 0.2);
+    assert_eq!(
+        events
+            .iter()
+            .filter(|e| matches!(e, MissionEvent::Done(_)))
+            .count(),
+        1
+    );
+    let truth = bot.true_pose().position().distance(start.position());
+    assert!(truth <= 0.5, "{truth} m from the start");
+
+    // Without return to start, the same voltage stops the robot where it is.
+    let config = frontier_config();
+    let mut sim = Sim::new(two_rooms(), &config, 5);
+    sim.add(config, start, Slip::thesis());
+    run_with_voltage(&mut sim, 600.0, volts).expect("the watch tripped");
+    let bot = &sim.bots[0];
+    assert_eq!(
+        bot.mission.state(),
+        MissionState::Done(DoneReason::VoltageLow)
+    );
+    assert!(
+        !events_of(bot)
+            .iter()
+            .any(|e| matches!(e, MissionEvent::Returning(_)))
+    );
+    assert!(!moving(sim.period()[0]));
+}
+
+/// `end` stops a mission at the next step; with return to start it returns first. Ending a
+/// mission already at its start (or a finished one) needs no way back.
+#[test]
+fn the_caller_can_end_a_mission() {
+    let config = frontier_config();
+    let start = Pose2::new(1.0, 1.0, 0.0);
+    let mut sim = Sim::new(two_rooms(), &config, 4);
+    sim.add(config.clone(), start, Slip::none());
+    sim.period();
+    // Still at its start: done at once, even with return to start.
+    sim.bots[0].mission.end(DoneReason::Requested);
+    sim.period();
+    assert_eq!(
+        sim.bots[0].mission.state(),
+        MissionState::Done(DoneReason::Requested)
+    );
+    let config = MissionConfig {
+        return_to_start: true,
+        ..config
+    };
+    let mut sim = Sim::new(two_rooms(), &config, 4);
+    sim.add(config, start, Slip::none());
+    while sim.bots[0]
+        .true_pose()
+        .position()
+        .distance(start.position())
+        < 1.0
+    {
+        assert!(sim.secs() < 120.0, "the robot never left its start");
+        sim.period();
+    }
+    sim.bots[0].mission.end(DoneReason::Requested);
+    sim.period();
+    assert_eq!(sim.bots[0].mission.returning(), Some(DoneReason::Requested));
+    // A second end while returning changes nothing.
+    sim.bots[0].mission.end(DoneReason::VoltageLow);
+    run_with_voltage(&mut sim, 300.0, |_| 0.0);
+    assert_eq!(
+        sim.bots[0].mission.state(),
+        MissionState::Done(DoneReason::Requested)
+    );
+    let truth = sim.bots[0]
+        .true_pose()
+        .position()
+        .distance(start.position());
+    assert!(truth <= 0.2, "{truth}");
+}

@@ -64,6 +64,10 @@ use crate::optim::Method;
 use crate::sensor::Scan;
 use crate::wire::arcos::StatusPacket;
 
+/// The nominal wheelbase the odometry corrections are computed with when the board names
+/// none (`papillon calibrate --wheelbase-mm`'s default) \[m\].
+pub const DEFAULT_WHEELBASE_M: f32 = 0.33;
+
 /// Cells the onboard grid can hold (512 x 512: 51 m square at 10 cm).
 pub const GRID_CELLS: usize = 1 << 18;
 /// The mission steps after each status packet (the P3-DX sends one every 100 ms), at most
@@ -182,6 +186,10 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     s.max_input_age = core::time::Duration::from_secs_f32(board.safety.stale_timeout_s);
     s.min_clearance_m = board.safety.obstacle_stop_m;
     s.backoff_distance_m = board.safety.back_off_m;
+    let v = &mut config.voltage;
+    v.low_v = m.low_voltage_v.unwrap_or(v.low_v);
+    v.hold_s = m.low_voltage_hold_s.unwrap_or(v.hold_s);
+    config.return_to_start = m.return_to_start.unwrap_or(false);
     config.validate().map_err(|e| format!("$.mission: {e}"))?;
     Ok(config)
 }
@@ -308,6 +316,11 @@ impl CoreMission {
             rng: crate::random::seeded(board.mission.seed),
             mission: None,
             odometry: ArcosOdometry::new(),
+            correction: crate::control::umbmark::OdometryCorrection::new(
+                board.robot.wheel_diameter_ratio.unwrap_or(1.0),
+                board.robot.wheelbase_ratio.unwrap_or(1.0),
+                board.robot.wheelbase_m.unwrap_or(DEFAULT_WHEELBASE_M),
+            ),
             resume: resume.is_some().then_some(saved.clone()),
             base: saved,
             out: Arc::clone(&out),
@@ -434,6 +447,8 @@ struct Worker {
     /// Built at the first status packet (the start pose depends on it when resuming).
     mission: Option<Mission<GRID_CELLS>>,
     odometry: ArcosOdometry,
+    /// The board's odometry corrections (`papillon calibrate`), applied to every reading.
+    correction: crate::control::umbmark::OdometryCorrection,
     /// The saved state when resuming.
     resume: Option<SavedState>,
     /// Counters and trajectory carried over from a resumed mission.
@@ -494,9 +509,10 @@ impl Worker {
     fn handle(&mut self, input: Input) -> Result<(), String> {
         match input {
             Input::Status(t_s, status) => {
-                let pose_odom = self
+                let raw = self
                     .odometry
                     .update(status.x_pos, status.y_pos, status.th_pos);
+                let pose_odom = self.correction.apply(raw);
                 self.last_flags = RobotFlags::from_sip(status.stall_bumpers, status.flags);
                 self.last_status_s = t_s;
                 self.history.push(t_s, pose_odom);
@@ -512,6 +528,27 @@ impl Worker {
                 }
                 self.integrate_pending(flags)?;
                 if let Some(m) = &mut self.mission {
+                    let volts = battery_v(&status);
+                    if m.on_battery_voltage(time(t_s), volts) {
+                        let v = m.config().voltage;
+                        tracing::warn!(
+                            battery_v = volts,
+                            low_v = v.low_v,
+                            hold_s = v.hold_s,
+                            return_to_start = m.config().return_to_start,
+                            "battery voltage low: the mission ends"
+                        );
+                        lock(&self.out).telemetry.push(TelemetryRecord {
+                            t_s,
+                            kind: "battery_low",
+                            fields: serde_json::json!({
+                                "battery_v": volts,
+                                "low_v": v.low_v,
+                                "hold_s": v.hold_s,
+                                "return_to_start": m.config().return_to_start,
+                            }),
+                        });
+                    }
                     m.on_odometry(time(t_s), pose_odom, flags);
                     if let Some(rec) = &mut self.recording {
                         rec.status(t_s, pose_odom, m.pose_map(), m.path(), &self.map.grid);
@@ -530,7 +567,7 @@ impl Worker {
                 if let Some(m) = &mut self.mission {
                     let mut flags = self.last_flags;
                     flags.motors_enabled = false;
-                    m.on_odometry(time(self.last_status_s), self.odometry.pose_odom(), flags);
+                    m.on_odometry(time(self.last_status_s), self.correction.pose(), flags);
                 }
             }
             Input::Reconnected => {
@@ -622,7 +659,7 @@ impl Worker {
         if self.force_fault {
             // The core has seen the fault for one period; give it the real flags back.
             self.force_fault = false;
-            let pose_odom = self.odometry.pose_odom();
+            let pose_odom = self.correction.pose();
             mission.on_odometry(time(self.last_status_s), pose_odom, self.last_flags);
         }
         let stats = mission.stats();
@@ -693,6 +730,19 @@ impl Worker {
                         fields: serde_json::json!({ "reason": format!("{reason:?}") }),
                     })
                 }
+                MissionEvent::Returning(reason) => {
+                    out.last_plan_s = Some(t_s);
+                    out.telemetry.push(TelemetryRecord {
+                        t_s,
+                        kind: "returning",
+                        fields: serde_json::json!({
+                            "reason": done_name(*reason),
+                            "start_distance_m": start_distance_m(mission),
+                            "battery_v": mission.voltage().last_v(),
+                            "battery_steps": mission.battery_steps(),
+                        }),
+                    });
+                }
                 MissionEvent::Done(reason) => {
                     out.done = Some(done_name(*reason));
                     out.telemetry.push(TelemetryRecord {
@@ -700,6 +750,8 @@ impl Worker {
                         kind: "done",
                         fields: serde_json::json!({
                             "reason": done_name(*reason),
+                            "start_distance_m": start_distance_m(mission),
+                            "battery_v": mission.voltage().last_v(),
                             "battery_steps": mission.battery_steps(),
                             "decisions": stats.decisions,
                             "replans": stats.replans,
@@ -715,10 +767,15 @@ impl Worker {
             .events
             .iter()
             .any(|e| matches!(e, MissionEvent::Decided { .. }));
-        if decided
+        let stalled = decided
             && out.done.is_none()
-            && self.stall.on_decision(known_cells(&self.map), stats.steps)
-        {
+            && mission.returning().is_none()
+            && self.stall.on_decision(known_cells(&self.map), stats.steps);
+        if stalled && self.config.return_to_start {
+            // The end of an explored building, by the way back to the start: the core turns
+            // back at its next step (reported `NothingObservable` when it is there).
+            mission.end(DoneReason::Requested);
+        } else if stalled {
             out.done = Some(END_NOTHING_OBSERVABLE);
             out.telemetry.push(TelemetryRecord {
                 t_s,
@@ -777,7 +834,7 @@ impl Worker {
         let stats = mission.stats();
         let known = known_cells(&self.map);
         let base = self.base.counters;
-        let o = self.odometry.pose_odom();
+        let o = self.correction.pose();
         let state = SavedState {
             version: STATE_VERSION,
             mission_time_s: t_s,
@@ -805,6 +862,8 @@ impl Worker {
             kind: "mission",
             fields: serde_json::json!({
                 "state": format!("{:?}", mission.state()),
+                "returning": mission.returning().is_some(),
+                "battery_v": mission.voltage().last_v(),
                 "battery_steps": mission.battery_steps(),
                 "decisions": stats.decisions,
                 "failed_decisions": stats.failed_decisions,
@@ -841,11 +900,32 @@ fn known_cells(map: &Map) -> usize {
 /// The `done` reason of an onboard end: decisions stopped adding to the map.
 pub const END_NOTHING_OBSERVABLE: &str = "NothingObservable";
 
+/// The battery voltage a status packet reports \[V\] (the 16-bit BATTERYX10 when the firmware
+/// sends it, else the 8-bit BATTERY; both in 0.1 V).
+fn battery_v(status: &StatusPacket) -> f32 {
+    f32::from(
+        status
+            .extras
+            .battery_dv_x10
+            .unwrap_or(u16::from(status.battery_dv)),
+    ) * 0.1
+}
+
+/// How far the mission's pose estimate is from its start \[m\].
+fn start_distance_m(mission: &Mission<GRID_CELLS>) -> f32 {
+    let start = mission.start_pose_map().position();
+    mission.pose_map().position().distance(start)
+}
+
 fn done_name(reason: DoneReason) -> &'static str {
     match reason {
         DoneReason::CoverageReached => "CoverageReached",
         DoneReason::BatteryExhausted => "BatteryExhausted",
         DoneReason::NothingReachable => "NothingReachable",
+        DoneReason::VoltageLow => "VoltageLow",
+        // The onboard program ends a mission itself only when decisions stop adding to the
+        // map ([`Stall`]).
+        DoneReason::Requested => END_NOTHING_OBSERVABLE,
     }
 }
 

@@ -13,8 +13,10 @@
 //! - [`persist`]: atomic saving and loading of the mission state, telemetry;
 //! - [`record`]: the mission's MCAP recording (`mission.mcap`, see `crate::record`);
 //! - [`pose_history`]: odometry readings with their times, interpolated to a scan's time;
-//! - [`runtime`]: `papillon run` and `papillon probe`.
+//! - [`runtime`]: `papillon run` and `papillon probe`;
+//! - [`calibrate`]: `papillon calibrate` (UMBmark).
 
+pub mod calibrate;
 pub mod codec;
 pub mod driver;
 pub mod laser;

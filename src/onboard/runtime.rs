@@ -759,6 +759,15 @@ impl Progress {
                 reason = %record.fields["reason"].as_str().unwrap_or("?"),
                 "mission done"
             ),
+            "returning" => tracing::info!(
+                t_s = format_args!("{:.0}", record.t_s),
+                reason = %record.fields["reason"].as_str().unwrap_or("?"),
+                start_distance_m = format_args!(
+                    "{:.1}",
+                    record.fields["start_distance_m"].as_f64().unwrap_or(0.0)
+                ),
+                "mission ended: returning to the start"
+            ),
             _ => {}
         }
     }
@@ -810,6 +819,70 @@ pub struct ProbeOptions {
     pub tcp: Option<String>,
     /// Drive a small square at low speed and report the odometry.
     pub drive: bool,
+    /// The serial speed to use \[baud\]; `None` tries [`PROBE_BAUD_RATES`] in turn.
+    pub baud: Option<u32>,
+    /// The laser to check with one scan: `board.laser` as the board (with `--laser`) says;
+    /// `None` checks no laser.
+    pub laser: Option<BoardConfig>,
+}
+
+/// The serial speeds `probe` tries, in order, when none is forced: the P3-DX's power-up 9600
+/// first, then the speeds HOSTBAUD can select (a robot whose FLASH `HostBaud` was changed
+/// answers at that speed).
+pub const PROBE_BAUD_RATES: [u32; 5] = crate::config::ARCOS_BAUD_RATES;
+
+/// How long `probe` waits for each SYNC reply while it looks for the robot's speed.
+pub const PROBE_SYNC_TIMEOUT: Duration = Duration::from_millis(400);
+
+/// Opens the link and runs the ARCOS handshake: at `options.baud`, or at each of
+/// [`PROBE_BAUD_RATES`] in turn until the robot answers (over TCP, once). Writes one line per
+/// speed tried.
+pub(super) async fn probe_connect(
+    options: &ProbeOptions,
+    out: &mut impl io::Write,
+) -> Result<ArcosClient, RuntimeError> {
+    let session = SessionOptions {
+        expected_subclass: None,
+        ..SessionOptions::default()
+    };
+    let rates: Vec<u32> = match (&options.tcp, options.baud) {
+        (Some(_), _) => vec![9600],
+        (None, Some(b)) => vec![b],
+        (None, None) => PROBE_BAUD_RATES.to_vec(),
+    };
+    let searching = rates.len() > 1;
+    let mut last = None;
+    for &baud in &rates {
+        let link = open_robot_link(options.tcp.as_deref(), &options.port, baud).await?;
+        writeln!(out, "link: {}", link.describe())?;
+        // While searching, a short handshake per speed; the speed found then gets a whole one.
+        let trial = if searching {
+            SessionOptions {
+                sync_timeout: PROBE_SYNC_TIMEOUT,
+                sync_attempts: 2,
+                ..session.clone()
+            }
+        } else {
+            session.clone()
+        };
+        match ArcosClient::connect(link, trial).await {
+            Ok(client) => {
+                if searching {
+                    writeln!(out, "baud: the robot answers at {baud} baud")?;
+                }
+                return Ok(client);
+            }
+            Err(e @ (SessionError::HandshakeFailed { .. } | SessionError::Io(_))) if searching => {
+                writeln!(out, "baud: no answer at {baud} baud ({e})")?;
+                last = Some(e);
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
+    Err(match last {
+        Some(e) => RuntimeError::Session(e),
+        None => RuntimeError::Link(io::Error::other("no serial speed to try")),
+    })
 }
 
 /// `papillon probe`: connects, prints the robot's identity, CONFIG highlights, battery and
@@ -819,13 +892,7 @@ pub async fn probe_with(
     options: &ProbeOptions,
     out: &mut impl io::Write,
 ) -> Result<(), RuntimeError> {
-    let link = open_robot_link(options.tcp.as_deref(), &options.port, 9600).await?;
-    writeln!(out, "link: {}", link.describe())?;
-    let session = SessionOptions {
-        expected_subclass: None,
-        ..SessionOptions::default()
-    };
-    let mut client = ArcosClient::connect(link, session).await?;
+    let mut client = probe_connect(options, out).await?;
     let id = client.identity().clone();
     writeln!(
         out,
@@ -917,6 +984,64 @@ pub async fn probe_with(
     let stats = client.stop_and_close().await?;
     writeln!(out, "link: {}", stats.codec)?;
     writeln!(out, "disconnected: motors disabled, session closed")?;
+    if let Some(board) = &options.laser {
+        probe_laser(board, out).await?;
+    }
+    Ok(())
+}
+
+/// How long `probe` waits for the laser's first scan.
+pub const PROBE_SCAN_WAIT: Duration = Duration::from_secs(5);
+
+/// Connects the board's laser, takes one scan and prints its beam count (against the board's)
+/// and its ranges.
+async fn probe_laser(board: &BoardConfig, out: &mut impl io::Write) -> Result<(), RuntimeError> {
+    let model = board.laser.model.as_str();
+    let at = board
+        .laser
+        .address
+        .as_ref()
+        .or(board.laser.port.as_ref())
+        .map_or("?", |a| a.as_str());
+    let mut laser = connect_laser(board, laser_codec(), Opening::First)
+        .await
+        .map_err(|e| e.at(laser_source(board)))?;
+    let scan = laser.next_scan(Instant::now() + PROBE_SCAN_WAIT).await;
+    let _ = laser.close().await;
+    let Some((_, scan)) = scan.map_err(RuntimeError::Laser)? else {
+        writeln!(
+            out,
+            "laser: {model} at {at}: no scan within {} s",
+            PROBE_SCAN_WAIT.as_secs()
+        )?;
+        return Err(RuntimeError::Laser(super::laser::LaserError::Io(
+            io::Error::new(
+                io::ErrorKind::TimedOut,
+                format!("no scan within {} s", PROBE_SCAN_WAIT.as_secs()),
+            ),
+        )));
+    };
+    let ranges: Vec<f32> = scan.beams().iter().filter_map(|b| b.range_m).collect();
+    let (lo, hi) = ranges.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), &r| {
+        (lo.min(r), hi.max(r))
+    });
+    let expected = board.laser.beam_count;
+    writeln!(
+        out,
+        "laser: {model} at {at}: one scan of {} beams ({}), {} returns{}",
+        scan.len(),
+        if scan.len() == usize::from(expected) {
+            format!("as the board's {expected}")
+        } else {
+            format!("the board says {expected}: check $.laser.beam_count")
+        },
+        ranges.len(),
+        if ranges.is_empty() {
+            ", nothing within range".to_string()
+        } else {
+            format!(", ranges {lo:.2} m to {hi:.2} m")
+        }
+    )?;
     Ok(())
 }
 
@@ -930,7 +1055,7 @@ fn pose_text(p: crate::geometry::Pose2) -> String {
     )
 }
 
-async fn next_status(
+pub(super) async fn next_status(
     client: &mut ArcosClient,
     wait: Duration,
 ) -> Result<Option<StatusPacket>, RuntimeError> {
@@ -1117,6 +1242,8 @@ mod tests {
                 port: String::new(),
                 tcp: Some(addr),
                 drive: false,
+                baud: None,
+                laser: None,
             },
             &mut out,
         )

@@ -98,6 +98,10 @@ pub struct Args {
     /// With --live: simulated seconds per wall-clock second (more than 0, at most 1000).
     #[arg(long, default_value = "1", requires = "live", value_parser = live_speed)]
     pub live_speed: f64,
+    /// When a robot's mission ends, drive it back to its start position first (the core's
+    /// return to start, as `papillon run --return-to-start`).
+    #[arg(long)]
+    pub return_to_start: bool,
 }
 
 /// `--live-speed`: a number above 0 and at most 1000.
@@ -192,7 +196,10 @@ pub fn setup_from_args(args: &Args) -> Result<Setup, String> {
 /// Runs the command.
 pub fn run(args: Args) -> ExitCode {
     let setup = match setup_from_args(&args) {
-        Ok(s) => s,
+        Ok(mut s) => {
+            s.run.mission.return_to_start = args.return_to_start;
+            s
+        }
         Err(e) => {
             eprintln!("papillon-sim mission: {e}");
             return ExitCode::from(2);
@@ -262,6 +269,7 @@ mod tests {
             mcap: None,
             live: None,
             live_speed: 1.0,
+            return_to_start: false,
         }
     }
 

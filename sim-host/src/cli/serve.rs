@@ -66,6 +66,49 @@ pub struct Args {
     /// `boards/sim.json`.
     #[arg(long, default_value_t = 0.0, value_parser = super::noise_fraction)]
     pub laser_noise: f32,
+    /// The serial speed of the emulated microcontroller on `--pty` [baud]: it answers only a
+    /// client that set its line to this speed, as a real serial line would (a pty itself
+    /// carries bytes at any speed). Default: any speed.
+    #[arg(long, value_parser = ["9600", "19200", "38400", "57600", "115200"])]
+    pub baud: Option<String>,
+    /// Systematic odometry errors of the emulated robot, `ED,EB` (Borenstein & Feng's UMBmark
+    /// errors): ED the right over left wheel diameter, EB the effective over nominal
+    /// wheelbase, e.g. `1.02,0.97`; each from 0.8 to 1.2. Default: perfect wheels.
+    #[arg(long, value_parser = wheel_errors)]
+    pub wheel_errors: Option<(f32, f32)>,
+    /// Robot 0's start pose `X,Y,THETA` [m, m, rad] instead of the world's (1 m from its
+    /// south-west corner, heading east), e.g. `12,12,0`.
+    #[arg(long, value_parser = start_pose, allow_negative_numbers = true)]
+    pub start: Option<papillon::geometry::Pose2>,
+}
+
+/// `X,Y,THETA`, finite numbers.
+fn start_pose(s: &str) -> Result<papillon::geometry::Pose2, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<Vec<f32>>>()
+        .ok_or_else(|| format!("expected X,Y,THETA as numbers (e.g. 12,12,0), found {s:?}"))?;
+    match v[..] {
+        [x, y, theta] => Ok(papillon::geometry::Pose2::new(x, y, theta)),
+        _ => Err(format!("expected X,Y,THETA (three numbers), found {s:?}")),
+    }
+}
+
+/// `ED,EB`, each a ratio from 0.8 to 1.2.
+fn wheel_errors(s: &str) -> Result<(f32, f32), String> {
+    let bad = || {
+        format!("expected ED,EB with each a ratio from 0.8 to 1.2 (e.g. 1.02,0.97), found {s:?}")
+    };
+    let (ed, eb) = s.split_once(',').ok_or_else(bad)?;
+    let ratio = |v: &str| {
+        v.trim()
+            .parse::<f32>()
+            .ok()
+            .filter(|r| (0.8..=1.2).contains(r))
+            .ok_or_else(bad)
+    };
+    Ok((ratio(ed)?, ratio(eb)?))
 }
 
 /// What `serve` presents itself as.
@@ -129,6 +172,9 @@ impl From<Args> for ServeConfig {
                 Subclass::P3dxSh => arcos::Subclass::P3dxSh,
             },
             laser_noise_fraction: a.laser_noise,
+            baud: a.baud.and_then(|b| b.parse().ok()),
+            wheel_errors: a.wheel_errors,
+            start: a.start,
         }
     }
 }

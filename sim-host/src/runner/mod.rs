@@ -593,7 +593,15 @@ impl Runner {
             self.sample();
         }
         if nothing_observable {
-            self.end(EndReason::NothingObservable);
+            if self.config.mission.return_to_start {
+                // Each robot drives back first; the run ends when all are done (their
+                // `Requested` end is reported as nothing-observable).
+                for r in &mut self.robots {
+                    r.mission.end(DoneReason::Requested);
+                }
+            } else {
+                self.end(EndReason::NothingObservable);
+            }
         }
         self.check_end();
         decided

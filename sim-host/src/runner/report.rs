@@ -20,11 +20,13 @@ pub enum EndReason {
     /// Decisions stopped adding to the map ([`super::PumpModel::nothing_observable_end`],
     /// `papillon run`'s end of an explored building).
     NothingObservable,
+    /// The battery voltage stayed low (a mission fed voltages; the runner feeds none).
+    VoltageLow,
 }
 
 impl EndReason {
     /// Name in reports: `coverage-reached`, `battery-exhausted`, `nothing-reachable`,
-    /// `time-limit`, `nothing-observable`.
+    /// `time-limit`, `nothing-observable`, `voltage-low`.
     pub fn name(self) -> &'static str {
         match self {
             EndReason::CoverageReached => "coverage-reached",
@@ -32,6 +34,7 @@ impl EndReason {
             EndReason::NothingReachable => "nothing-reachable",
             EndReason::TimeLimit => "time-limit",
             EndReason::NothingObservable => "nothing-observable",
+            EndReason::VoltageLow => "voltage-low",
         }
     }
 }
@@ -42,6 +45,9 @@ impl From<DoneReason> for EndReason {
             DoneReason::CoverageReached => EndReason::CoverageReached,
             DoneReason::BatteryExhausted => EndReason::BatteryExhausted,
             DoneReason::NothingReachable => EndReason::NothingReachable,
+            DoneReason::VoltageLow => EndReason::VoltageLow,
+            // The runner ends a mission itself only when decisions stop adding to the map.
+            DoneReason::Requested => EndReason::NothingObservable,
         }
     }
 }

@@ -95,6 +95,17 @@ pub struct ServeConfig {
     /// configuration (`boards/sim.json`: 5 %, the thesis's); the binary predicts what the
     /// runner predicts only on the same laser (`scripts/house-check.sh` passes the board's).
     pub laser_noise_fraction: f32,
+    /// The serial speed of the emulated microcontroller on a pty \[baud\]: it answers only a
+    /// client whose line is set to this speed (a pty carries bytes at any speed; a real serial
+    /// line at the wrong speed delivers garbage, modelled as lost bytes). `None`: any speed.
+    /// Not used over TCP.
+    pub baud: Option<u32>,
+    /// The emulated robot's systematic odometry errors, `(Ed, Eb)` (Borenstein & Feng 1996,
+    /// [`crate::odometry_error`]): right over left wheel diameter, effective over nominal
+    /// wheelbase. `None`: perfect wheels.
+    pub wheel_errors: Option<(f32, f32)>,
+    /// Robot 0's start pose \[m, m, rad\] instead of the world's.
+    pub start: Option<papillon::geometry::Pose2>,
 }
 
 /// An endpoint the server opened, for the announcement line.
@@ -115,6 +126,8 @@ struct Sim {
     subclass: Subclass,
     /// See [`ServeConfig::laser_noise_fraction`].
     laser_noise_fraction: f32,
+    /// See [`ServeConfig::baud`].
+    baud: Option<u32>,
     /// Per robot: whether a client owns its microcontroller (one client at a time, as a
     /// serial port has one owner and AMRISim answers one client).
     owned: Vec<AtomicBool>,
@@ -197,8 +210,14 @@ impl Server {
     /// Loads the world, places the robots, opens every endpoint and starts the threads; the
     /// error is one line.
     pub fn start(config: &ServeConfig) -> Result<Self, String> {
-        let world = World::load(&config.map, MAP_RESOLUTION_M)
+        let mut world = World::load(&config.map, MAP_RESOLUTION_M)
             .map_err(|e| format!("cannot load map {:?}: {e}", config.map))?;
+        if let Some(start) = config.start {
+            world.set_start(start);
+            if let Some(why) = world.start_outside() {
+                return Err(format!("--start: {why}"));
+            }
+        }
         let n = config.robots;
         // The thesis's slip (a slide of about 1.5 cm at the end of each move), as the mission
         // runner uses: the core has no scan matching, so the full default slip smears its map.
@@ -215,6 +234,9 @@ impl Server {
                 let mut b = RobotBody::new(body, pose, config.seed.wrapping_add(i as u64));
                 // The motors are disabled at power-on until a client enables them.
                 b.set_motors_enabled(false);
+                if let Some((ed, eb)) = config.wheel_errors {
+                    b.set_wheels(crate::odometry_error::DrawnWheels::exact(ed, eb));
+                }
                 b
             })
             .collect();
@@ -224,6 +246,7 @@ impl Server {
             identity: config.identity,
             subclass: config.subclass,
             laser_noise_fraction: config.laser_noise_fraction,
+            baud: config.baud,
             owned: (0..n).map(|_| AtomicBool::new(false)).collect(),
             bodies: Mutex::new(bodies),
             start: Instant::now(),

@@ -42,6 +42,29 @@ pub(super) fn open_pty() -> io::Result<(OwnedFd, PathBuf, OwnedFd)> {
     Ok((master, path, slave))
 }
 
+/// The speed the client set on the slave of the pty whose master is `master` \[baud\]: on
+/// Linux a master's termios requests act on its slave, and `TCGETS2` gives the speed as a
+/// number (also one set with `BOTHER`). `None` where this is not available.
+pub(super) fn slave_baud(master: &std::fs::File) -> Option<u32> {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        // SAFETY: TCGETS2 fills a termios2 we own, on a descriptor we own.
+        unsafe {
+            let mut t: libc::termios2 = std::mem::zeroed();
+            if libc::ioctl(master.as_raw_fd(), libc::TCGETS2, &mut t) == 0 {
+                return Some(t.c_ospeed);
+            }
+        }
+        None
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        let _ = master;
+        None
+    }
+}
+
 /// Makes `link` a symlink to `target`, replacing an older symlink (never a regular file).
 pub(super) fn make_symlink(link: &Path, target: &Path) -> Result<(), String> {
     if let Ok(meta) = std::fs::symlink_metadata(link) {

@@ -90,6 +90,10 @@ trait Wait {
     /// Makes the next read wait at most `wait` (a TCP read timeout); returns false if reads
     /// do not wait (a non-blocking pty), so the loop sleeps instead.
     fn wait_at_most(&mut self, wait: Duration) -> bool;
+    /// The speed the client set on its end of a serial line \[baud\]; `None` over TCP.
+    fn line_baud(&self) -> Option<u32> {
+        None
+    }
 }
 
 impl Wait for Tcp {
@@ -101,6 +105,10 @@ impl Wait for Tcp {
 impl Wait for std::fs::File {
     fn wait_at_most(&mut self, _: Duration) -> bool {
         false
+    }
+
+    fn line_baud(&self) -> Option<u32> {
+        super::pty::slave_baud(self)
     }
 }
 
@@ -149,6 +157,14 @@ fn arcos_session(
                 0
             }
         };
+        // A client at another speed than the microcontroller's sends garbage, and reads
+        // garbage: modelled as bytes lost both ways.
+        let wrong_speed = sim
+            .baud
+            .is_some_and(|want| io.line_baud().is_some_and(|have| have != want));
+        if wrong_speed {
+            n = 0;
+        }
         if n > 0 && !holding {
             holding = sim.claim(robot);
             if !holding {
@@ -186,7 +202,7 @@ fn arcos_session(
             opened = false;
             refused_logged = false;
         }
-        if cut {
+        if cut || wrong_speed {
             // The firmware runs on (its watchdog halts the robot), but nothing gets through.
             out.clear();
             line.clear();

@@ -18,6 +18,9 @@ use super::super::{DoneReason, MissionEvent, ReplanCause, SelectorKind};
 use super::following::{first_blocked, polyline_length};
 use super::{Events, Mission, Phase, RETRY_S, secs};
 
+/// The energy a plan back to the start may use \[steps\]: the way back is not limited by the
+/// budget (it is what the reserve is for).
+const HOMING_BUDGET_STEPS: f32 = 1.0e6;
 /// Search for a passable start cell up to this far from the robot \[m\].
 const START_SNAP_M: f32 = 0.6;
 /// A robot that moved this far since the first replan counted against its errand has made
@@ -97,6 +100,11 @@ impl<const N: usize> Mission<N> {
         self.blacklist.forget_changed(&map.grid);
         if let Some(goal) = self.goal.targets.take() {
             return self.decide_goal(now, goal, map, ws, events);
+        }
+        if let Some(reason) = self.homing {
+            // Back at the start, or the way back was given up: the mission ends.
+            self.finish(reason, events);
+            return true;
         }
         // A decision computed ahead, if its path is still clear.
         if let Some(mut d) = self.ahead.take() {
@@ -333,7 +341,12 @@ impl<const N: usize> Mission<N> {
             grid: &map.grid,
             trav: &map.trav,
             pose: self.start_pose(map, pose),
-            battery_steps: self.senses.battery_steps,
+            // The way back to the start is driven whatever energy is left.
+            battery_steps: if self.homing.is_some() {
+                HOMING_BUDGET_STEPS
+            } else {
+                self.senses.battery_steps
+            },
             laser: &self.config.laser,
         }
     }
