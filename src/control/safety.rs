@@ -1004,6 +1004,27 @@ mod tests {
     }
 
     #[test]
+    fn range_noise_excuses_a_return_in_the_side_margin_but_not_one_before_the_body() {
+        // The bumpered body (half width 0.2125 m) at 100 mm/s watches 0.2425 m each side. A
+        // return at 0.235 m to the left, 0.3 m ahead of the laser: with the thesis's 5 %
+        // noise, moved out along its beam by 10 % it lies outside the corridor (a frame just
+        // beside it, measured short); with a noise-free laser it stops the robot. One at
+        // 0.2 m, in front of the body itself, stops it whatever the noise.
+        let range_at = |y: f32, deg: f32| y / math::sin(crate::units::deg_to_rad(deg));
+        for (noise, y, deg, stops) in [
+            (0.05, 0.235, 38.0, false),
+            (0.0, 0.235, 38.0, true),
+            (0.05, 0.2, 34.0, true),
+        ] {
+            let mut b = Bench::new();
+            b.laser.noise_fraction = noise;
+            b.scan = scan_with(None, &[(beam_at(deg as i32), range_at(y, deg))]);
+            let cmd = b.tick(forward(100)).0;
+            assert_eq!(cmd == RobotCommand::Stop, stops, "noise {noise}, y {y}");
+        }
+    }
+
+    #[test]
     fn invalid_zero_ranges_are_not_obstacles() {
         let mut b = Bench::new();
         b.scan = scan_with(Some(0.0), &[]);
