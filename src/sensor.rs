@@ -10,7 +10,10 @@
 //! log-odds evidence on the occupancy grid (Thrun, Burgard & Fox, *Probabilistic Robotics*,
 //! 2005, §9.2): every beam is traced with the exact grid traversal of [`crate::raycast`]; cells
 //! before the return gain Free evidence, the return cell gains Occupied evidence, and a beam
-//! with no return within the usable range gives Free evidence up to that range. As in the
+//! with no return within the usable range gives Free evidence up to that range. The return
+//! cell is the one holding the point a little past the measured range ([`hit_depth_m`]: the
+//! range noise's two standard deviations, at most a quarter cell), so that a wall's face on a
+//! cell edge, or a return just short of it, marks the wall and not the free cell in front. As in the
 //! thesis (Bendahmane 2023), each piece of evidence is weighted by how close the beam passes to
 //! the cell centre, `w = exp(-d² / 2σ²)` with `d` the perpendicular distance \[m\], and the
 //! evidence of all beams crossing a cell accumulates.
@@ -310,8 +313,8 @@ pub struct ScanIntegration {
 /// sensor model. The laser pose is the robot pose composed with `laser.mount`. Per beam:
 /// - a reading below `laser.min_range_m` (blind zone) or not a number is ignored;
 /// - a return within `laser.max_range_m`: cells from the laser up to the return get Free
-///   evidence and the cell holding the return gets Occupied evidence (and only that, from
-///   this beam);
+///   evidence and the cell holding the return, taken [`hit_depth_m`] past the measured range,
+///   gets Occupied evidence (and only that, from this beam);
 /// - a return beyond `laser.max_range_m`, or no return: Free evidence up to the usable range.
 ///
 /// Each update is weighted by `exp(-d² / 2σ²)`, `d` the distance \[m\] from the cell centre to
@@ -360,6 +363,15 @@ pub fn integrate_scan<const N: usize>(
         out.beams_used += 1;
         let angle = pose.theta + beam.angle_rad;
         let (dir_x, dir_y) = (math::cos(angle), math::sin(angle));
+        // A return is a point on a surface: the cell holding the surface is the one the beam
+        // enters there. Taken literally, a return on a cell's edge (a wall's face) or short of
+        // it by the range noise lands in the free cell in front of the wall; the hit is moved
+        // a little past the measured range (see `hit_depth_m`).
+        let length_m = if hit {
+            length_m + hit_depth_m(length_m, laser.noise_fraction, grid.geometry().resolution_m)
+        } else {
+            length_m
+        };
         let end = Point2::new(origin.x + dir_x * length_m, origin.y + dir_y * length_m);
         let geom = *grid.geometry();
         // The flat index of the cell holding the return (none when no return, or outside the
@@ -393,6 +405,31 @@ pub fn integrate_scan<const N: usize>(
         out.updates += walk.visited;
     }
     Ok(out)
+}
+
+/// How far past a measured range \[m\] the Occupied evidence goes: into the surface the beam
+/// hit, by twice the range's standard deviation (`noise_fraction · range_m`) plus a twentieth
+/// of a cell, at most a quarter of a cell (`resolution_m`). The Occupied cell is the one
+/// holding that point; every cell before it gets Free evidence.
+///
+/// Why: a wall's face lies between cells, and a return is as often short of the face as past
+/// it. In the cell holding the return itself, a beam that ends on the face (moving west or
+/// south, a face belongs to the free cell in front of it) or a little short of it marks the
+/// free cell in front of the wall Occupied, half the time with any noise, and cells in front of
+/// a door's jambs and in its frame shut a 0.5 m door that a 0.381 m robot fits through
+/// (docs/experiments.md, issue 17). Thrun, Burgard & Fox, *Probabilistic Robotics* (2005),
+/// §9.2, Table 9.2: the obstacle region of the inverse range sensor model lies at and beyond
+/// the measured range, `|r - z| < α/2`; a quarter of a cell keeps a return in the middle of a
+/// cell in that cell (it does not push the wall a cell back), and the depth never reaches
+/// through a wall half a cell thick.
+#[inline]
+pub fn hit_depth_m(range_m: f32, noise_fraction: f32, resolution_m: f32) -> f32 {
+    let noise = if noise_fraction.is_finite() {
+        noise_fraction.max(0.0)
+    } else {
+        0.0
+    };
+    (0.05 * resolution_m + 2.0 * noise * range_m).min(0.25 * resolution_m)
 }
 
 /// One beam's line, for weighting its evidence by the distance to a cell's centre.
@@ -597,6 +634,45 @@ mod tests {
     }
 
     #[test]
+    fn a_return_on_a_wall_face_marks_the_wall_not_the_cell_in_front() {
+        // A wall whose east face is the line x = 1.1 m (column 10 is the wall, 11 free), seen
+        // from the east along the centres of row 30: a return on the face, or 1 cm short of it
+        // with a precise laser, lies in column 11 itself; the Occupied evidence goes to column
+        // 10 and column 11 stays Free. A return in the middle of a cell stays in that cell.
+        let model = SensorModel::default();
+        let pose = Pose2::new(3.05, 3.05, PI);
+        for (noise, range_m) in [(0.0, 1.95), (0.003, 1.95), (0.003, 1.94), (0.05, 1.95)] {
+            let mut laser = LaserConfig::thesis();
+            laser.noise_fraction = noise;
+            let mut g = grid();
+            let mut s = Scan::new();
+            s.push(Beam {
+                angle_rad: 0.0,
+                range_m: Some(range_m),
+            })
+            .unwrap();
+            integrate_scan(&mut g, &s, pose, &laser, &model, &mut ()).unwrap();
+            let at = |col| g.class_of(Cell::new(col, 30));
+            assert_eq!(
+                at(10),
+                Some(CellClass::Occupied),
+                "noise {noise}, {range_m} m"
+            );
+            assert_eq!(at(11), Some(CellClass::Free), "noise {noise}, {range_m} m");
+            assert_eq!(
+                at(9),
+                Some(CellClass::Unknown),
+                "noise {noise}, {range_m} m"
+            );
+        }
+        // Depth: a twentieth of a cell plus two standard deviations, at most a quarter cell.
+        assert!((hit_depth_m(2.0, 0.0, 0.1) - 0.005).abs() < 1e-6);
+        assert!((hit_depth_m(2.0, 0.003, 0.1) - 0.017).abs() < 1e-6);
+        assert!((hit_depth_m(2.0, 0.05, 0.1) - 0.025).abs() < 1e-6);
+        assert!((hit_depth_m(2.0, f32::NAN, 0.1) - 0.005).abs() < 1e-6);
+    }
+
+    #[test]
     fn evidence_is_weighted_by_distance_to_the_cell_centre_and_accumulates() {
         let laser = LaserConfig::thesis();
         let model = SensorModel::default();
@@ -641,6 +717,11 @@ mod tests {
                 Some(r) if r < laser.min_range_m => continue,
                 Some(r) if r <= laser.max_range_m => (r, true),
                 _ => (laser.max_range_m, false),
+            };
+            let length = if hit {
+                length + hit_depth_m(length, laser.noise_fraction, geom.resolution_m)
+            } else {
+                length
             };
             let a = pose.theta + beam.angle_rad;
             let (dx, dy) = (math::cos(a), math::sin(a));

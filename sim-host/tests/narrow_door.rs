@@ -1,33 +1,90 @@
 //! A P3-DX (0.381 m wide) explores two rooms joined only by one door: through a 0.6 m door it
 //! plans with its footprint, drives through straight and never touches a wall; a 0.4 m door it
-//! never plans through. The 0.5 m door of issue 17 is not passed yet (ignored test).
+//! never plans through. The 0.5 m door of issue 17 (6 cm to spare on each side) is passed
+//! without contact with exact odometry, with the thesis's 5 % laser noise and with a SICK
+//! LMS1xx's 0.3 %; with the thesis's odometry slip (the runner's default) the map drifts by a
+//! cell or two against the true walls and it is not passed in most seeds yet (ignored test).
 
 use papillon::mission::{MissionConfig, SelectorKind};
 use papillon_sim::dynamic::Dynamics;
+use papillon_sim::physics::SlipConfig;
 use papillon_sim::runner::{RunConfig, RunReport, Runner};
 use papillon_sim::world::builtin;
 
 /// Two 5.75 m x 5 m rooms side by side (0.1 m cells), the wall between them at x = 6.4 m with
 /// one door of `door_m` centred on y = 3 m.
 fn run(door_m: f32, seed: u64) -> RunReport {
+    run_with(door_m, seed, None, true)
+}
+
+/// [`run`] with the laser's range noise (`None`: the thesis's 5 %) and the thesis's odometry
+/// slip on or off (exact odometry).
+fn run_with(door_m: f32, seed: u64, noise: Option<f32>, slip: bool) -> RunReport {
     let mut world = builtin::empty(0.1).unwrap();
     // Keep the south-west 12 m x 6 m: wall off the rest.
     world.fill_rect(0.5, 6.0, 23.5, 23.5, true);
     world.fill_rect(12.5, 0.5, 23.5, 6.0, true);
     world.fill_rect(6.4, 0.5, 6.5, 3.0 - door_m / 2.0, true);
     world.fill_rect(6.4, 3.0 + door_m / 2.0, 6.5, 6.0, true);
-    let mission = MissionConfig {
+    let mut mission = MissionConfig {
         selector: SelectorKind::NearestFrontier,
         ..MissionConfig::default()
     };
-    Runner::new(world, Dynamics::new(), RunConfig::new(mission, 1, seed))
+    if let Some(n) = noise {
+        mission.laser.noise_fraction = n;
+    }
+    let mut config = RunConfig::new(mission, 1, seed);
+    if !slip {
+        config.body.slip = SlipConfig::none();
+    }
+    Runner::new(world, Dynamics::new(), config)
         .unwrap()
         .run()
         .unwrap()
 }
 
+/// Through the 0.5 m door with exact odometry and laser noise `noise`, seeds 25..27.
+fn half_metre_door_with_exact_odometry(noise: f32) {
+    for seed in [25, 26, 27] {
+        let r = run_with(0.5, seed, Some(noise), false);
+        assert_eq!(r.collisions(), 0, "noise {noise}, seed {seed}: contacts");
+        let crossed = r.robots[0].trajectory.iter().any(|p| p.x > 7.0);
+        assert!(
+            crossed,
+            "noise {noise}, seed {seed}: never went through the door"
+        );
+        assert!(
+            r.coverage >= 0.95,
+            "noise {noise}, seed {seed}: coverage {} ({:?})",
+            r.coverage,
+            r.reason
+        );
+    }
+}
+
 #[test]
-#[ignore = "fails today (issue 17 open): the robot reaches the 0.5 m door but does not drive through it"]
+fn a_half_metre_door_is_driven_through_with_the_thesis_laser_noise() {
+    half_metre_door_with_exact_odometry(0.05);
+}
+
+#[test]
+fn a_half_metre_door_is_driven_through_with_a_precise_laser() {
+    half_metre_door_with_exact_odometry(0.003);
+}
+
+#[test]
+fn a_forty_centimetre_door_is_never_planned_through_with_a_precise_laser() {
+    for seed in [25, 26] {
+        let r = run_with(0.4, seed, Some(0.003), false);
+        assert_eq!(r.collisions(), 0);
+        let crossed = r.robots[0].trajectory.iter().any(|p| p.x > 6.5);
+        assert!(!crossed, "seed {seed}: went through a 0.4 m door");
+        assert!(r.coverage < 0.6, "seed {seed}: coverage {}", r.coverage);
+    }
+}
+
+#[test]
+#[ignore = "fails with the thesis's odometry slip (issue 17 open): the map drifts a cell against the true frames and the door is shut on it or the monitor stops the robot in it (2 of 5 seeds pass)"]
 fn a_half_metre_door_is_driven_through_without_contact() {
     for seed in [25, 26, 27] {
         let r = run(0.5, seed);

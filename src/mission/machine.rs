@@ -415,6 +415,17 @@ impl<const N: usize> Mission<N> {
         if let Some(cap) = footprint::narrow_speed_cap(&map.trav, self.senses.pose_map) {
             proposed.speed_mm_s = proposed.speed_mm_s.clamp(-cap, cap);
         }
+        // Slow down rather than be stopped: a return the safety monitor would stop for at
+        // this speed but not at the creep speed (a frame beside the body in a door, a wall
+        // ahead of a waypoint near it) brings the speed down to the creep speed.
+        if self.senses.scan_time.is_some() {
+            proposed = footprint::creep_near_obstacles(
+                &self.monitor,
+                proposed,
+                &self.senses.scan,
+                &self.config.laser,
+            );
+        }
         let mut remembered = heapless::Vec::new();
         let fp = self.config.safety.footprint;
         footprint::remembered_obstacles(

@@ -666,6 +666,40 @@ fn waypoints_through_a_door_turn_outside_the_no_turn_band() {
 }
 
 #[test]
+fn the_leg_through_a_narrow_door_runs_along_its_axis() {
+    // A 0.5 m door in a wall along row 15 (cells 18..22), approached from far to the side on
+    // both sides: the leg that crosses the wall runs down the door's middle column, so the
+    // robot enters it square, not at a slant.
+    let mut astar = AStar::<CAP>::new();
+    let mut path = [Cell::default(); CAP];
+    let mut out = [Point2::default(); CAP];
+    let (_, trav) = wall_with_door(5);
+    let g = *trav.geometry();
+    for (a, b) in [
+        (Cell::new(4, 4), Cell::new(28, 20)),
+        (Cell::new(30, 3), Cell::new(2, 22)),
+        (Cell::new(12, 10), Cell::new(26, 19)),
+        // A straight line between these stays in the door's middle column through the
+        // channel, at a slant of 6°.
+        (Cell::new(19, 2), Cell::new(21, 22)),
+        (Cell::new(21, 3), Cell::new(19, 23)),
+    ] {
+        let p = astar.find_path(&trav, a, b, &mut path).unwrap();
+        let n = prune_to_waypoints(&trav, &path[..p.len], &mut out).unwrap();
+        let crossing = out[..n]
+            .windows(2)
+            .map(|w| (g.cell_at(w[0]).unwrap(), g.cell_at(w[1]).unwrap()))
+            .find(|(c0, c1)| c0.row < 15 && c1.row > 15)
+            .expect("a leg crosses the wall");
+        assert_eq!(
+            (crossing.0.col, crossing.1.col),
+            (20, 20),
+            "{a:?} -> {b:?}: leg {crossing:?}"
+        );
+    }
+}
+
+#[test]
 fn banded_layer_updated_incrementally_equals_a_rebuild() {
     let g = GridGeometry::new(32, 24, 0.1, Point2::new(0.0, 0.0)).unwrap();
     let mut rng = random::seeded(5);

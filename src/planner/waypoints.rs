@@ -16,7 +16,15 @@
 //! ([`Traversability::can_turn`]): where the line of sight ends inside the no-turn band (a
 //! door), the waypoint goes back to the last cell of the path before it where the robot can
 //! turn, if there is one since the previous waypoint.
+//!
+//! A segment that enters the no-turn band (a door, a narrow aisle) must run along the path's
+//! own cells there: every cell it touches is a cell of the path. A shortcut may otherwise cross
+//! a one-cell channel at a slant, and a P3-DX with 6 cm to spare on each side of a 0.5 m
+//! door, entering it 6° off its axis, brings a front corner 2 cm nearer one frame (the safety
+//! monitor stops it). The path's cells through a narrow place run along its axis, and the
+//! waypoint before it is then the last cell, where the robot can still turn, on that line.
 
+use super::traversability::BAND_NO_TURN;
 use super::{BlockedBoxes, PlanError, Traversability};
 use crate::geometry::Point2;
 use crate::grid::Cell;
@@ -147,13 +155,26 @@ fn prune_with<const N: usize>(
         }
         band
     };
+    // Whether the segment from `path[a]` to `path[b]` touches only cells of `path[a..=b]`,
+    // in the path's order (a straight run of the path).
+    let along_path = |a: usize, b: usize| {
+        let mut j = a;
+        supercover(path[a], path[b], |c| {
+            while j <= b && path[j] != c {
+                j += 1;
+            }
+            j <= b
+        })
+    };
     let mut anchor = 0usize;
     // The highest wall band of the path's cells from the anchor to `k`.
     let mut band = band_at(first);
     let mut k = 1usize;
     while k < path.len() {
         let with_k = band.max(step_band(k));
-        if sees(path[anchor], path[k], with_k) {
+        if sees(path[anchor], path[k], with_k)
+            && (with_k < BAND_NO_TURN || k == anchor + 1 || along_path(anchor, k))
+        {
             band = with_k;
             k += 1;
             continue;
