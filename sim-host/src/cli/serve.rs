@@ -1,7 +1,8 @@
 //! `papillon-sim serve`: the emulator server ([`crate::serve`]) until SIGINT or SIGTERM.
 //!
 //! Prints one line per endpoint (prefixed with `robot i: ` when there are several robots),
-//! then `ready`; on a signal it stops the server and prints `stopped`.
+//! then `live ws://ADDR` with `--live`, then `ready`; on a signal it stops the server (and
+//! finishes the `--mcap` recording) and prints `stopped`.
 
 use std::io::{self, Write};
 use std::path::PathBuf;
@@ -66,6 +67,16 @@ pub struct Args {
     /// `boards/sim.json`.
     #[arg(long, default_value_t = 0.0, value_parser = super::noise_fraction)]
     pub laser_noise: f32,
+    /// Record the run as MCAP with Foxglove's schemas: the world's map at the start, each
+    /// robot's true pose and odometry at 10 Hz (`/pose/true`, `/pose/odometry`) and each scan
+    /// served (`/scan`, at the laser's true pose). Written when the server stops.
+    #[arg(long)]
+    pub mcap: Option<PathBuf>,
+    /// Serve the same messages live to Foxglove on this address (host:port, e.g.
+    /// 127.0.0.1:8765): Foxglove → Open connection → Foxglove WebSocket → ws://HOST:PORT.
+    /// Announced as `live ws://ADDR`. Off by default.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub live: Option<String>,
 }
 
 /// What `serve` presents itself as.
@@ -129,6 +140,8 @@ impl From<Args> for ServeConfig {
                 Subclass::P3dxSh => arcos::Subclass::P3dxSh,
             },
             laser_noise_fraction: a.laser_noise,
+            mcap: a.mcap,
+            live: a.live,
         }
     }
 }
@@ -151,10 +164,19 @@ pub fn run(args: Args) -> ExitCode {
             println!("{}", e.what);
         }
     }
+    if let Some(addr) = server.live_addr() {
+        println!("live ws://{addr}");
+    }
     println!("ready");
     let _ = io::stdout().flush();
     serve::signal::wait();
-    server.stop();
+    let finished = server.stop();
     let _ = writeln!(io::stdout(), "stopped");
-    ExitCode::SUCCESS
+    match finished {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("papillon-sim serve: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }
