@@ -43,6 +43,8 @@ pub mod mapfile;
 pub mod math;
 pub mod mission;
 pub mod optim;
+#[cfg(feature = "picture")]
+pub mod picture;
 pub mod planner;
 pub mod random;
 pub mod raycast;

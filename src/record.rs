@@ -33,7 +33,7 @@ use mcap::records::MessageHeader;
 use serde_json::{Value, json};
 
 use crate::geometry::{Point2, Pose2};
-use crate::grid::{CellClass, OccupancyGrid};
+use crate::grid::{CellClass, GridGeometry, OccupancyGrid};
 use crate::sensor::Scan;
 
 /// The frame every message is placed in.
@@ -332,10 +332,23 @@ impl<W: Write + Seek> Recorder<W> {
         t_s: f64,
         grid: &OccupancyGrid<N>,
     ) -> Result<(), RecordError> {
-        let g = *grid.geometry();
-        let cells: Vec<u8> = (0..grid.cell_count())
-            .map(|i| occupancy(grid.class(i)) as u8)
-            .collect();
+        self.map_cells(
+            t_s,
+            grid.geometry(),
+            (0..grid.cell_count()).map(|i| grid.class(i)),
+        )
+    }
+
+    /// A map of geometry `g` given cell by cell (flat-index order, row 0 south) at mission
+    /// time `t_s` \[s\] (`/map`, `foxglove.Grid`): for maps that are no [`OccupancyGrid`],
+    /// such as a simulated world.
+    pub fn map_cells(
+        &mut self,
+        t_s: f64,
+        g: &GridGeometry,
+        classes: impl IntoIterator<Item = CellClass>,
+    ) -> Result<(), RecordError> {
+        let cells: Vec<u8> = classes.into_iter().map(|c| occupancy(c) as u8).collect();
         let t_ns = self.time_ns(t_s);
         let message = json!({
             "timestamp": stamp(t_ns),

@@ -14,8 +14,7 @@ use crate::world::World;
 
 /// Pixels per cell for pictures about 600 pixels across (1 to 4).
 pub fn picture_scale(world: &World) -> u32 {
-    let g = world.geometry();
-    (600 / g.width.max(g.height).max(1) as u32).clamp(1, 4)
+    papillon::picture::picture_scale(world.geometry())
 }
 
 /// The JSON report (one object).

@@ -1083,3 +1083,146 @@ fn a_second_tcp_client_is_refused_while_the_first_drives() {
     let (first, last) = drive_session(&mut c);
     assert_moved(&first, &last);
 }
+
+/// `serve --mcap FILE --live ADDR`: a WebSocket client (tungstenite, not Papillon's server
+/// code) is advertised the served robot's true pose and receives it live; after the server
+/// stops, the recording read back with the `mcap` crate's reader (not Papillon's writer) holds
+/// the world's map, the true poses and odometry, and every scan a laser client was sent.
+#[test]
+fn serve_records_mcap_and_serves_the_live_view() {
+    use tungstenite::Message;
+    use tungstenite::client::IntoClientRequest;
+
+    let dir = temp_dir("mcap");
+    let path = dir.join("serve.mcap");
+    let path_arg = path.to_str().unwrap();
+    let mut server = Server::start(&[
+        "--tcp",
+        "127.0.0.1:0",
+        "--mcap",
+        path_arg,
+        "--live",
+        "127.0.0.1:0",
+    ]);
+    let url = server.endpoint("live");
+    assert!(url.starts_with("ws://127.0.0.1:"), "{url}");
+
+    let mut request = url.as_str().into_client_request().unwrap();
+    request.headers_mut().insert(
+        "Sec-WebSocket-Protocol",
+        tungstenite::http::HeaderValue::from_static("foxglove.websocket.v1"),
+    );
+    let (mut ws, _) = tungstenite::connect(request).unwrap();
+    if let tungstenite::stream::MaybeTlsStream::Plain(s) = ws.get_ref() {
+        s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    }
+    let mut live_pose = None;
+    while live_pose.is_none() {
+        match ws.read().unwrap() {
+            Message::Text(text) => {
+                let m: serde_json::Value = serde_json::from_str(text.as_str()).unwrap();
+                if m["op"] != "advertise" {
+                    continue;
+                }
+                for c in m["channels"].as_array().unwrap() {
+                    if c["topic"] == "/pose/true" {
+                        assert_eq!(c["schemaName"], "foxglove.PoseInFrame");
+                        ws.send(Message::text(
+                            serde_json::json!({"op": "subscribe",
+                                "subscriptions": [{"id": 7, "channelId": c["id"]}]})
+                            .to_string(),
+                        ))
+                        .unwrap();
+                    }
+                }
+            }
+            Message::Binary(b) => {
+                assert_eq!(b[0], 1, "message data");
+                assert_eq!(u32::from_le_bytes(b[1..5].try_into().unwrap()), 7);
+                let m: serde_json::Value = serde_json::from_slice(&b[13..]).unwrap();
+                live_pose = Some(m);
+            }
+            _ => {}
+        }
+    }
+    let live_pose = live_pose.unwrap();
+    assert_eq!(live_pose["frame_id"], "map");
+    // The empty world's start, (1, 1).
+    let x = live_pose["pose"]["position"]["x"].as_f64().unwrap();
+    assert!((x - 1.0).abs() < 0.01, "{live_pose}");
+    drop(ws);
+
+    let scans = laser_scans(
+        &server.endpoint("laser lms1xx tcp"),
+        5,
+        Duration::from_secs(3),
+    );
+    assert_eq!(scans.len(), 5);
+    let mut stream = TcpStream::connect(server.endpoint("arcos tcp")).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .unwrap();
+    let (first, last) = drive_session(&mut stream);
+    assert_moved(&first, &last);
+    drop(stream);
+    assert!(server.terminate().success());
+
+    let bytes = std::fs::read(&path).unwrap();
+    let mut topics: std::collections::BTreeMap<String, (String, Vec<serde_json::Value>)> =
+        Default::default();
+    for message in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = message.unwrap();
+        let schema = m.channel.schema.as_ref().expect("a schema");
+        assert_eq!(schema.encoding, "jsonschema");
+        assert_eq!(m.channel.message_encoding, "json");
+        topics
+            .entry(m.channel.topic.clone())
+            .or_insert_with(|| (schema.name.clone(), Vec::new()))
+            .1
+            .push(serde_json::from_slice(&m.data).unwrap());
+    }
+    let schemas: Vec<(&str, &str)> = topics
+        .iter()
+        .map(|(t, (s, _))| (t.as_str(), s.as_str()))
+        .collect();
+    assert_eq!(
+        schemas,
+        [
+            ("/map", "foxglove.Grid"),
+            ("/pose/odometry", "foxglove.PoseInFrame"),
+            ("/pose/true", "foxglove.PoseInFrame"),
+            ("/scan", "foxglove.LaserScan"),
+        ]
+    );
+    // The world's map once: every cell known, walls and free space.
+    let map = &topics["/map"].1;
+    assert_eq!(map.len(), 1);
+    let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
+    assert_eq!(
+        map[0]["column_count"].as_u64().unwrap(),
+        world.geometry().width as u64
+    );
+    use base64::Engine as _;
+    let cells = base64::engine::general_purpose::STANDARD
+        .decode(map[0]["data"].as_str().unwrap())
+        .unwrap();
+    assert_eq!(cells.len(), world.blocked().len());
+    for (c, &b) in cells.iter().zip(world.blocked()) {
+        assert_eq!(*c, if b { 100 } else { 0 });
+    }
+    // At least the scans the client got (the server may have cast one more before it saw the
+    // client leave), each with the LMS1xx's 541 beams.
+    let recorded = &topics["/scan"].1;
+    assert!(recorded.len() >= 5, "{} scans", recorded.len());
+    assert_eq!(recorded[0]["ranges"].as_array().unwrap().len(), 541);
+    // True poses at 10 Hz, showing the drive.
+    let poses = &topics["/pose/true"].1;
+    assert!(poses.len() >= 10, "{} poses", poses.len());
+    let xs: Vec<f64> = poses
+        .iter()
+        .map(|p| p["pose"]["position"]["x"].as_f64().unwrap())
+        .collect();
+    let moved = xs.iter().fold(0.0_f64, |m, x| m.max((x - xs[0]).abs()));
+    assert!(moved > 0.01, "the true pose never moved: {xs:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -319,13 +319,37 @@ impl MapImage {
         Ok(Self::from_map_file(&map))
     }
 
-    /// Writes the map as a PNG (grey levels as in the PGM).
-    pub fn write_png(&self, path: &Path) -> Result<(), PersistError> {
-        let img =
-            image::GrayImage::from_raw(self.width as u32, self.height as u32, self.pixels.clone())
-                .ok_or_else(|| {
-                    PersistError::Corrupt("map size does not match its pixels".into())
-                })?;
+    /// Writes the map as a picture a person can read (`map.png`): the map (free white,
+    /// unknown grey, occupied black; [`crate::picture::picture_scale`] pixels a cell) with the
+    /// trajectory, the chosen targets, the start and robot marks, a scale bar and a legend
+    /// ([`crate::picture::render_picture`], the drawing of `papillon-sim mission --png`).
+    pub fn write_png(
+        &self,
+        path: &Path,
+        track: &crate::picture::Track,
+    ) -> Result<(), PersistError> {
+        if self.pixels.len() != self.width * self.height {
+            return Err(PersistError::Corrupt(
+                "map size does not match its pixels".into(),
+            ));
+        }
+        let g = GridGeometry {
+            width: self.width,
+            height: self.height,
+            resolution_m: self.resolution_m,
+            origin: Point2::new(self.origin_x_m, self.origin_y_m),
+        };
+        // Flat index: row 0 south; the pixels' first row is the north edge.
+        let class = |i: usize| {
+            let (row, col) = (i / self.width, i % self.width);
+            pixel_class(self.pixels[(self.height - 1 - row) * self.width + col])
+        };
+        let img = crate::picture::render_picture(
+            &g,
+            class,
+            core::slice::from_ref(track),
+            crate::picture::picture_scale(&g),
+        );
         let mut bytes = Vec::new();
         img.write_to(&mut io::Cursor::new(&mut bytes), image::ImageFormat::Png)
             .map_err(|e| PersistError::Io(io::Error::other(e)))?;
@@ -477,6 +501,8 @@ impl StateStore {
 /// The telemetry log: one JSON object per line, each with `t_s` (mission time \[s\]) and `kind`.
 pub struct Telemetry {
     out: BufWriter<File>,
+    /// Each `decision` record's (first) target, in order, for `map.png`.
+    targets: Vec<Point2>,
 }
 
 impl Telemetry {
@@ -486,7 +512,14 @@ impl Telemetry {
         let f = open_log(&dir.join("telemetry.jsonl"), Existing::Append)?;
         Ok(Self {
             out: BufWriter::new(f),
+            targets: Vec::new(),
         })
+    }
+
+    /// The target of each `decision` record written so far (its `target_x_m`, `target_y_m`:
+    /// the decision's first target), oldest first.
+    pub fn targets(&self) -> &[Point2] {
+        &self.targets
     }
 
     /// Writes one record: `{"t_s": t_s, "kind": kind, ...fields}`.
@@ -494,6 +527,12 @@ impl Telemetry {
         let mut obj = serde_json::Map::new();
         obj.insert("t_s".into(), serde_json::json!(t_s));
         obj.insert("kind".into(), serde_json::json!(kind));
+        if kind == "decision"
+            && let (Some(x), Some(y)) =
+                (fields["target_x_m"].as_f64(), fields["target_y_m"].as_f64())
+        {
+            self.targets.push(Point2::new(x as f32, y as f32));
+        }
         if let serde_json::Value::Object(m) = fields {
             obj.extend(m);
         }
@@ -747,7 +786,13 @@ mod tests {
     #[test]
     fn png_is_written() {
         let dir = temp_dir("png");
-        sample_map().write_png(&dir.join("map.png")).unwrap();
+        let track = crate::picture::Track {
+            trajectory: vec![Point2::new(0.2, 0.2), Point2::new(0.4, 0.3)],
+            targets: vec![Point2::new(0.5, 0.5)],
+        };
+        sample_map()
+            .write_png(&dir.join("map.png"), &track)
+            .unwrap();
         let bytes = fs::read(dir.join("map.png")).unwrap();
         assert_eq!(&bytes[1..4], b"PNG");
         fs::remove_dir_all(&dir).unwrap();

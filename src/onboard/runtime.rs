@@ -26,6 +26,7 @@ use super::robot::{ArcosClient, Fault, MotionLimits, SessionError, SessionOption
 use crate::config::{BoardConfig, LaserModel};
 use crate::control::command::{Limits, MotionCommand};
 use crate::control::odometry::ArcosOdometry;
+use crate::geometry::Point2;
 use crate::sensor::Scan;
 use crate::wire::arcos::StatusPacket;
 
@@ -581,7 +582,15 @@ pub async fn run_with(
         let (state, map) = mission.snapshot();
         store.save(&state, map.as_ref())?;
         if let Some(map) = map {
-            map.write_png(&options.log_dir.join("map.png"))?;
+            let track = crate::picture::Track {
+                trajectory: state
+                    .trajectory
+                    .iter()
+                    .map(|p| Point2::new(p.x_m, p.y_m))
+                    .collect(),
+                targets: telemetry.targets().to_vec(),
+            };
+            map.write_png(&options.log_dir.join("map.png"), &track)?;
         }
         // The session's last figures are recorded at the mission time it ended.
         (outcome, now_s(epoch))

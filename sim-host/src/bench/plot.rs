@@ -15,7 +15,6 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -23,22 +22,13 @@ use plotters::prelude::*;
 use super::record::RunRecord;
 use super::summary::GroupKey;
 
-/// The embedded font (Bitstream Vera licence, see `assets/fonts/LICENSE-DejaVu.txt`).
-pub(crate) static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
-/// The family name plots ask for.
-pub(crate) const FAMILY: &str = "sans-serif";
+/// The embedded font, its family name and its registration: the map pictures' own
+/// ([`papillon::picture`]).
+pub(crate) use papillon::picture::{FAMILY, register_font};
 /// Picture size \[px\].
 const SIZE: (u32, u32) = (960, 640);
 /// Points of the common steps grid the coverage curves are resampled on.
 const GRID_POINTS: usize = 200;
-
-pub(crate) fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // The font is valid (checked by the tests); a failure only loses the text.
-        let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT);
-    });
-}
 
 /// One series: its name and its runs' results.
 struct Series<'a> {
@@ -552,6 +542,9 @@ mod tests {
 
     #[test]
     fn the_embedded_font_parses() {
-        assert!(plotters::style::register_font("test-font", FontStyle::Normal, FONT).is_ok());
+        assert!(
+            plotters::style::register_font("test-font", FontStyle::Normal, papillon::picture::FONT)
+                .is_ok()
+        );
     }
 }

@@ -56,10 +56,11 @@ pub struct Args {
     #[arg(long)]
     pub params: Option<PathBuf>,
     /// Directory with the thesis's map-empty.csv and map-house.csv, added to the named
-    /// experiments' maps (default: ../shared/data/thesis-maps when it exists).
+    /// experiments' maps (e.g. ../shared/data/thesis-maps). Without it the named experiments
+    /// run on the project's own maps only, whatever exists beside the project.
     #[arg(long, conflicts_with = "no_thesis_maps")]
     pub thesis_maps: Option<PathBuf>,
-    /// Do not add the thesis's maps to the named experiments.
+    /// Do not add the thesis's maps to the named experiments (the default; kept for scripts).
     #[arg(long)]
     pub no_thesis_maps: bool,
     /// Print one line per finished run even on a terminal.
@@ -93,7 +94,7 @@ pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
             thesis_maps: match (&args.thesis_maps, args.no_thesis_maps) {
                 (_, true) => ThesisMaps::Skip,
                 (Some(dir), false) => ThesisMaps::In(dir.clone()),
-                (None, false) => ThesisMaps::Find,
+                (None, false) => ThesisMaps::Skip,
             },
         },
         (None, Some(path)) => Source::File(path.clone()),

@@ -1,7 +1,8 @@
 //! `papillon-sim serve`: the emulator server ([`crate::serve`]) until SIGINT or SIGTERM.
 //!
 //! Prints one line per endpoint (prefixed with `robot i: ` when there are several robots),
-//! then `ready`; on a signal it stops the server and prints `stopped`.
+//! then `live ws://ADDR` with `--live`, then `ready`; on a signal it stops the server (and
+//! finishes the `--mcap` recording) and prints `stopped`.
 
 use std::io::{self, Write};
 use std::path::PathBuf;
@@ -80,6 +81,16 @@ pub struct Args {
     /// south-west corner, heading east), e.g. `12,12,0`.
     #[arg(long, value_parser = start_pose, allow_negative_numbers = true)]
     pub start: Option<papillon::geometry::Pose2>,
+    /// Record the run as MCAP with Foxglove's schemas: the world's map at the start, each
+    /// robot's true pose and odometry at 10 Hz (`/pose/true`, `/pose/odometry`) and each scan
+    /// served (`/scan`, at the laser's true pose). Written when the server stops.
+    #[arg(long)]
+    pub mcap: Option<PathBuf>,
+    /// Serve the same messages live to Foxglove on this address (host:port, e.g.
+    /// 127.0.0.1:8765): Foxglove → Open connection → Foxglove WebSocket → ws://HOST:PORT.
+    /// Announced as `live ws://ADDR`. Off by default.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub live: Option<String>,
 }
 
 /// `X,Y,THETA`, finite numbers.
@@ -175,6 +186,8 @@ impl From<Args> for ServeConfig {
             baud: a.baud.and_then(|b| b.parse().ok()),
             wheel_errors: a.wheel_errors,
             start: a.start,
+            mcap: a.mcap,
+            live: a.live,
         }
     }
 }
@@ -197,10 +210,19 @@ pub fn run(args: Args) -> ExitCode {
             println!("{}", e.what);
         }
     }
+    if let Some(addr) = server.live_addr() {
+        println!("live ws://{addr}");
+    }
     println!("ready");
     let _ = io::stdout().flush();
     serve::signal::wait();
-    server.stop();
+    let finished = server.stop();
     let _ = writeln!(io::stdout(), "stopped");
-    ExitCode::SUCCESS
+    match finished {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("papillon-sim serve: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use crate::bench::sweep::{Shard, find_thesis_maps};
+use crate::bench::sweep::Shard;
 use crate::bench::tune::{Settings, best, tune};
 
 /// Arguments of `papillon-sim tune`.
@@ -23,8 +23,8 @@ pub struct Args {
     /// Missions per trial, seeds SEED.. (the thesis: 3).
     #[arg(long, default_value = "3", allow_negative_numbers = true)]
     pub runs: usize,
-    /// World (default: the thesis's House, map-house.csv, when found in
-    /// ../shared/data/thesis-maps, else the project's house).
+    /// World (default: the project's house; the thesis's House only when named, e.g.
+    /// ../shared/data/thesis-maps/map-house.csv).
     #[arg(long)]
     pub map: Option<String>,
     /// Population.
@@ -80,10 +80,7 @@ fn fail(msg: &str) -> ExitCode {
 pub fn settings_from_args(args: &Args) -> Result<Settings, String> {
     let map = match &args.map {
         Some(m) => m.clone(),
-        None => find_thesis_maps()
-            .into_iter()
-            .find(|m| m.ends_with("map-house.csv"))
-            .unwrap_or_else(|| "house".into()),
+        None => "house".into(),
     };
     if args.strategy != "short" && args.strategy != "long" {
         return Err(format!(

@@ -31,6 +31,10 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use papillon::geometry::Pose2;
+use papillon::grid::CellClass;
+use papillon::live::LiveServer;
+use papillon::record::{PoseSource, RecordError, Recorder};
 use papillon::sensor::{LaserConfig, Scan};
 
 use crate::emulator::arcos::{Identity, Subclass};
@@ -106,7 +110,15 @@ pub struct ServeConfig {
     pub wheel_errors: Option<(f32, f32)>,
     /// Robot 0's start pose \[m, m, rad\] instead of the world's.
     pub start: Option<papillon::geometry::Pose2>,
+    /// Record the run as MCAP into this file ([`papillon::record`]): the world's map at the
+    /// start, each robot's true pose and odometry at 10 Hz, each scan served.
+    pub mcap: Option<PathBuf>,
+    /// Serve the same messages live to Foxglove on this address ([`papillon::live`]).
+    pub live: Option<String>,
 }
+
+/// Period of the recorded poses \[s\] (as the mission's control period).
+pub const RECORD_PERIOD_S: f64 = 0.1;
 
 /// An endpoint the server opened, for the announcement line.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -140,6 +152,8 @@ struct Sim {
     /// Scans cast so far (each draws its noise from its number).
     scans: AtomicU64,
     stop: AtomicBool,
+    /// The recording and/or live view (`--mcap`, `--live`); `None` once finished.
+    recorder: Mutex<Option<Recorder<io::BufWriter<std::fs::File>>>>,
 }
 
 impl Sim {
@@ -167,6 +181,21 @@ impl Sim {
         self.bodies.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// Runs `f` on the recording, if there is one; on an error the recording stops there
+    /// (said once on stderr) and the server goes on.
+    fn record(
+        &self,
+        f: impl FnOnce(&mut Recorder<io::BufWriter<std::fs::File>>) -> Result<(), RecordError>,
+    ) {
+        let mut guard = self.recorder.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(rec) = guard.as_mut()
+            && let Err(e) = f(rec)
+        {
+            eprintln!("papillon-sim serve: --mcap: {e}; the recording stops here");
+            *guard = None;
+        }
+    }
+
     /// A scan from robot `robot`'s true pose, with the server's range noise; the other robots
     /// appear as discs.
     fn scan(&self, robot: usize, mut config: LaserConfig) -> Scan {
@@ -181,12 +210,16 @@ impl Sim {
                 .collect();
             (bodies[robot].true_pose(), others)
         };
+        let mount = config.mount;
         // A fresh noise stream per scan: a laser made anew with one seed for every scan drew
         // the same noise for each beam every time (a fixed range bias per beam, which never
         // averaged out in the map and punched the same holes through walls scan after scan).
         let n = self.scans.fetch_add(1, Ordering::Relaxed);
         let seed = crate::runner::derive_seed(self.seed, robot, 16 + n);
-        LaserSim::new(config, seed).scan(&self.world, pose, &others)
+        let scan = LaserSim::new(config, seed).scan(&self.world, pose, &others);
+        let t_s = self.now_s();
+        self.record(|rec| rec.scan(t_s, robot, pose.compose(mount), &scan));
+        scan
     }
 }
 
@@ -255,6 +288,21 @@ impl Server {
             links: AtomicU64::new(0),
             scans: AtomicU64::new(0),
             stop: AtomicBool::new(false),
+            recorder: Mutex::new(open_recorder(config, n)?),
+        });
+        sim.record(|rec| {
+            let world = &sim.world;
+            rec.map_cells(
+                0.0,
+                world.geometry(),
+                world.blocked().iter().map(|&b| {
+                    if b {
+                        CellClass::Occupied
+                    } else {
+                        CellClass::Free
+                    }
+                }),
+            )
         });
         let truth = match &config.truth_log {
             Some(path) => Some(io::BufWriter::new(
@@ -273,7 +321,7 @@ impl Server {
             links: Vec::new(),
         };
         if let Err(e) = server.open_endpoints(config) {
-            server.stop();
+            let _ = server.stop();
             return Err(e);
         }
         Ok(server)
@@ -336,19 +384,66 @@ impl Server {
         self.sim.bodies().len()
     }
 
-    /// Ends the threads' loops (within a poll period) and removes the pty symlinks.
-    pub fn stop(&mut self) {
+    /// The live view's address (`--live`), when there is one.
+    pub fn live_addr(&self) -> Option<std::net::SocketAddr> {
+        let guard = self.sim.recorder.lock().unwrap_or_else(|e| e.into_inner());
+        guard.as_ref().and_then(Recorder::live_addr)
+    }
+
+    /// Ends the threads' loops (within a poll period), removes the pty symlinks and finishes
+    /// the recording; the error is the recording's (one line naming the option).
+    pub fn stop(&mut self) -> Result<(), String> {
         self.sim.stop.store(true, Ordering::SeqCst);
         for link in self.links.drain(..) {
             let _ = std::fs::remove_file(&link);
+        }
+        let recorder = self
+            .sim
+            .recorder
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .take();
+        match recorder {
+            Some(rec) => rec.finish().map_err(|e| format!("--mcap: {e}")),
+            None => Ok(()),
         }
     }
 }
 
 impl Drop for Server {
     fn drop(&mut self) {
-        self.stop();
+        if let Err(e) = self.stop() {
+            eprintln!("papillon-sim serve: {e}");
+        }
     }
+}
+
+/// The recording and/or live view asked for by `config` (`None` for neither), for `robots`
+/// robots, times from the wall clock now; the error names the option.
+fn open_recorder(
+    config: &ServeConfig,
+    robots: usize,
+) -> Result<Option<Recorder<io::BufWriter<std::fs::File>>>, String> {
+    let live = match &config.live {
+        Some(addr) => Some(LiveServer::bind(addr).map_err(|e| format!("--live {e}"))?),
+        None => None,
+    };
+    let base_ns = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX));
+    let recorder = match (&config.mcap, live) {
+        (None, None) => return Ok(None),
+        (Some(path), live) => {
+            let rec =
+                Recorder::create(path, robots, base_ns).map_err(|e| format!("--mcap: {e}"))?;
+            match live {
+                Some(l) => rec.with_live(l),
+                None => rec,
+            }
+        }
+        (None, Some(l)) => Recorder::live_only(l, robots, base_ns),
+    };
+    Ok(Some(recorder))
 }
 
 fn bind(addr: &str) -> Result<TcpListener, String> {
@@ -385,9 +480,25 @@ pub fn offset_addr(addr: &str, offset: usize) -> Result<String, String> {
 /// wheel stall or a bumper, the physics' wall contact).
 fn physics_loop(sim: &Sim, mut truth: Option<io::BufWriter<std::fs::File>>) {
     let mut next_truth_s = 0.0;
+    let mut next_record_s = 0.0;
     while !sim.stopped() {
         thread::sleep(Duration::from_millis(10));
         let now = sim.now_s();
+        if now >= next_record_s {
+            next_record_s = now + RECORD_PERIOD_S;
+            let poses: Vec<(Pose2, Pose2)> = sim
+                .bodies()
+                .iter()
+                .map(|b| (b.true_pose(), b.odometry_pose()))
+                .collect();
+            sim.record(|rec| {
+                for (k, (truth, odometry)) in poses.into_iter().enumerate() {
+                    rec.pose(now, k, PoseSource::True, truth)?;
+                    rec.pose(now, k, PoseSource::Odometry, odometry)?;
+                }
+                Ok(())
+            });
+        }
         let mut bodies = sim.bodies();
         if !sim.faults.estops.is_empty() {
             let pressed = sim.faults.estop_pressed(now);
