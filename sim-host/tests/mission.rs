@@ -272,8 +272,15 @@ fn json_output_is_one_object_with_every_key() {
     assert!(curve.len() > 2);
     assert!(curve.iter().all(|p| p.as_array().unwrap().len() == 2));
     let img = image::open(&png).unwrap().to_rgb8();
-    // The lab is 80 x 80 cells at 0.1 m, drawn at 4 pixels per cell.
-    assert_eq!((img.width(), img.height()), (320, 320));
+    // The lab is 80 x 80 cells at 0.1 m, drawn at 4 pixels per cell, with the band of the
+    // scale bar and the legend under it, and at least as wide as the legend.
+    assert_eq!(
+        (img.width(), img.height()),
+        (
+            320.max(papillon::picture::MIN_PICTURE_WIDTH),
+            320 + papillon::picture::LEGEND_HEIGHT
+        )
+    );
     std::fs::remove_file(&png).unwrap();
     // One frame per decision.
     let written = std::fs::read_dir(&frames).unwrap().count();
