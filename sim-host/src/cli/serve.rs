@@ -67,7 +67,7 @@ pub struct Args {
     /// `boards/sim.json`.
     #[arg(long, default_value_t = 0.0, value_parser = super::noise_fraction)]
     pub laser_noise: f32,
-    /// The serial speed of the emulated microcontroller on `--pty` [baud]: it answers only a
+    /// The serial speed of the emulated microcontroller on `--pty`, in baud: it answers only a
     /// client that set its line to this speed, as a real serial line would (a pty itself
     /// carries bytes at any speed). Default: any speed.
     #[arg(long, value_parser = ["9600", "19200", "38400", "57600", "115200"])]

@@ -43,7 +43,7 @@ pub struct Args {
     /// efficient.
     #[arg(long, default_value = "thesis")]
     pub objective: String,
-    /// Battery [steps] (default: the mission's, 500).
+    /// Battery in steps (default: the mission's, 500).
     #[arg(long, allow_negative_numbers = true)]
     pub battery: Option<f32>,
     /// Seed of every trial's first mission.
