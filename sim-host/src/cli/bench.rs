@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use crate::bench::exec::ProgressMode;
 use crate::bench::select::{Overrides, SelectError, Source, ThesisMaps, select};
-use crate::bench::sweep::{Shard, Sweep};
+use crate::bench::sweep::Sweep;
 use crate::bench::{self as b, run_sweep};
 
 /// Arguments of `papillon-sim bench`.
@@ -132,11 +132,8 @@ pub fn run(args: Args) -> ExitCode {
     if let Some(BenchCommand::Merge(m)) = &args.command {
         return merge(m);
     }
-    if args.jobs > MAX_JOBS {
-        return fail(&format!(
-            "--jobs: expected 0 (one per core) to {MAX_JOBS}, got {}",
-            args.jobs
-        ));
+    if let Err(e) = super::check_jobs(args.jobs) {
+        return fail(&e);
     }
     if args.experiment.as_deref() == Some(crate::bench::thesis::ALL) {
         return run_thesis_all(&args);
@@ -145,17 +142,15 @@ pub fn run(args: Args) -> ExitCode {
         Ok(s) => s,
         Err(e) => return fail(&e),
     };
-    let shard = match &args.shard {
-        Some(t) => match Shard::parse(t) {
-            Ok(s) => s,
-            Err(e) => return fail(&e),
-        },
-        None => Shard::ALL,
+    let (shard, out) = match super::shard_and_out(
+        args.shard.as_deref(),
+        args.out.as_deref(),
+        "bench-results",
+        &sweep.name,
+    ) {
+        Ok(x) => x,
+        Err(e) => return fail(&e),
     };
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("bench-results").join(&sweep.name));
     let mode = if args.plain {
         ProgressMode::Lines
     } else {
