@@ -164,10 +164,17 @@ pub struct ExploreConfig {
     pub population: usize,
     /// Generations of the optimizer (default 30).
     pub max_generations: u32,
-    /// Hyper-parameters replacing the thesis's Table 4.1 for the optimizer they belong to
-    /// (`None`, the default: Table 4.1; see [`crate::optim::Method::build_tuned`]).
+    /// The optimizers' parameter sets (default [`DEFAULT_PRESET`]; only GA, PSO, GWO and ABC
+    /// differ between them, see [`crate::optim::Preset`]).
+    pub preset: crate::optim::Preset,
+    /// Hyper-parameters replacing the preset's for the optimizer they belong to (`None`, the
+    /// default: the preset's; see [`crate::optim::Method::build_tuned`]).
     pub tuning: Option<crate::optim::Tuning>,
 }
+
+/// The optimizers' parameter set an exploration gets unless told otherwise
+/// ([`ExploreConfig::preset`]; `docs/optimizers.md`, "Which preset the exploration uses").
+pub const DEFAULT_PRESET: crate::optim::Preset = crate::optim::Preset::Thesis;
 
 impl Default for ExploreConfig {
     fn default() -> Self {
@@ -183,6 +190,7 @@ impl Default for ExploreConfig {
             viewpoint_spacing_m: 0.5,
             population: 5,
             max_generations: 30,
+            preset: DEFAULT_PRESET,
             tuning: None,
         }
     }

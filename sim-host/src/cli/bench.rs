@@ -27,7 +27,7 @@ pub struct Args {
     #[arg(long, conflicts_with = "config")]
     pub experiment: Option<String>,
     /// Sweep file (JSON: maps, methods, strategies, populations, robots, runs, generations,
-    /// battery_steps, base_seed, resolution_m).
+    /// battery_steps, base_seed, resolution_m, objective(s), preset(s), params).
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Runs per combination (default: the sweep's, 10 for the named experiments).
@@ -51,6 +51,11 @@ pub struct Args {
     /// Replace the sweep's objective: efficient (the default) or thesis.
     #[arg(long)]
     pub objective: Option<String>,
+    /// Replace the sweep's optimizer preset: thesis (Table 4.1; the thesis-* experiments') or
+    /// standard (the literature's defaults; see docs/optimizers.md). Default: the sweep's,
+    /// Papillon's default for a named experiment.
+    #[arg(long, value_parser = ["thesis", "standard"])]
+    pub preset: Option<String>,
     /// Hyper-parameters replacing Table 4.1's: a JSON file with {"params": {METHOD: {NAME:
     /// VALUE}}}, such as a `tune` run's best.json.
     #[arg(long)]
@@ -110,6 +115,7 @@ pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
         maps: args.maps.clone(),
         battery_steps: args.battery,
         objective: args.objective.clone(),
+        preset: args.preset.clone(),
     };
     select(&source, &overrides).map_err(|e| match e {
         SelectError::UnknownExperiment(_) => format!("--experiment: {e}"),
