@@ -199,14 +199,14 @@ pub enum Preset {
     /// The thesis's Table 4.1, tuned on the exploration problem: GA and PSO as in
     /// [`ga::GaParams::thesis`] and [`pso::PsoParams::thesis`], GWO with
     /// [`gwo::Schedule::Started`], ABC as Karaboga's ([`abc::AbcParams::karaboga`], pygmo's
-    /// `bee_colony`). [`Method::build`] uses it, so the exploration experiments keep the
-    /// thesis's set-up.
+    /// `bee_colony`). [`Method::build`] uses it; the thesis reproduction experiments run it.
     #[default]
     Thesis,
     /// The literature's defaults: [`ga::GaParams::standard`] (Deb's), [`pso::PsoParams::standard`]
     /// (Clerc and Kennedy's, pygmo's `pso` default), [`gwo::Schedule::Paper`] and GABC
     /// ([`abc::AbcParams::standard`]). Stronger on the standard test functions
-    /// (`docs/optimizers.md`).
+    /// (`docs/optimizers.md`), and the exploration's default
+    /// ([`crate::explore::DEFAULT_PRESET`]).
     Standard,
 }
 

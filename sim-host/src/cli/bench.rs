@@ -51,9 +51,9 @@ pub struct Args {
     /// Replace the sweep's objective: efficient (the default) or thesis.
     #[arg(long)]
     pub objective: Option<String>,
-    /// Replace the sweep's optimizer preset: thesis (Table 4.1; the thesis-* experiments') or
-    /// standard (the literature's defaults; see docs/optimizers.md). Default: the sweep's,
-    /// Papillon's default for a named experiment.
+    /// Replace the sweep's optimizer preset: standard (the literature's defaults; Papillon's
+    /// default) or thesis (Table 4.1; what the thesis-* experiments and tune run). Default: the
+    /// sweep's; see docs/optimizers.md.
     #[arg(long, value_parser = ["thesis", "standard"])]
     pub preset: Option<String>,
     /// Hyper-parameters replacing Table 4.1's: a JSON file with {"params": {METHOD: {NAME:

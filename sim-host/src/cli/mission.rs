@@ -37,9 +37,9 @@ pub struct Args {
     /// discounted by energy; the default) or thesis (the thesis's objective, for reproduction).
     #[arg(long, default_value = "efficient", value_parser = ["efficient", "thesis"])]
     pub objective: String,
-    /// The optimizer's parameter set: thesis (the thesis's Table 4.1 for GA and PSO, GWO's
-    /// earlier schedule, Karaboga's ABC; Papillon's default for exploration) or standard (the
-    /// literature's defaults: Deb's GA, Clerc and Kennedy's PSO, GWO's paper schedule, GABC).
+    /// The optimizer's parameter set: standard (the literature's defaults: Deb's GA, Clerc and
+    /// Kennedy's PSO, GWO's paper schedule, GABC; Papillon's default) or thesis (the thesis's
+    /// Table 4.1 for GA and PSO, GWO's earlier schedule, Karaboga's ABC, for reproduction).
     /// The other methods are the same in both; see docs/optimizers.md.
     #[arg(long, default_value = papillon::explore::DEFAULT_PRESET.name(), value_parser = ["thesis", "standard"])]
     pub preset: String,
