@@ -174,8 +174,9 @@ pub struct ExploreConfig {
 
 /// The optimizers' parameter set an exploration gets unless told otherwise
 /// ([`ExploreConfig::preset`]): the literature's defaults, which reached 99 % in every one of
-/// 320 missions (thesis preset: 318) in 3 % fewer steps on average (`docs/optimizers.md`,
-/// "Which preset the exploration uses"). Only GA, PSO, GWO and ABC differ.
+/// 320 missions on four maps (thesis preset: 318) in 3 % fewer steps on average; on a
+/// battery-limited map the two did not separate (`docs/optimizers.md`, "Which preset the
+/// exploration uses"). Only GA, PSO, GWO and ABC differ.
 pub const DEFAULT_PRESET: crate::optim::Preset = crate::optim::Preset::Standard;
 
 impl Default for ExploreConfig {
