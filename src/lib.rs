@@ -16,7 +16,8 @@
 //! - [`mission`]: the mission state machine, one or several robots.
 //! - [`config`]: the board file (robot, link, laser, grid, mission, PID, safety), parsed
 //!   without an allocator; [`mapfile`] (host only): map files read into an occupancy grid;
-//!   [`files`] (host only): bounded reads of every input file.
+//!   [`files`] (host only): bounded reads of every input file; [`command_line`] (host only):
+//!   one-line command-line errors for both binaries.
 //! - [`wire`]: ARCOS, SICK LMS1xx (CoLa-A) and LMS200 wire formats.
 //! - `record` (feature `record`, host only): mission recordings as MCAP with Foxglove's
 //!   schemas; `live` (feature `live`, host only): the same messages served live to Foxglove
@@ -25,6 +26,8 @@
 #![cfg_attr(not(feature = "std"), no_std)]
 #![warn(missing_docs)]
 
+#[cfg(feature = "std")]
+pub mod command_line;
 pub mod config;
 pub mod control;
 pub mod explore;

@@ -65,21 +65,5 @@ fn clap_error_line(e: &clap::Error) -> String {
                 papillon-sim --help)"
             .into();
     }
-    let text = e.to_string();
-    let first: Vec<&str> = text
-        .lines()
-        .take_while(|l| !l.trim().is_empty())
-        .map(str::trim)
-        .collect();
-    let mut line = first.join(" ");
-    // clap's suggestion for a near miss (`tip: a similar value exists: 'xboa'`) stays on the
-    // line.
-    for tip in text
-        .lines()
-        .map(str::trim)
-        .filter(|l| l.starts_with("tip:"))
-    {
-        line.push_str(&format!(" ({tip})"));
-    }
-    line.strip_prefix("error: ").unwrap_or(&line).to_string()
+    papillon::command_line::error_line(&e.to_string())
 }

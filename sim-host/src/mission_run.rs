@@ -47,6 +47,7 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
         "robots": setup.run.robots,
         "seed": setup.run.seed,
         "population": m.explore.population,
+        "preset": m.explore.preset.name(),
         "generations": m.explore.max_generations,
         "strategy": setup.strategy.name(),
         "targets": m.explore.targets,

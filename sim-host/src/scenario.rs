@@ -11,7 +11,7 @@ use std::fmt;
 
 use papillon::geometry::Pose2;
 use papillon::mission::{MissionConfig, SelectorKind, footprint};
-use papillon::optim::Method;
+use papillon::optim::{Method, Preset};
 
 use crate::physics::SlipConfig;
 use crate::runner::{self, RunConfig};
@@ -168,8 +168,11 @@ pub struct ScenarioSpec {
     /// `None`: the mission's laser's (the thesis's 5 %). A SICK LMS1xx is nearer 0.3 %
     /// (about 12 mm at 4 m).
     pub laser_noise: Option<f32>,
-    /// Hyper-parameters replacing the thesis's Table 4.1 for the selector's optimizer
-    /// (`None`: Table 4.1; see [`papillon::optim::Method::build_tuned`]).
+    /// The optimizer's parameter set (`--preset`; default
+    /// [`papillon::explore::DEFAULT_PRESET`]; the frontier rules ignore it).
+    pub preset: Preset,
+    /// Hyper-parameters replacing the preset's for the selector's optimizer
+    /// (`None`: the preset's; see [`papillon::optim::Method::build_tuned`]).
     pub tuning: Option<papillon::optim::Tuning>,
 }
 
@@ -191,6 +194,7 @@ impl Default for ScenarioSpec {
             slip: Slip::Thesis,
             localize: false,
             laser_noise: None,
+            preset: papillon::explore::DEFAULT_PRESET,
             tuning: None,
         }
     }
@@ -257,6 +261,7 @@ impl Setup {
             ..MissionConfig::default()
         };
         mission.explore.objective = spec.objective;
+        mission.explore.preset = spec.preset;
         mission.explore.population = pop;
         mission.explore.max_generations = spec.generations;
         mission.explore.targets = targets;
@@ -329,6 +334,12 @@ impl Setup {
     pub fn method(&self) -> &'static str {
         selector_name(self.run.mission.selector)
     }
+}
+
+/// The preset named `name` (`--preset`, a sweep's `preset`); the error is one line.
+pub fn preset_from_name(name: &str) -> Result<Preset, String> {
+    name.parse::<Preset>()
+        .map_err(|_| format!("--preset: expected thesis or standard, got '{name}'"))
 }
 
 /// The objective named `name` (`--objective`, a sweep's `objective`); the error is one line.

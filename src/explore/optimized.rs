@@ -102,6 +102,7 @@ impl<const N: usize, P: Planner<N>> TargetSelector<N> for Optimized<'_, '_, N, P
             max_evaluations: None,
         };
         let mut opt = self.method.build_tuned(
+            self.config.preset,
             self.config.tuning,
             self.config.population,
             rules.max_generations,

@@ -966,6 +966,8 @@ fn thesis_fingerprints() -> Vec<Fingerprint> {
                 let config = ExploreConfig {
                     objective: ObjectiveKind::Thesis,
                     targets: k,
+                    // Recorded with Table 4.1's PSO, the only preset there was.
+                    preset: crate::optim::Preset::Thesis,
                     ..ExploreConfig::default()
                 };
                 let mut sel = Optimized::new(method, config, &mut obj);

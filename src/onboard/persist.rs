@@ -163,6 +163,15 @@ fn pixel_class(p: u8) -> CellClass {
     }
 }
 
+/// The PGM value [`MapImage`] writes for a class.
+fn pgm_value(class: CellClass) -> u8 {
+    match class {
+        CellClass::Occupied => PGM_OCCUPIED,
+        CellClass::Free => PGM_FREE,
+        CellClass::Unknown => PGM_UNKNOWN,
+    }
+}
+
 /// A map as an image: one byte per cell, rows from north to south.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapImage {
@@ -183,15 +192,16 @@ pub struct MapImage {
 impl MapImage {
     /// The image of a grid: each cell's class as a PGM value.
     pub fn from_grid<const N: usize>(grid: &OccupancyGrid<N>) -> Self {
-        let g = *grid.geometry();
+        Self::from_classes(*grid.geometry(), |cell| grid.class(cell))
+    }
+
+    /// The image of a map of `g`'s geometry whose cell `row * width + col` (row 0 south) has
+    /// the class `class(cell)`: rows from north to south, each class as its PGM value.
+    pub fn from_classes(g: GridGeometry, class: impl Fn(usize) -> CellClass) -> Self {
         let mut pixels = Vec::with_capacity(g.width * g.height);
         for row in (0..g.height).rev() {
             for col in 0..g.width {
-                pixels.push(match grid.class(row * g.width + col) {
-                    CellClass::Occupied => PGM_OCCUPIED,
-                    CellClass::Free => PGM_FREE,
-                    CellClass::Unknown => PGM_UNKNOWN,
-                });
+                pixels.push(pgm_value(class(row * g.width + col)));
             }
         }
         Self {
@@ -202,6 +212,15 @@ impl MapImage {
             origin_y_m: g.origin.y,
             pixels,
         }
+    }
+
+    /// Each pixel's grid cell (`row * width + col`, row 0 south) and class.
+    fn cell_classes(&self) -> impl Iterator<Item = (usize, CellClass)> + '_ {
+        self.pixels.iter().enumerate().map(|(i, &p)| {
+            let (image_row, col) = (i / self.width, i % self.width);
+            let row = self.height - 1 - image_row;
+            (row * self.width + col, pixel_class(p))
+        })
     }
 
     /// Restores a saved map into `grid` (for `--resume`): every cell gets the class its pixel
@@ -232,10 +251,8 @@ impl MapImage {
                 g.origin.y
             )));
         }
-        for (i, &p) in self.pixels.iter().enumerate() {
-            let (image_row, col) = (i / self.width, i % self.width);
-            let row = self.height - 1 - image_row;
-            grid.set_class(row * g.width + col, pixel_class(p), &mut ());
+        for (cell, class) in self.cell_classes() {
+            grid.set_class(cell, class, &mut ());
         }
         Ok(())
     }
@@ -256,45 +273,21 @@ impl MapImage {
             ));
         }
         let mut cells = vec![CellClass::Unknown; geometry.cell_count()];
-        for (i, &p) in self.pixels.iter().enumerate() {
-            let (image_row, col) = (i / self.width, i % self.width);
-            let row = self.height - 1 - image_row;
-            cells[row * self.width + col] = pixel_class(p);
+        for (cell, class) in self.cell_classes() {
+            cells[cell] = class;
         }
         Ok(mapfile::MapImage { geometry, cells })
     }
 
     /// A map read from map files ([`crate::mapfile`]).
     pub fn from_map_file(map: &mapfile::MapImage) -> Self {
-        let g = map.geometry;
-        let mut pixels = Vec::with_capacity(g.cell_count());
-        for row in (0..g.height).rev() {
-            for col in 0..g.width {
-                pixels.push(match map.cells[row * g.width + col] {
-                    CellClass::Occupied => PGM_OCCUPIED,
-                    CellClass::Free => PGM_FREE,
-                    CellClass::Unknown => PGM_UNKNOWN,
-                });
-            }
-        }
-        Self {
-            width: g.width,
-            height: g.height,
-            resolution_m: g.resolution_m,
-            origin_x_m: g.origin.x,
-            origin_y_m: g.origin.y,
-            pixels,
-        }
+        Self::from_classes(map.geometry, |cell| map.cells[cell])
     }
 
     /// Binary PGM (P5) bytes, as [`mapfile::encode_pgm`] writes them.
     pub fn to_pgm(&self) -> Vec<u8> {
         let mut out = format!("P5\n{} {}\n255\n", self.width, self.height).into_bytes();
-        out.extend(self.pixels.iter().map(|&p| match pixel_class(p) {
-            CellClass::Occupied => PGM_OCCUPIED,
-            CellClass::Free => PGM_FREE,
-            CellClass::Unknown => PGM_UNKNOWN,
-        }));
+        out.extend(self.pixels.iter().map(|&p| pgm_value(pixel_class(p))));
         out
     }
 

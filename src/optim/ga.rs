@@ -148,6 +148,9 @@ pub struct Ga {
     engine: Engine,
     children: [Genome; MAX_POP],
     child_fitness: [f32; MAX_POP],
+    /// The survivors of plus replacement, built here before they replace the population
+    /// (kept between steps so that no generation clears a new buffer).
+    survivors: [Genome; MAX_POP],
 }
 
 /// Simulated binary crossover of `c1` and `c2` in place (see [`Crossover::Sbx`]).
@@ -190,6 +193,7 @@ impl Ga {
             engine: Engine::new(max_generations),
             children: [[0.0; MAX_DIM]; MAX_POP],
             child_fitness: [f32::NAN; MAX_POP],
+            survivors: [[0.0; MAX_DIM]; MAX_POP],
         }
     }
 }
@@ -339,7 +343,7 @@ impl Optimizer for Ga {
                 }
                 insertion_sort(&mut parents[..n], before);
                 insertion_sort(&mut kids[..n], before);
-                let mut order = [0usize; 2 * MAX_POP];
+                let mut order = [0usize; MAX_POP];
                 let (mut a, mut b) = (0, 0);
                 for o in order[..n].iter_mut() {
                     let take_parent = b == n
@@ -352,7 +356,7 @@ impl Optimizer for Ga {
                         kids[b - 1]
                     };
                 }
-                let mut genes = [[0.0; MAX_DIM]; MAX_POP];
+                let genes = &mut self.survivors;
                 let mut fit = [0.0; MAX_POP];
                 for (slot, &k) in order[..n].iter().enumerate() {
                     genes[slot] = if k < n {

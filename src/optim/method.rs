@@ -70,17 +70,18 @@ impl Method {
 
     /// The method with the thesis's hyper-parameters ([`Preset::Thesis`]) for `population`
     /// individuals (xBOA and BOA interpolate between their pop-5 and pop-20 tunings, see their
-    /// modules), `max_generations` being the horizon `T` of its schedules. The exploration
-    /// layer builds its optimizers this way.
+    /// modules), `max_generations` being the horizon `T` of its schedules.
     pub fn build(self, population: usize, max_generations: u32) -> AnyOptimizer {
         self.build_preset(Preset::Thesis, population, max_generations)
     }
 
-    /// [`Method::build`], except that `tuning`, when it is this method's, replaces the
-    /// thesis's hyper-parameters (a tuning of another method is ignored: the caller checks
-    /// that they match, see [`Tuning::method`]).
+    /// [`Method::build_preset`], except that `tuning`, when it is this method's, replaces the
+    /// preset's hyper-parameters (a tuning of another method is ignored: the caller checks
+    /// that they match, see [`Tuning::method`]). The exploration layer builds its optimizers
+    /// this way, with the preset and tuning of its [`crate::explore::ExploreConfig`].
     pub fn build_tuned(
         self,
+        preset: Preset,
         tuning: Option<Tuning>,
         population: usize,
         max_generations: u32,
@@ -102,7 +103,7 @@ impl Method {
             }
             Some(Tuning::Ga(p)) if self == Method::Ga => AnyOptimizer::Ga(ga::Ga::new(p, t)),
             Some(Tuning::Pso(p)) if self == Method::Pso => AnyOptimizer::Pso(pso::Pso::new(p, t)),
-            _ => self.build(population, max_generations),
+            _ => self.build_preset(preset, population, max_generations),
         }
     }
 
@@ -198,14 +199,14 @@ pub enum Preset {
     /// The thesis's Table 4.1, tuned on the exploration problem: GA and PSO as in
     /// [`ga::GaParams::thesis`] and [`pso::PsoParams::thesis`], GWO with
     /// [`gwo::Schedule::Started`], ABC as Karaboga's ([`abc::AbcParams::karaboga`], pygmo's
-    /// `bee_colony`). [`Method::build`] uses it, so the exploration experiments keep the
-    /// thesis's set-up.
+    /// `bee_colony`). [`Method::build`] uses it; the thesis reproduction experiments run it.
     #[default]
     Thesis,
     /// The literature's defaults: [`ga::GaParams::standard`] (Deb's), [`pso::PsoParams::standard`]
     /// (Clerc and Kennedy's, pygmo's `pso` default), [`gwo::Schedule::Paper`] and GABC
     /// ([`abc::AbcParams::standard`]). Stronger on the standard test functions
-    /// (`docs/optimizers.md`).
+    /// (`docs/optimizers.md`), and the exploration's default
+    /// ([`crate::explore::DEFAULT_PRESET`]).
     Standard,
 }
 

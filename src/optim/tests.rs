@@ -663,8 +663,8 @@ fn a_tuning_applies_to_its_own_method_only() {
         p_c: 0.1,
     });
     let mut table = Method::Xboa.build(20, 20);
-    let mut with_own = Method::Xboa.build_tuned(Some(tuned), 20, 20);
-    let mut with_other = Method::Boa.build_tuned(Some(tuned), 20, 20);
+    let mut with_own = Method::Xboa.build_tuned(Preset::Thesis, Some(tuned), 20, 20);
+    let mut with_other = Method::Boa.build_tuned(Preset::Thesis, Some(tuned), 20, 20);
     let mut boa = Method::Boa.build(20, 20);
     assert_eq!(with_own.method(), Method::Xboa);
     assert_eq!(with_other.method(), Method::Boa);

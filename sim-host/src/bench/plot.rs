@@ -57,6 +57,7 @@ fn series_by_map(records: &[RunRecord]) -> BTreeMap<String, Vec<Series<'_>>> {
             let pop = varies(&|k| k.population.to_string());
             let robots = varies(&|k| k.robots.to_string());
             let objective = varies(&|k| k.objective.clone());
+            let preset = varies(&|k| k.preset.clone());
             let series = groups
                 .into_iter()
                 .map(|(k, rs)| {
@@ -72,6 +73,9 @@ fn series_by_map(records: &[RunRecord]) -> BTreeMap<String, Vec<Series<'_>>> {
                     }
                     if objective {
                         name += &format!(" ({})", k.objective);
+                    }
+                    if preset {
+                        name += &format!(" ({} preset)", k.preset);
                     }
                     Series {
                         name,

@@ -43,6 +43,8 @@ pub struct Overrides {
     pub battery_steps: Option<f32>,
     /// What the optimizers maximise (`efficient` or `thesis`).
     pub objective: Option<String>,
+    /// The optimizers' parameter set (`thesis` or `standard`).
+    pub preset: Option<String>,
     /// Hyper-parameters per method (`bench --params`, a `tune` run's `best.json`).
     pub params: Option<std::collections::BTreeMap<String, super::params::ParamMap>>,
 }
@@ -123,6 +125,10 @@ pub fn apply(mut sweep: Sweep, overrides: &Overrides) -> Sweep {
         sweep.objective = o.clone();
         sweep.objectives.clear();
     }
+    if let Some(p) = &overrides.preset {
+        sweep.preset = p.clone();
+        sweep.presets.clear();
+    }
     if let Some(p) = &overrides.params {
         sweep.params.extend(p.clone());
     }
@@ -149,6 +155,11 @@ pub fn check_overrides(overrides: &Overrides) -> Result<(), SelectError> {
     }
     if let Some(o) = &overrides.objective
         && let Err(e) = crate::scenario::objective_from_name(o)
+    {
+        return bad(e);
+    }
+    if let Some(p) = &overrides.preset
+        && let Err(e) = crate::scenario::preset_from_name(p)
     {
         return bad(e);
     }
@@ -198,16 +209,20 @@ mod tests {
             maps: Some(vec!["lab".into()]),
             battery_steps: Some(50.0),
             objective: Some("thesis".into()),
+            preset: Some("standard".into()),
             params: None,
         };
         let s = select(&named_source("boa-variants"), &o).unwrap();
         assert_eq!((s.runs, s.maps.clone()), (2, vec!["lab".to_string()]));
         assert_eq!(s.battery_steps, Some(50.0));
         assert_eq!(s.objective, "thesis");
+        assert_eq!(s.preset_list(), vec!["standard"]);
+        assert!(s.specs().iter().all(|r| r.preset == "standard"));
         let d = select(&named_source("boa-variants"), &Overrides::default()).unwrap();
         assert_eq!(d.runs, sweep::DEFAULT_RUNS);
         assert_eq!(d.objective, "efficient");
         assert_eq!(d.maps, vec!["house", "empty"]);
+        assert_eq!(d.preset, papillon::explore::DEFAULT_PRESET.name());
     }
 
     #[test]
@@ -230,6 +245,12 @@ mod tests {
         };
         let e = select(&named_source("methods"), &bad_objective).unwrap_err();
         assert!(e.to_string().contains("--objective"), "{e}");
+        let bad_preset = Overrides {
+            preset: Some("pygmo".into()),
+            ..Overrides::default()
+        };
+        let e = select(&named_source("methods"), &bad_preset).unwrap_err();
+        assert!(e.to_string().contains("--preset"), "{e}");
         let e = select(&Source::File("/nonexistent/s.json".into()), &bad).unwrap_err();
         assert!(e.to_string().contains("cannot read"), "{e}");
     }

@@ -10,7 +10,7 @@ use super::sweep::RunSpec;
 use crate::dynamic::Dynamics;
 use crate::runner::Runner;
 use crate::scenario::{
-    ScenarioSpec, Setup, Slip, Strategy, objective_from_name, selector_from_name,
+    ScenarioSpec, Setup, Slip, Strategy, objective_from_name, preset_from_name, selector_from_name,
 };
 
 /// The scenario of a run: `papillon-sim mission`'s defaults (thesis slip, the world's start)
@@ -34,6 +34,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
         slip: Slip::Thesis,
         localize: false,
         laser_noise: None,
+        preset: preset_from_name(&spec.preset)?,
         tuning: match &spec.params {
             Some(values) => Some(super::params::tuning(
                 &spec.method,

@@ -14,6 +14,10 @@ pub struct GroupKey {
     /// What the optimizers maximised (`thesis` or `efficient`).
     #[serde(default)]
     pub objective: String,
+    /// The optimizers' parameter set (`thesis` or `standard`; summaries written before the
+    /// preset was an option read as `thesis`).
+    #[serde(default = "thesis_preset")]
+    pub preset: String,
     /// Map label.
     pub map: String,
     /// Target selector.
@@ -28,12 +32,17 @@ pub struct GroupKey {
     pub robots: usize,
 }
 
+fn thesis_preset() -> String {
+    papillon::optim::Preset::Thesis.name().into()
+}
+
 impl GroupKey {
     /// The group of run `r`.
     pub fn of(r: &RunRecord) -> Self {
         let s = &r.spec;
         Self {
             objective: s.objective.clone(),
+            preset: s.preset.clone(),
             map: s.map_label.clone(),
             method: s.method.clone(),
             strategy: s.strategy.clone(),
@@ -212,6 +221,7 @@ pub fn markdown(name: &str, groups: &[GroupSummary]) -> String {
     let objectives_vary = groups
         .iter()
         .any(|g| g.key.objective != groups[0].key.objective);
+    let presets_vary = groups.iter().any(|g| g.key.preset != groups[0].key.preset);
     for map in maps {
         let _ = writeln!(out, "## {map}\n");
         let _ = writeln!(
@@ -232,10 +242,11 @@ pub fn markdown(name: &str, groups: &[GroupSummary]) -> String {
             let _ = writeln!(
                 out,
                 "| {} | {} ({}) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                if objectives_vary {
-                    format!("{} ({})", k.method, k.objective)
-                } else {
-                    k.method.clone()
+                match (objectives_vary, presets_vary) {
+                    (false, false) => k.method.clone(),
+                    (true, false) => format!("{} ({})", k.method, k.objective),
+                    (false, true) => format!("{} ({} preset)", k.method, k.preset),
+                    (true, true) => format!("{} ({}, {} preset)", k.method, k.objective, k.preset),
                 },
                 k.strategy,
                 k.targets,

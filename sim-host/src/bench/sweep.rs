@@ -121,6 +121,14 @@ pub struct Sweep {
     /// What the optimizers maximise (`efficient`, the default, or `thesis`).
     #[serde(default = "default_objective")]
     pub objective: String,
+    /// The optimizers' parameter set (`thesis` or `standard`, see
+    /// [`papillon::optim::Preset`]; default [`papillon::explore::DEFAULT_PRESET`]).
+    #[serde(default = "default_preset")]
+    pub preset: String,
+    /// Presets compared side by side (outside every dimension but `objectives`); empty: the
+    /// single `preset`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub presets: Vec<String>,
     /// Population sizes.
     #[serde(default = "default_populations")]
     pub populations: Vec<usize>,
@@ -170,6 +178,10 @@ pub struct RunSpec {
     /// objective was an option read as `thesis`).
     #[serde(default = "thesis_objective")]
     pub objective: String,
+    /// The optimizers' parameter set (`thesis` or `standard`; runs recorded before the preset
+    /// was an option read as `thesis`).
+    #[serde(default = "thesis_preset")]
+    pub preset: String,
     /// Targets per decision.
     pub targets: usize,
     /// Population size.
@@ -210,6 +222,14 @@ fn default_objective() -> String {
 
 fn thesis_objective() -> String {
     papillon::explore::ObjectiveKind::Thesis.name().into()
+}
+
+fn default_preset() -> String {
+    papillon::explore::DEFAULT_PRESET.name().into()
+}
+
+fn thesis_preset() -> String {
+    papillon::optim::Preset::Thesis.name().into()
 }
 
 impl Sweep {
@@ -276,6 +296,8 @@ impl Sweep {
             robots,
             runs,
             objective: default_objective(),
+            preset: default_preset(),
+            presets: Vec::new(),
             generations: default_generations(),
             battery_steps: None,
             base_seed: BASE_SEED,
@@ -327,6 +349,7 @@ impl Sweep {
         }
         let combinations = [
             self.objective_list().len(),
+            self.preset_list().len(),
             self.maps.len(),
             self.strategies.len(),
             self.populations.len(),
@@ -339,7 +362,8 @@ impl Sweep {
         .filter(|&n| n <= MAX_SWEEP_RUNS);
         if combinations.is_none() {
             return Err(format!(
-                "maps x methods x strategies x populations x robots x runs is more than \
+                "objectives x presets x maps x methods x strategies x populations x robots x runs \
+                 is more than \
                  {MAX_SWEEP_RUNS} runs"
             ));
         }
@@ -369,6 +393,12 @@ impl Sweep {
         for (i, o) in self.objectives.iter().enumerate() {
             crate::scenario::objective_from_name(o)
                 .map_err(|e| e.replacen("--objective", &format!("objectives[{i}]"), 1))?;
+        }
+        crate::scenario::preset_from_name(&self.preset)
+            .map_err(|e| e.replacen("--preset", "preset", 1))?;
+        for (i, p) in self.presets.iter().enumerate() {
+            crate::scenario::preset_from_name(p)
+                .map_err(|e| e.replacen("--preset", &format!("presets[{i}]"), 1))?;
         }
         for (method, values) in &self.params {
             for &p in &self.populations {
@@ -409,6 +439,7 @@ impl Sweep {
     /// Number of runs in the sweep.
     pub fn len(&self) -> usize {
         self.objective_list().len()
+            * self.preset_list().len()
             * self.maps.len()
             * self.strategies.len()
             * self.populations.len()
@@ -426,30 +457,34 @@ impl Sweep {
     /// share a seed, are neighbours).
     pub fn specs(&self) -> Vec<RunSpec> {
         let mut out = Vec::with_capacity(self.len());
+        let presets = self.preset_list();
         for objective in &self.objective_list() {
-            for map in &self.maps {
-                for strategy in &self.strategies {
-                    for &population in &self.populations {
-                        for &robots in &self.robots {
-                            for run in 0..self.runs {
-                                for method in &self.methods {
-                                    out.push(RunSpec {
-                                        index: out.len(),
-                                        map: map.clone(),
-                                        map_label: map_label(map),
-                                        method: method.clone(),
-                                        strategy: strategy.name.clone(),
-                                        objective: objective.clone(),
-                                        targets: strategy.k(),
-                                        population,
-                                        generations: self.generations,
-                                        robots,
-                                        run,
-                                        seed: self.base_seed + run as u64,
-                                        battery_steps: self.battery_steps,
-                                        resolution_m: self.resolution_m,
-                                        params: self.params.get(method).cloned(),
-                                    });
+            for preset in &presets {
+                for map in &self.maps {
+                    for strategy in &self.strategies {
+                        for &population in &self.populations {
+                            for &robots in &self.robots {
+                                for run in 0..self.runs {
+                                    for method in &self.methods {
+                                        out.push(RunSpec {
+                                            index: out.len(),
+                                            map: map.clone(),
+                                            map_label: map_label(map),
+                                            method: method.clone(),
+                                            strategy: strategy.name.clone(),
+                                            objective: objective.clone(),
+                                            preset: preset.clone(),
+                                            targets: strategy.k(),
+                                            population,
+                                            generations: self.generations,
+                                            robots,
+                                            run,
+                                            seed: self.base_seed + run as u64,
+                                            battery_steps: self.battery_steps,
+                                            resolution_m: self.resolution_m,
+                                            params: self.params.get(method).cloned(),
+                                        });
+                                    }
                                 }
                             }
                         }
@@ -458,6 +493,15 @@ impl Sweep {
             }
         }
         out
+    }
+
+    /// The presets the sweep runs: `presets`, or `preset` alone.
+    pub fn preset_list(&self) -> Vec<String> {
+        if self.presets.is_empty() {
+            vec![self.preset.clone()]
+        } else {
+            self.presets.clone()
+        }
     }
 
     /// The objectives the sweep runs: `objectives`, or `objective` alone.
@@ -642,6 +686,42 @@ mod tests {
         assert!(e.starts_with("t.json: bad sweep"), "{e}");
         let e = Sweep::from_json(r#"{"maps": [], "methods": ["xboa"]}"#, "t.json").unwrap_err();
         assert!(e.contains("no maps"), "{e}");
+    }
+
+    #[test]
+    fn presets_are_a_dimension_of_the_sweep() {
+        let s = Sweep::from_json(
+            r#"{"maps": ["lab"], "methods": ["ga"], "runs": 2}"#,
+            "t.json",
+        )
+        .unwrap();
+        assert_eq!(s.preset, papillon::explore::DEFAULT_PRESET.name());
+        let both = Sweep::from_json(
+            r#"{"maps": ["lab"], "methods": ["ga", "pso"], "runs": 2,
+                "presets": ["thesis", "standard"]}"#,
+            "t.json",
+        )
+        .unwrap();
+        assert_eq!(both.len(), 8);
+        let specs = both.specs();
+        let of = |p: &str| specs.iter().filter(|r| r.preset == p).count();
+        assert_eq!((of("thesis"), of("standard")), (4, 4));
+        // The same seeds under both presets.
+        assert_eq!(specs[0].seed, specs[4].seed);
+        let e = Sweep::from_json(
+            r#"{"maps": ["lab"], "methods": ["ga"], "presets": ["thesis", "pygmo"]}"#,
+            "t.json",
+        )
+        .unwrap_err();
+        assert!(e.contains("presets[1]"), "{e}");
+        // A run recorded before the preset existed ran Table 4.1's.
+        let old: RunSpec = serde_json::from_str(
+            r#"{"index": 0, "map": "lab", "map_label": "lab", "method": "ga",
+                "strategy": "short", "targets": 1, "population": 5, "generations": 30,
+                "robots": 1, "run": 0, "seed": 25, "battery_steps": null, "resolution_m": 0.1}"#,
+        )
+        .unwrap();
+        assert_eq!(old.preset, "thesis");
     }
 
     #[test]

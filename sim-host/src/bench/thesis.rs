@@ -267,6 +267,9 @@ pub fn sweep(name: &str, runs: usize, maps: &[String; 2]) -> Option<Sweep> {
         strategies,
         objective: "thesis".into(),
         objectives: vec!["thesis".into(), "efficient".into()],
+        // Table 4.1's hyper-parameters, whatever Papillon's default preset.
+        preset: papillon::optim::Preset::Thesis.name().into(),
+        presets: Vec::new(),
         populations,
         robots,
         runs,
@@ -422,12 +425,14 @@ mod tests {
             let s = sweep(name, 2, &maps).unwrap();
             s.check().unwrap();
             assert_eq!(s.objective_list(), vec!["thesis", "efficient"]);
+            assert_eq!(s.preset_list(), vec!["thesis"]);
             let with_cell = s
                 .specs()
                 .iter()
                 .filter(|spec| {
                     let key = GroupKey {
                         objective: spec.objective.clone(),
+                        preset: spec.preset.clone(),
                         map: spec.map_label.clone(),
                         method: spec.method.clone(),
                         strategy: spec.strategy.clone(),
@@ -448,6 +453,7 @@ mod tests {
         // each experiment takes its own.
         let key = GroupKey {
             objective: "thesis".into(),
+            preset: "thesis".into(),
             map: "map-house".into(),
             method: "boa".into(),
             strategy: "short".into(),

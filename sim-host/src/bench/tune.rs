@@ -133,6 +133,9 @@ impl Settings {
             strategies: vec![strategy],
             objective: self.objective.clone(),
             objectives: Vec::new(),
+            // Tuning like the thesis: what a tuning does not set is Table 4.1's.
+            preset: papillon::optim::Preset::Thesis.name().into(),
+            presets: Vec::new(),
             populations: vec![self.population],
             robots: vec![1],
             runs: self.runs,

@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use crate::bench::exec::ProgressMode;
 use crate::bench::select::{Overrides, SelectError, Source, ThesisMaps, select};
-use crate::bench::sweep::{Shard, Sweep};
+use crate::bench::sweep::Sweep;
 use crate::bench::{self as b, run_sweep};
 
 /// Arguments of `papillon-sim bench`.
@@ -27,7 +27,7 @@ pub struct Args {
     #[arg(long, conflicts_with = "config")]
     pub experiment: Option<String>,
     /// Sweep file (JSON: maps, methods, strategies, populations, robots, runs, generations,
-    /// battery_steps, base_seed, resolution_m).
+    /// battery_steps, base_seed, resolution_m, objective(s), preset(s), params).
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Runs per combination (default: the sweep's, 10 for the named experiments).
@@ -51,6 +51,11 @@ pub struct Args {
     /// Replace the sweep's objective: efficient (the default) or thesis.
     #[arg(long)]
     pub objective: Option<String>,
+    /// Replace the sweep's optimizer preset: standard (the literature's defaults; Papillon's
+    /// default) or thesis (Table 4.1; what the thesis-* experiments and tune run). Default: the
+    /// sweep's; see docs/optimizers.md.
+    #[arg(long, value_parser = ["thesis", "standard"])]
+    pub preset: Option<String>,
     /// Hyper-parameters replacing Table 4.1's: a JSON file with {"params": {METHOD: {NAME:
     /// VALUE}}}, such as a `tune` run's best.json.
     #[arg(long)]
@@ -110,6 +115,7 @@ pub fn sweep_from_args(args: &Args) -> Result<Sweep, String> {
         maps: args.maps.clone(),
         battery_steps: args.battery,
         objective: args.objective.clone(),
+        preset: args.preset.clone(),
     };
     select(&source, &overrides).map_err(|e| match e {
         SelectError::UnknownExperiment(_) => format!("--experiment: {e}"),
@@ -132,11 +138,8 @@ pub fn run(args: Args) -> ExitCode {
     if let Some(BenchCommand::Merge(m)) = &args.command {
         return merge(m);
     }
-    if args.jobs > MAX_JOBS {
-        return fail(&format!(
-            "--jobs: expected 0 (one per core) to {MAX_JOBS}, got {}",
-            args.jobs
-        ));
+    if let Err(e) = super::check_jobs(args.jobs) {
+        return fail(&e);
     }
     if args.experiment.as_deref() == Some(crate::bench::thesis::ALL) {
         return run_thesis_all(&args);
@@ -145,17 +148,15 @@ pub fn run(args: Args) -> ExitCode {
         Ok(s) => s,
         Err(e) => return fail(&e),
     };
-    let shard = match &args.shard {
-        Some(t) => match Shard::parse(t) {
-            Ok(s) => s,
-            Err(e) => return fail(&e),
-        },
-        None => Shard::ALL,
+    let (shard, out) = match super::shard_and_out(
+        args.shard.as_deref(),
+        args.out.as_deref(),
+        "bench-results",
+        &sweep.name,
+    ) {
+        Ok(x) => x,
+        Err(e) => return fail(&e),
     };
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("bench-results").join(&sweep.name));
     let mode = if args.plain {
         ProgressMode::Lines
     } else {

@@ -12,7 +12,7 @@ use papillon::geometry::Pose2;
 
 use crate::mission_run::{Failure, execute_recorded, json_report, summary};
 use crate::scenario::{
-    ScenarioSpec, Setup, Slip, Strategy, objective_from_name, selector_from_name,
+    ScenarioSpec, Setup, Slip, Strategy, objective_from_name, preset_from_name, selector_from_name,
 };
 
 /// Arguments of `papillon-sim mission`: the options with a fixed set of values are checked by
@@ -37,6 +37,12 @@ pub struct Args {
     /// discounted by energy; the default) or thesis (the thesis's objective, for reproduction).
     #[arg(long, default_value = "efficient", value_parser = ["efficient", "thesis"])]
     pub objective: String,
+    /// The optimizer's parameter set: standard (the literature's defaults: Deb's GA, Clerc and
+    /// Kennedy's PSO, GWO's paper schedule, GABC; Papillon's default) or thesis (the thesis's
+    /// Table 4.1 for GA and PSO, GWO's earlier schedule, Karaboga's ABC, for reproduction).
+    /// The other methods are the same in both; see docs/optimizers.md.
+    #[arg(long, default_value = papillon::explore::DEFAULT_PRESET.name(), value_parser = ["thesis", "standard"])]
+    pub preset: String,
     /// Population of the optimizer.
     #[arg(long, default_value = "5", allow_negative_numbers = true)]
     pub pop: String,
@@ -125,6 +131,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
     let robots = number("--robots", &args.robots, "a whole number of robots")?;
     let selector = selector_from_name(&args.method)?;
     let objective = objective_from_name(&args.objective)?;
+    let preset = preset_from_name(&args.preset)?;
     let population = number("--pop", &args.pop, "a whole number")?;
     let generations = number("--gens", &args.gens, "a whole number")?;
     let strategy = Strategy::from_name(&args.strategy)?;
@@ -184,6 +191,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         slip,
         localize,
         laser_noise,
+        preset,
         tuning: None,
     })
 }
@@ -252,6 +260,7 @@ mod tests {
             robots: "1".into(),
             method: "xboa".into(),
             objective: "efficient".into(),
+            preset: papillon::explore::DEFAULT_PRESET.name().into(),
             pop: "5".into(),
             gens: "30".into(),
             strategy: "short".into(),
@@ -314,6 +323,15 @@ mod tests {
             thesis.run.mission.explore.objective,
             papillon::explore::ObjectiveKind::Thesis
         );
+        assert_eq!(m.explore.preset, papillon::explore::DEFAULT_PRESET);
+        for preset in papillon::optim::Preset::ALL {
+            let s = setup_from_args(&Args {
+                preset: preset.name().into(),
+                ..args()
+            })
+            .unwrap();
+            assert_eq!(s.run.mission.explore.preset, preset);
+        }
     }
 
     #[test]
@@ -353,6 +371,13 @@ mod tests {
                     ..args()
                 },
                 "--objective:",
+            ),
+            (
+                Args {
+                    preset: "pygmo".into(),
+                    ..args()
+                },
+                "--preset:",
             ),
             (
                 Args {

@@ -5,10 +5,9 @@
 //! Bad arguments exit with status 2 and one line on standard error; a failed mission exits
 //! with status 1.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use crate::bench::sweep::Shard;
 use crate::bench::tune::{Settings, best, tune};
 
 /// Arguments of `papillon-sim tune`.
@@ -115,28 +114,22 @@ pub fn settings_from_args(args: &Args) -> Result<Settings, String> {
 
 /// Runs `papillon-sim tune`.
 pub fn run(args: Args) -> ExitCode {
-    if args.jobs > super::bench::MAX_JOBS {
-        return fail(&format!(
-            "--jobs: expected 0 (one per core) to {}, got {}",
-            super::bench::MAX_JOBS,
-            args.jobs
-        ));
+    if let Err(e) = super::check_jobs(args.jobs) {
+        return fail(&e);
     }
     let settings = match settings_from_args(&args) {
         Ok(s) => s,
         Err(e) => return fail(&e),
     };
-    let shard = match &args.shard {
-        Some(t) => match Shard::parse(t) {
-            Ok(s) => s,
-            Err(e) => return fail(&e),
-        },
-        None => Shard::ALL,
+    let (shard, out) = match super::shard_and_out(
+        args.shard.as_deref(),
+        args.out.as_deref(),
+        "tune-results",
+        &settings.method,
+    ) {
+        Ok(x) => x,
+        Err(e) => return fail(&e),
     };
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("tune-results").join(&settings.method));
     let total = settings.trials;
     let mut progress = |t: &crate::bench::tune::Trial| {
         let cov =
