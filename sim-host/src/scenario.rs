@@ -256,7 +256,7 @@ impl Setup {
             selector: spec.selector,
             ..MissionConfig::default()
         };
-        mission.set_objective(spec.objective);
+        mission.explore.objective = spec.objective;
         mission.explore.population = pop;
         mission.explore.max_generations = spec.generations;
         mission.explore.targets = targets;

@@ -240,18 +240,6 @@ impl Default for MissionConfig {
 }
 
 impl MissionConfig {
-    /// Sets the optimizers' objective and the inverse sensor model that goes with it: the
-    /// thesis's objective maps with the thesis's model ([`SensorModel::thesis`]), so that
-    /// `--objective thesis` reproduces the thesis; the efficient objective with Papillon's
-    /// ([`SensorModel::default`]: hits before misses, weaker misses).
-    pub fn set_objective(&mut self, objective: crate::explore::ObjectiveKind) {
-        self.explore.objective = objective;
-        self.sensor = match objective {
-            crate::explore::ObjectiveKind::Thesis => SensorModel::thesis(),
-            _ => SensorModel::default(),
-        };
-    }
-
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), MissionError> {
         let bad = |field: &'static str, value: f32| Err(MissionError::BadConfig { field, value });

@@ -158,7 +158,7 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
         _ => 1,
     };
     config.explore.reserve_steps = m.reserve_steps;
-    config.set_objective(board.objective().unwrap_or_default());
+    config.explore.objective = board.objective().unwrap_or_default();
     config.explore.population = usize::from(m.population);
     config.explore.max_generations = u32::from(m.generations);
     let r = &board.robot;
