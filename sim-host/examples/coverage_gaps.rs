@@ -117,7 +117,10 @@ fn main() {
     let map = &runner.map().grid;
     if std::env::var_os("GAPS_EVENTS").is_some() {
         let p = runner.body(0).true_pose();
-        eprintln!("end pose {p:?}");
+        eprintln!(
+            "end pose {p:?}, estimated {:?}",
+            runner.mission(0).pose_map()
+        );
         // Map around the robot: '#' Occupied and blocked, '!' Occupied but free in truth,
         // '.' Free, ',' Free but blocked in truth, ' ' Unknown (truth free), '%' Unknown (truth
         // blocked), 'R' the robot's cell.
@@ -257,6 +260,32 @@ fn main() {
             noise += 1;
         } else {
             shut += 1;
+        }
+    }
+    if std::env::var_os("GAPS_MAP").is_some() {
+        // The whole map, one character per 2 x 2 cells: 'M' holds an observable cell the map
+        // does not know, '#' a wall in truth, '.' free in truth.
+        let missing_at: std::collections::HashSet<usize> = truth
+            .cells()
+            .iter()
+            .copied()
+            .filter(|&i| !map.class(i).is_known())
+            .collect();
+        for r in (0..g.height as i32 / 2).rev() {
+            let line: String = (0..g.width as i32 / 2)
+                .map(|c| {
+                    let cells = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                        .map(|(dc, dr)| g.index(Cell::new(2 * c + dc, 2 * r + dr)).unwrap());
+                    if cells.iter().any(|i| missing_at.contains(i)) {
+                        'M'
+                    } else if cells.iter().any(|&i| world.is_blocked_index(i)) {
+                        '#'
+                    } else {
+                        '.'
+                    }
+                })
+                .collect();
+            eprintln!("{line}");
         }
     }
     let mut causes = std::collections::BTreeMap::new();

@@ -10,6 +10,8 @@
 #   BATTERY_RULE  "default" (the mission's 500 steps) or K: battery = ceil(K x free area in m²)
 #   PLANS         plan names, default gen-00 .. gen-23
 #   METHODS       default "xboa nearest-frontier"
+# MISSION_ARGS (environment) is added to every mission's options, e.g.
+#   MISSION_ARGS="--laser-noise 0.003" sim-host/scripts/world-set.sh "25 26 27" 2
 # Missions run one at a time under `nice` (the machine may be shared).
 set -eu
 BIN=${BIN:-${CARGO_TARGET_DIR:-target}/release}
@@ -30,7 +32,7 @@ for plan in $PLANS; do
     for method in $METHODS; do
         for seed in $SEEDS; do
             nice -n 5 "$BIN/papillon-sim" mission --map "$plan" --method "$method" --seed "$seed" \
-                ${battery:+--battery "$battery"} --json |
+                ${battery:+--battery "$battery"} ${MISSION_ARGS:-} --json |
                 jq -r --arg plan "$plan" '
                     (.coverage_curve | map(select(.[1] >= 0.99)) | first) as $hit
                     | [$plan, .method, .seed, .battery_steps, (.coverage * 1000 | round / 1000),
