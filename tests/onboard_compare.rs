@@ -37,7 +37,7 @@ const RESOLUTION_M: f32 = 0.1;
 
 /// Draws of the world's noise the runner's prediction is the median of, unless
 /// `PAPILLON_COMPARE_DRAWS` says otherwise.
-const DEFAULT_DRAWS: u64 = 1;
+const DEFAULT_DRAWS: u64 = 9;
 
 /// One mission's result.
 #[derive(Debug)]
