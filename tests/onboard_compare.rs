@@ -12,6 +12,10 @@
 //!   cargo test --release -p papillon --test onboard_compare -- --ignored --nocapture
 //! ```
 //!
+//! The runner's prediction is the median over `PAPILLON_COMPARE_DRAWS` (default 9) draws of
+//! its laser noise and wheel slip, each printed: one draw is one sample of what a mission
+//! meets, and on one seed the draws spread as much as the binary's own runs do.
+//!
 //! `PAPILLON_COMPARE_WORLD_GRID=1` gives the runner its own map (the world's extent) instead of
 //! the board's grid. It prints one line per seed and pump, then checks the targets of issue 26: coverage within
 //! 2 points and energy steps within 15 %.
