@@ -12,6 +12,10 @@
 //!   cargo test --release -p papillon --test onboard_compare -- --ignored --nocapture
 //! ```
 //!
+//! The runner's prediction is the median over `PAPILLON_COMPARE_DRAWS` (default 9) draws of
+//! its laser noise and wheel slip, each printed: one draw is one sample of what a mission
+//! meets, and on one seed the draws spread as much as the binary's own runs do.
+//!
 //! `PAPILLON_COMPARE_WORLD_GRID=1` gives the runner its own map (the world's extent) instead of
 //! the board's grid. It prints one line per seed and pump, then checks the targets of issue 26: coverage within
 //! 2 points and energy steps within 15 %.
@@ -34,6 +38,10 @@ use papillon_sim::world::World;
 /// Cell size of the runner's world and of the truth both maps are scored against (the
 /// runner's and `papillon-sim score`'s default; the board's grid has the same).
 const RESOLUTION_M: f32 = 0.1;
+
+/// Draws of the world's noise the runner's prediction is the median of, unless
+/// `PAPILLON_COMPARE_DRAWS` says otherwise.
+const DEFAULT_DRAWS: u64 = 9;
 
 /// One mission's result.
 #[derive(Debug)]
@@ -172,7 +180,7 @@ fn on_board_grid(world: &World, board: &BoardConfig) -> World {
         .with_start(start)
 }
 
-fn runner(map: &str, seed: u64, decision_s: f64) -> Outcome {
+fn runner(map: &str, seed: u64, decision_s: f64, draw: u64) -> Outcome {
     let (board, _) = board(seed);
     let world = World::load(map, RESOLUTION_M).unwrap();
     let world = if std::env::var("PAPILLON_COMPARE_WORLD_GRID").is_ok() {
@@ -182,6 +190,7 @@ fn runner(map: &str, seed: u64, decision_s: f64) -> Outcome {
     };
     let mut config = RunConfig::new(mission_config(&board).unwrap(), 1, seed);
     config.pump = PumpModel::onboard(decision_s);
+    config.pump.noise_draw = draw;
     let report = Runner::new(world, Dynamics::new(), config)
         .unwrap_or_else(|e| panic!("runner on {map}: {e}"))
         .run()
@@ -198,9 +207,63 @@ fn runner(map: &str, seed: u64, decision_s: f64) -> Outcome {
     }
 }
 
+/// Draws of the world's noise the prediction is the median of (`PAPILLON_COMPARE_DRAWS`).
+fn draws() -> u64 {
+    std::env::var("PAPILLON_COMPARE_DRAWS")
+        .ok()
+        .map(|v| v.parse().expect("PAPILLON_COMPARE_DRAWS: a number"))
+        .unwrap_or(DEFAULT_DRAWS)
+        .max(1)
+}
+
+/// The runner's prediction: the median, coverage and steps each, over `draws` draws of the
+/// laser noise and wheel slip (`PumpModel::noise_draw`), each draw printed. One draw is one
+/// sample of what a mission meets: the binary, on its simulator's draw, spreads from run to
+/// run as much as the draws do (docs/user-guide.md, section 7).
+fn prediction(map: &str, seed: u64, decision_s: f64, draws: u64) -> Outcome {
+    let mut runs: Vec<Outcome> = (0..draws)
+        .map(|draw| {
+            let o = runner(map, seed, decision_s, draw);
+            if draws > 1 {
+                print(map, seed, &format!("draw {draw}"), &o);
+            }
+            o
+        })
+        .collect();
+    if runs.len() == 1 {
+        return runs.remove(0);
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            (v[n / 2 - 1] + v[n / 2]) / 2.0
+        }
+    };
+    let coverage = median(runs.iter().map(|o| f64::from(o.coverage)).collect()) as f32;
+    let steps = median(runs.iter().map(|o| f64::from(o.steps)).collect()) as f32;
+    let time_s = median(runs.iter().map(|o| o.time_s).collect());
+    let decisions = median(runs.iter().map(|o| o.decisions as f64).collect()).round() as u64;
+    let replans_per_decision = median(runs.iter().map(|o| o.replans_per_decision).collect());
+    let mut ends: Vec<&str> = runs.iter().map(|o| o.end.as_str()).collect();
+    ends.sort_unstable();
+    ends.dedup();
+    Outcome {
+        coverage,
+        time_s,
+        steps,
+        decisions,
+        replans_per_decision,
+        end: ends.join("/"),
+        decision_s,
+    }
+}
+
 fn print(map: &str, seed: u64, pump: &str, o: &Outcome) {
     eprintln!(
-        "{map:6} seed {seed:3} {pump:7} coverage {:6.2} % time {:6.0} s steps {:6.1} decisions {:4} replans/decision {:4.2} decision {:5.3} s end {}",
+        "{map:6} seed {seed:3} {pump:8} coverage {:6.2} % time {:6.0} s steps {:6.1} decisions {:4} replans/decision {:4.2} decision {:5.3} s end {}",
         o.coverage * 100.0,
         o.time_s,
         o.steps,
@@ -244,7 +307,12 @@ fn runner_predicts_the_binary() {
     if let Ok(d) = std::env::var("PAPILLON_COMPARE_RUNNER_ONLY") {
         let decision_s: f64 = d.parse().expect("PAPILLON_COMPARE_RUNNER_ONLY: seconds");
         for &seed in &seeds {
-            print(&map, seed, "runner", &runner(&map, seed, decision_s));
+            print(
+                &map,
+                seed,
+                "runner",
+                &prediction(&map, seed, decision_s, draws()),
+            );
         }
         return;
     }
@@ -261,7 +329,7 @@ fn runner_predicts_the_binary() {
     });
     for (&seed, b) in seeds.iter().zip(binaries) {
         print(&map, seed, "binary", &b);
-        let r = runner(&map, seed, b.decision_s);
+        let r = prediction(&map, seed, b.decision_s, draws());
         print(&map, seed, "runner", &r);
         let dc = (b.coverage - r.coverage).abs() * 100.0;
         let ds = (b.steps - r.steps).abs() / r.steps.max(1.0);

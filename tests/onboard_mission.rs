@@ -11,8 +11,8 @@ use std::process::{Child, Output};
 use std::time::{Duration, Instant};
 
 use e2e::{
-    Relay, Sim, papillon, read_truth, run_on_sim_board, signal, sim_board, temp_dir, unix_now_s,
-    wait_bounded,
+    Relay, Sim, papillon, read_truth, run_on_sim_board, signal, sim_board, sim_board_laser_noise,
+    temp_dir, unix_now_s, wait_bounded,
 };
 use papillon::onboard::persist::{MapImage, MissionState, PGM_UNKNOWN, StateStore};
 use papillon_sim::serve::MAP_RESOLUTION_M;
@@ -112,7 +112,7 @@ fn only_the_log_in(dir: &Path, log: &Path) {
 
 #[test]
 fn a_lab_mission_finishes_with_95_percent_coverage() {
-    let sim = Sim::start("lab", None, &[]);
+    let sim = Sim::start("lab", None, &["--laser-noise", &sim_board_laser_noise()]);
     let dir = temp_dir("mission-lab");
     let log = dir.join("log");
     let began = Instant::now();
@@ -154,7 +154,7 @@ fn a_lab_mission_finishes_with_95_percent_coverage() {
 
 #[test]
 fn sigterm_saves_the_mission_and_resume_finishes_it_without_losing_the_map() {
-    let sim = Sim::start("lab", None, &[]);
+    let sim = Sim::start("lab", None, &["--laser-noise", &sim_board_laser_noise()]);
     let dir = temp_dir("mission-sigterm");
     let log = dir.join("log");
     let child = run(&sim.arcos_tcp(), &sim.laser(), &log, false);
@@ -212,7 +212,7 @@ fn sigterm_saves_the_mission_and_resume_finishes_it_without_losing_the_map() {
 
 #[test]
 fn after_kill_9_the_saved_map_is_intact_and_resume_continues_from_it() {
-    let sim = Sim::start("lab", None, &[]);
+    let sim = Sim::start("lab", None, &["--laser-noise", &sim_board_laser_noise()]);
     let dir = temp_dir("mission-kill9");
     let log = dir.join("log");
     let mut child = run(&sim.arcos_tcp(), &sim.laser(), &log, false);
@@ -261,10 +261,13 @@ fn after_kill_9_the_saved_map_is_intact_and_resume_continues_from_it() {
 fn a_mission_survives_corruption_a_laser_dropout_and_a_link_cut() {
     let dir = temp_dir("mission-faults");
     let truth_log = dir.join("truth.jsonl");
+    let noise = sim_board_laser_noise();
     let sim = Sim::start(
         "lab",
         None,
         &[
+            "--laser-noise",
+            &noise,
             "--faults",
             "corrupt=0.001",
             "--truth-log",
@@ -464,7 +467,12 @@ fn lab_missions_finish_at_a_tenth_of_a_percent_corruption() {
         .map(|seed| {
             std::thread::spawn(move || {
                 let seed_text = seed.to_string();
-                let sim = Sim::start("lab", None, &["--faults", "corrupt=0.001", "--seed", &seed_text]);
+                let noise = sim_board_laser_noise();
+                let sim = Sim::start(
+                    "lab",
+                    None,
+                    &["--laser-noise", &noise, "--faults", "corrupt=0.001", "--seed", &seed_text],
+                );
                 let dir = temp_dir(&format!("mission-corrupt-{seed}"));
                 let mut board: serde_json::Value =
                     serde_json::from_str(&std::fs::read_to_string(board()).unwrap()).unwrap();
@@ -517,7 +525,17 @@ fn lab_missions_finish_at_a_tenth_of_a_percent_corruption() {
 fn house_mission_manual_check() {
     let dir = temp_dir("mission-house");
     let truth_log = dir.join("truth.jsonl");
-    let sim = Sim::start("house", None, &["--truth-log", truth_log.to_str().unwrap()]);
+    let noise = sim_board_laser_noise();
+    let sim = Sim::start(
+        "house",
+        None,
+        &[
+            "--laser-noise",
+            &noise,
+            "--truth-log",
+            truth_log.to_str().unwrap(),
+        ],
+    );
     let log = dir.join("log");
     // Another board (e.g. a larger battery) with PAPILLON_HOUSE_BOARD.
     let house_board = std::env::var("PAPILLON_HOUSE_BOARD").ok();

@@ -144,7 +144,7 @@ impl WireLms1xx {
             let telegram = ScanTelegram::parse(payload).ok()?;
             let mut scan = Box::new(Scan::new());
             lms1xx_scan(&telegram, laser.max_range_m, &mut scan).ok()?;
-            return Some(LaserReply::Scan(scan));
+            return Some(LaserReply::Scan(scan, Some(telegram.time_since_startup_us)));
         }
         let reply = Reply::parse(payload).ok()?;
         if let Reply::Status { state } = reply {
@@ -346,7 +346,7 @@ mod tests {
             &out[2],
             LaserReply::Refused { request: LaserRequest::StartMeasurement, detail } if detail.contains("status 1")
         ));
-        let LaserReply::Scan(scan) = &out[3] else {
+        let LaserReply::Scan(scan, _) = &out[3] else {
             panic!("{:?}", out[3]);
         };
         assert_eq!(scan.len(), 541);

@@ -18,6 +18,7 @@ use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::time::Instant;
 
 use super::link::RobotLink;
+use super::sensor_clock::{PassiveClock, WrappingMicros};
 use crate::sensor::{LaserConfig, Scan};
 
 /// A request of the connect sequence.
@@ -57,8 +58,9 @@ pub enum LaserReply {
         /// What the laser said.
         detail: String,
     },
-    /// A scan, already converted to the core's type (boxed: a scan is about 9 KB).
-    Scan(Box<Scan>),
+    /// A scan, already converted to the core's type (boxed: a scan is about 9 KB), and the
+    /// laser's own time of it (µs since its start-up) when the telegram carries one.
+    Scan(Box<Scan>, Option<u32>),
     /// A telegram the session does not use.
     Other,
 }
@@ -143,6 +145,11 @@ pub struct Lms1xxClient {
     buf: Vec<u8>,
     reply_timeout: Duration,
     scans: u64,
+    /// The laser's clock: each scan is placed by its own time, not by when it was read
+    /// ([`super::sensor_clock`]).
+    clock: PassiveClock,
+    micros: WrappingMicros,
+    epoch: Instant,
 }
 
 /// How long to wait for each reply of the connect sequence.
@@ -166,6 +173,9 @@ impl Lms1xxClient {
             buf: vec![0u8; 8192],
             reply_timeout: REPLY_TIMEOUT,
             scans: 0,
+            clock: PassiveClock::new(),
+            micros: WrappingMicros::default(),
+            epoch: Instant::now(),
         };
         for request in [
             LaserRequest::SetAccessMode,
@@ -243,8 +253,11 @@ impl Lms1xxClient {
         .await
     }
 
-    /// The next scan and its arrival time, or `None` at `deadline` (a dropout when it
-    /// exceeds the board's stale timeout).
+    /// The next scan and its time, or `None` at `deadline` (a dropout when it exceeds the
+    /// board's stale timeout): the laser's own time of the scan placed on this computer's
+    /// clock ([`super::sensor_clock`]), never later than its arrival, so that a scan read late
+    /// is still placed on the odometry of the moment it was taken; its arrival when the
+    /// telegram carries no time.
     pub async fn next_scan(
         &mut self,
         deadline: Instant,
@@ -252,9 +265,16 @@ impl Lms1xxClient {
         loop {
             match self.next_reply(deadline).await? {
                 None => return Ok(None),
-                Some(LaserReply::Scan(scan)) => {
+                Some(LaserReply::Scan(scan, laser_us)) => {
                     self.scans += 1;
-                    return Ok(Some((Instant::now(), *scan)));
+                    let arrival = Instant::now();
+                    let Some(us) = laser_us else {
+                        return Ok(Some((arrival, *scan)));
+                    };
+                    let arrival_s = arrival.saturating_duration_since(self.epoch).as_secs_f64();
+                    let placed_s = self.clock.place(arrival_s, self.micros.seconds(us));
+                    let placed = self.epoch + Duration::from_secs_f64(placed_s.max(0.0));
+                    return Ok(Some((placed.min(arrival), *scan)));
                 }
                 Some(_) => {}
             }
@@ -360,7 +380,7 @@ pub(crate) mod tests {
                                 range_m: Some(cm as f32 * 0.01),
                             });
                         }
-                        LaserReply::Scan(Box::new(scan))
+                        LaserReply::Scan(Box::new(scan), None)
                     }
                     _ => LaserReply::Other,
                 });

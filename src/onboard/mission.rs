@@ -229,12 +229,16 @@ pub struct CoreMission {
     step_sent_s: f64,
     /// A status packet arrived since then.
     status_pending: bool,
+    /// The latest status packet's time (on the robot's clock, `sensor_clock`) \[s\].
+    status_t_s: f64,
+    /// The time of the last step asked for, on the mission's clock \[s\]: the status
+    /// packet's time for a step after one (the core sees the robot's SIP cycle, not how late
+    /// the program read the packet), strictly increasing.
+    core_step_s: f64,
     commands_seen: u64,
     last_command_s: f64,
     last_moving: bool,
     fault_at_s: Option<f64>,
-    /// The latest time `step` was called with \[s\].
-    last_step_s: f64,
     done: bool,
     /// The mission thread (joined, for a bounded time, when the mission is dropped).
     worker: Option<std::thread::JoinHandle<()>>,
@@ -347,11 +351,12 @@ impl CoreMission {
             out,
             step_sent_s: f64::NEG_INFINITY,
             status_pending: false,
+            status_t_s: 0.0,
+            core_step_s: f64::NEG_INFINITY,
             commands_seen: 0,
             last_command_s: 0.0,
             last_moving: false,
             fault_at_s: None,
-            last_step_s: 0.0,
             done: false,
             worker: Some(worker),
         })
@@ -361,6 +366,7 @@ impl CoreMission {
 impl MissionDriver for CoreMission {
     fn on_status(&mut self, t_s: f64, status: &StatusPacket) {
         self.status_pending = true;
+        self.status_t_s = t_s;
         let _ = self.tx.send(Input::Status(t_s, Box::new(status.clone())));
     }
 
@@ -368,9 +374,10 @@ impl MissionDriver for CoreMission {
         let _ = self.tx.send(Input::Scan(t_s, Box::new(scan.clone())));
     }
 
-    fn on_fault(&mut self, t_s: f64, _fault: Fault) {
-        // Only a plan made after the fault counts (the runtime may pass an older time).
-        self.fault_at_s = Some(t_s.max(self.last_step_s));
+    fn on_fault(&mut self, _t_s: f64, _fault: Fault) {
+        // Only a plan made at a step asked for after the fault counts (steps are in the
+        // mission's clock, strictly increasing).
+        self.fault_at_s = Some(self.core_step_s);
         let _ = self.tx.send(Input::Fault);
     }
 
@@ -381,7 +388,7 @@ impl MissionDriver for CoreMission {
     fn replanned(&self) -> bool {
         match self.fault_at_s {
             None => true,
-            Some(f) => lock(&self.out).last_plan_s.is_some_and(|p| p >= f),
+            Some(f) => lock(&self.out).last_plan_s.is_some_and(|p| p > f),
         }
     }
 
@@ -389,15 +396,20 @@ impl MissionDriver for CoreMission {
         if self.done {
             return MissionCommand::Done;
         }
-        self.last_step_s = self.last_step_s.max(t_s);
         // Step right after each status packet (the freshest pose, the least delay between
         // measuring and commanding), or every STEP_FALLBACK_S without one (so the mission
         // notices stale inputs).
         let since = t_s - self.step_sent_s;
         if (self.status_pending && since >= MIN_STEP_S) || since >= STEP_FALLBACK_S {
+            let at_s = if self.status_pending {
+                self.status_t_s
+            } else {
+                t_s
+            };
+            self.core_step_s = at_s.max(self.core_step_s + 1e-6);
             self.status_pending = false;
             self.step_sent_s = t_s;
-            let _ = self.tx.send(Input::Step(t_s));
+            let _ = self.tx.send(Input::Step(self.core_step_s));
         }
         let (command, commands) = {
             let out = lock(&self.out);

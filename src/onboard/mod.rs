@@ -13,6 +13,7 @@
 //! - [`persist`]: atomic saving and loading of the mission state, telemetry;
 //! - [`record`]: the mission's MCAP recording (`mission.mcap`, see `crate::record`);
 //! - [`pose_history`]: odometry readings with their times, interpolated to a scan's time;
+//! - [`sensor_clock`]: status packets and scans placed on the host clock by the devices' own clocks;
 //! - [`runtime`]: `papillon run` and `papillon probe`;
 //! - [`calibrate`]: `papillon calibrate` (UMBmark).
 
@@ -28,6 +29,7 @@ pub mod pose_history;
 pub mod record;
 pub mod robot;
 pub mod runtime;
+pub mod sensor_clock;
 
 #[cfg(test)]
 mod testkit;

@@ -639,6 +639,11 @@ pub async fn pump(
     let mut last_scan = start;
     let mut next_save = start + save_every;
     let mut in_contact = false;
+    // Status packets are placed on the robot's own clock, its SIP cycle (the firmware stamps
+    // none), as scans are on the laser's (`sensor_clock`): a packet read late is still the
+    // odometry of the moment it was sent.
+    let sip_cycle_ms = client.config().map_or(100, |c| c.sip_cycle_ms).max(10);
+    let mut sip_clock = super::sensor_clock::PeriodicClock::new(f64::from(sip_cycle_ms) * 1e-3);
     loop {
         let now = Instant::now();
         // The signal is checked between events (at least every `tick`), never by cancelling
@@ -656,7 +661,7 @@ pub async fn pump(
         let event = client.next_event(now + tick).await?;
         if let Some(super::robot::RobotEvent::Status { at, status }) = event {
             last_status = at;
-            mission.on_status(t(at), &status);
+            mission.on_status(sip_clock.place(t(at)), &status);
             // A wheel stall or a bumper is the mission's to handle: its safety monitor stops
             // and backs off before re-planning (a stop here would cut that back-off short).
             let contact = status.stalled() || status.bumpers_a() != 0 || status.bumpers_b() != 0;

@@ -205,6 +205,21 @@ pub fn sim_board() -> String {
     format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The range noise of `boards/sim.json`'s laser (`laser.noise_fraction`), for `serve
+/// --laser-noise`: a mission test's simulator serves the laser its board describes (the
+/// house check's and `onboard_compare`'s do). On a noise-free laser under a board that
+/// says 5 % the core maps walls one cell thick with holes, its predicted scans see through
+/// them, and the robot chases gain it can never observe: back and forth or deciding where it
+/// stands until `NothingObservable` (docs/architecture.md, "The binary against the runner").
+pub fn sim_board_laser_noise() -> String {
+    let board: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(sim_board()).unwrap()).unwrap();
+    board["laser"]["noise_fraction"]
+        .as_f64()
+        .unwrap_or(0.0)
+        .to_string()
+}
+
 /// `papillon run` on `boards/sim.json` against these endpoints, logging into `log`, plus
 /// `extra` flags. The working directory is the log's parent: nothing may be written there but
 /// the log.

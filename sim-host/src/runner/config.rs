@@ -72,6 +72,12 @@ pub struct PumpModel {
     /// derived from the run's seed, [`derive_seed`]): on the same seed the runner's optimizer
     /// then draws what the binary's draws.
     pub board_seeded_decisions: bool,
+    /// Which draw of the world's randomness (laser range noise, wheel slip) the run makes:
+    /// 0 is the run's seed's own streams, `k > 0` other streams of the same seed, the
+    /// decisions unchanged. `papillon run` meets one draw of its simulator's (or its
+    /// building's) noise; the runner's prediction of it is the median over several draws
+    /// (`tests/onboard_compare.rs`), not one arbitrary draw.
+    pub noise_draw: u64,
 }
 
 /// See [`PumpModel::nothing_observable_end`] (the same values as `papillon run`'s).
@@ -92,6 +98,7 @@ impl PumpModel {
             nothing_observable_end: false,
             unmapped_turn_deg_s: None,
             board_seeded_decisions: false,
+            noise_draw: 0,
         }
     }
 
@@ -106,6 +113,7 @@ impl PumpModel {
             nothing_observable_end: true,
             unmapped_turn_deg_s: Some(20.0),
             board_seeded_decisions: true,
+            noise_draw: 0,
         }
     }
 }

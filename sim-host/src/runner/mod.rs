@@ -220,6 +220,11 @@ impl Runner {
         };
         let mut robots = Vec::with_capacity(config.robots);
         let mut bodies = Vec::with_capacity(config.robots);
+        // The streams of the laser noise and the wheel slip: the run's seed's own (draw 0),
+        // or another draw of the same seed (`PumpModel::noise_draw`).
+        let world_seed = config
+            .seed
+            .wrapping_add(config.pump.noise_draw.wrapping_mul(0x9E37_79B9_7F4A_7C15));
         for (k, &pose) in starts.iter().enumerate() {
             if world.disc_hits_blocked(pose.position(), radius)
                 || starts[..k]
@@ -232,12 +237,12 @@ impl Runner {
             bodies.push(RobotBody::new(
                 config.body,
                 pose,
-                derive_seed(config.seed, k, STREAM_BODY),
+                derive_seed(world_seed, k, STREAM_BODY),
             ));
             robots.push(Robot {
                 laser: LaserSim::new(
                     config.mission.laser,
-                    derive_seed(config.seed, k, STREAM_LASER),
+                    derive_seed(world_seed, k, STREAM_LASER),
                 ),
                 mission,
                 rng: random::seeded(if config.pump.board_seeded_decisions {
