@@ -56,12 +56,16 @@ fn along_a_featureless_corridor_the_odometry_is_kept_and_the_walls_hold_the_rest
     let steps = (40.0 / step_m) as usize;
     let mut counts = [0u32; 4];
     let mut along_sum = 0.0f32;
+    // The odometry's increments laid along the estimate's own heading: where a matcher that
+    // keeps the odometry along the corridor ends (its x), whatever heading it holds.
+    let mut odometry_on_estimate_x = start.x;
     for k in 0..=steps {
         truth = Pose2::new(start.x + k as f32 * step_m, start.y, 0.0);
         if k > 0 {
             // Odometry: 2 % long, 0.15° left per metre.
             let d = step_m * 1.02;
             let turn = (0.15f32).to_radians() * step_m;
+            odometry_on_estimate_x += d * math::cos(estimate.theta + 0.5 * turn);
             odom = Pose2::new(
                 odom.x + d * math::cos(odom.theta),
                 odom.y + d * math::sin(odom.theta),
@@ -100,9 +104,19 @@ fn along_a_featureless_corridor_the_odometry_is_kept_and_the_walls_hold_the_rest
     }
     let odometry_only = MapFromOdom::from_start(start, Pose2::new(0.0, 0.0, 0.0)).map_pose(odom);
     let along_matched = (estimate.x - truth.x).abs();
-    let along_odometry = (odometry_only.x - truth.x).abs();
+    // What keeping the odometry along the corridor gives is its increments laid along the
+    // heading the walls hold, not the odometry-only pose: that pose ends 0.73 m along
+    // instead of the 0.80 m the 2 % over-count makes because its 6° heading drift folds
+    // distance across the corridor (it ends 2 m across). A pose that held the true heading
+    // exactly and kept the odometry along would end 0.80 m along and fail a bound of
+    // 0.725 m + 5 cm, so the odometry-only pose's x error is the wrong reference; the
+    // increments on the estimate's own heading are the right one (docs/experiments.md,
+    // sixth measurement).
+    let along_odometry = (odometry_on_estimate_x - truth.x).abs();
+    let along_odometry_only = (odometry_only.x - truth.x).abs();
     eprintln!(
-        "along: matched {along_matched} m, odometry alone {along_odometry} m; across worst \
+        "along: matched {along_matched} m, odometry on the estimate's heading \
+         {along_odometry} m (odometry-only pose {along_odometry_only} m); across worst \
          {worst_across} m; heading worst {worst_heading} rad; constrained {counts:?}; \
          corrections along summed {along_sum} m"
     );
@@ -115,8 +129,8 @@ fn along_a_featureless_corridor_the_odometry_is_kept_and_the_walls_hold_the_rest
     assert!(worst_heading <= 0.05, "heading: {worst_heading} rad");
     assert!(
         along_matched <= along_odometry + 0.05,
-        "along the corridor: {along_matched} m (estimate - truth {} m), odometry alone \
-         {along_odometry} m; matches by directions constrained {counts:?}, corrections along \
+        "along the corridor: {along_matched} m (estimate - truth {} m), odometry on the \
+         estimate's heading {along_odometry} m; matches by directions constrained {counts:?}, corrections along \
          summed {along_sum} m",
         estimate.x - truth.x
     );
