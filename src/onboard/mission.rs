@@ -78,7 +78,7 @@ pub const STEP_FALLBACK_S: f64 = 0.15;
 /// With no new command for this long after a moving one, the runtime is told to stop \[s\].
 pub const BUSY_STOP_S: f64 = 0.3;
 /// Scans kept while they wait for the status packet after them (more are dropped, oldest
-/// first: at 25 Hz, 0.3 s of scans).
+/// first): 0.32 s of scans at the LMS1xx board's 25 Hz, 0.16 s at `boards/sim.json`'s 50 Hz.
 pub const PENDING_SCANS: usize = 8;
 /// A turn between two status packets (100 ms apart) above which a scan between them is not
 /// mapped \[rad\] (2°).
