@@ -211,16 +211,9 @@ impl Recorder<BufWriter<File>> {
     /// A live view of `robots` robots alone, no file (see [`Self::with_live`]).
     #[cfg(feature = "live")]
     pub fn live_only(live: crate::live::LiveServer, robots: usize, base_ns: u64) -> Self {
-        Self {
-            writer: None,
-            live: Some((live, BTreeMap::new())),
-            robots: robots.max(1),
-            base_ns,
-            schemas: BTreeMap::new(),
-            channels: BTreeMap::new(),
-            sequence: 0,
-            last_path: vec![Vec::new(); robots.max(1)],
-        }
+        let mut recorder = Self::starting(None, robots, base_ns);
+        recorder.live = Some((live, BTreeMap::new()));
+        recorder
     }
 }
 
@@ -231,8 +224,13 @@ impl<W: Write + Seek> Recorder<W> {
             .profile("")
             .library(concat!("papillon ", env!("CARGO_PKG_VERSION")))
             .create(w)?;
-        Ok(Self {
-            writer: Some(writer),
+        Ok(Self::starting(Some(writer), robots, base_ns))
+    }
+
+    /// A recorder that has written nothing yet: no live view, no schema or channel registered.
+    fn starting(writer: Option<mcap::Writer<W>>, robots: usize, base_ns: u64) -> Self {
+        Self {
+            writer,
             #[cfg(feature = "live")]
             live: None,
             robots: robots.max(1),
@@ -241,7 +239,7 @@ impl<W: Write + Seek> Recorder<W> {
             channels: BTreeMap::new(),
             sequence: 0,
             last_path: vec![Vec::new(); robots.max(1)],
-        })
+        }
     }
 
     /// Also publishes every message to the live view `live` ([`crate::live`]).
