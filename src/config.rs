@@ -296,6 +296,10 @@ pub struct MissionConfig {
     /// ([`crate::explore::ObjectiveKind`]).
     #[serde(default)]
     pub objective: Option<Name>,
+    /// The optimizers' parameter sets: `standard` (the default when absent) or `thesis`
+    /// ([`crate::optim::Preset`]; only GA, PSO, GWO and ABC differ).
+    #[serde(default)]
+    pub preset: Option<Name>,
     /// Candidate targets considered per decision.
     pub targets: u16,
     /// Energy budget \[steps\] (one step = 1 m of travel or 45° of rotation).
@@ -442,6 +446,7 @@ impl Default for BoardConfig {
                 generations: 30,
                 strategy: name("short"),
                 objective: None,
+                preset: None,
                 targets: 16,
                 battery_steps: 400.0,
                 reserve_steps: 20.0,
@@ -621,6 +626,15 @@ impl BoardConfig {
         match &self.mission.objective {
             Some(name) => crate::explore::ObjectiveKind::from_name(name),
             None => Some(crate::explore::ObjectiveKind::default()),
+        }
+    }
+
+    /// The optimizers' parameter sets (the exploration's default when the board names none),
+    /// `None` if the board names an unknown preset.
+    pub fn preset(&self) -> Option<crate::optim::Preset> {
+        match &self.mission.preset {
+            Some(name) => name.parse().ok(),
+            None => Some(crate::explore::DEFAULT_PRESET),
         }
     }
 

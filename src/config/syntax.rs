@@ -84,6 +84,7 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
     ("$.mission.generations", true, Kind::Whole(u16::MAX as u64)),
     ("$.mission.strategy", true, Kind::Str(32)),
     ("$.mission.objective", false, Kind::Optional(&Kind::Str(32))),
+    ("$.mission.preset", false, Kind::Optional(&Kind::Str(32))),
     ("$.mission.targets", true, Kind::Whole(u16::MAX as u64)),
     ("$.mission.battery_steps", true, Kind::Number),
     ("$.mission.reserve_steps", true, Kind::Number),

@@ -303,6 +303,9 @@ fn mission_rules() {
     only_problem_at("$.mission.objective", |c| {
         c.mission.objective = Some(name("thesys"))
     });
+    only_problem_at("$.mission.preset", |c| {
+        c.mission.preset = Some(name("tuned"))
+    });
     only_problem_at("$.mission.strategy", |c| {
         c.mission.strategy = name("medium")
     });
@@ -398,6 +401,23 @@ fn the_objective_is_optional_and_named() {
         );
         let c = BoardConfig::from_json(json.as_bytes()).unwrap();
         assert_eq!(c.objective(), Some(kind));
+        assert_eq!(paths(&c), Vec::<String>::new());
+    }
+}
+
+#[test]
+fn the_preset_is_optional_and_named() {
+    use crate::optim::Preset;
+    let c = BoardConfig::from_json(LMS1XX.as_bytes()).unwrap();
+    assert_eq!(c.mission.preset, None);
+    assert_eq!(c.preset(), Some(crate::explore::DEFAULT_PRESET));
+    for (text, preset) in [("thesis", Preset::Thesis), ("standard", Preset::Standard)] {
+        let json = LMS1XX.replace(
+            "\"strategy\": \"short\",",
+            &std::format!("\"strategy\": \"short\", \"preset\": \"{text}\","),
+        );
+        let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+        assert_eq!(c.preset(), Some(preset));
         assert_eq!(paths(&c), Vec::<String>::new());
     }
 }

@@ -259,6 +259,9 @@ impl BoardConfig {
         if self.objective().is_none() {
             r("$.mission.objective", "must be \"efficient\" or \"thesis\"");
         }
+        if self.preset().is_none() {
+            r("$.mission.preset", "must be \"standard\" or \"thesis\"");
+        }
         if m.targets == 0 {
             r("$.mission.targets", "must be at least 1");
         } else if Strategy::from_name(&m.strategy) == Some(Strategy::Long)

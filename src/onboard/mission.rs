@@ -159,6 +159,7 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     };
     config.explore.reserve_steps = m.reserve_steps;
     config.explore.objective = board.objective().unwrap_or_default();
+    config.explore.preset = board.preset().unwrap_or(crate::explore::DEFAULT_PRESET);
     config.explore.population = usize::from(m.population);
     config.explore.max_generations = u32::from(m.generations);
     let r = &board.robot;
