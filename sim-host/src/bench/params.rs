@@ -21,7 +21,7 @@
 
 use std::collections::BTreeMap;
 
-use papillon::optim::{Method, Tuning, aboa, boa, ga, mboa, pso, saboa, xboa};
+use papillon::optim::{Method, Preset, Tuning, aboa, boa, ga, mboa, pso, saboa, xboa};
 
 /// Named values of a method's hyper-parameters.
 pub type ParamMap = BTreeMap<String, f32>;
@@ -73,6 +73,13 @@ pub fn space(method: &str) -> &'static [Range] {
 /// The thesis's Table 4.1 values of `method` at `population` (as the optimizers build them,
 /// [`Method::build`]), by name; empty for a method without parameters.
 pub fn thesis_values(method: &str, population: usize) -> ParamMap {
+    preset_values(method, population, Preset::Thesis)
+}
+
+/// The values of `method` at `population` under `preset` ([`Method::build_preset`]), by name:
+/// Table 4.1's, except GA's and PSO's under [`Preset::Standard`]; empty for a method without
+/// parameters.
+pub fn preset_values(method: &str, population: usize, preset: Preset) -> ParamMap {
     let Ok(m) = method.parse::<Method>() else {
         return ParamMap::new();
     };
@@ -95,7 +102,7 @@ pub fn thesis_values(method: &str, population: usize) -> ParamMap {
         }
         Method::Saboa => vec![("p", saboa::SaboaParams::default().p)],
         Method::Ga => {
-            let p = ga::GaParams::thesis();
+            let p = ga_base(preset);
             vec![
                 ("crossover", p.crossover),
                 ("mutation", p.mutation),
@@ -103,7 +110,7 @@ pub fn thesis_values(method: &str, population: usize) -> ParamMap {
             ]
         }
         Method::Pso => {
-            let p = pso::PsoParams::thesis();
+            let p = pso_base(preset);
             vec![
                 ("inertia", p.inertia),
                 ("cognitive", p.cognitive),
@@ -116,15 +123,34 @@ pub fn thesis_values(method: &str, population: usize) -> ParamMap {
     v.into_iter().map(|(k, x)| (k.to_string(), x)).collect()
 }
 
-/// The tuning of `method` at `population`: Table 4.1's values with `values` replacing some;
-/// an unknown name, a value outside the search range, or a method without parameters is an
-/// error naming it.
-pub fn tuning(method: &str, population: usize, values: &ParamMap) -> Result<Tuning, String> {
+fn ga_base(preset: Preset) -> ga::GaParams {
+    match preset {
+        Preset::Thesis => ga::GaParams::thesis(),
+        Preset::Standard => ga::GaParams::standard(),
+    }
+}
+
+fn pso_base(preset: Preset) -> pso::PsoParams {
+    match preset {
+        Preset::Thesis => pso::PsoParams::thesis(),
+        Preset::Standard => pso::PsoParams::standard(),
+    }
+}
+
+/// The tuning of `method` at `population`: `preset`'s values ([`preset_values`]) with `values`
+/// replacing some; an unknown name, a value outside the search range, or a method without
+/// parameters is an error naming it.
+pub fn tuning(
+    method: &str,
+    population: usize,
+    preset: Preset,
+    values: &ParamMap,
+) -> Result<Tuning, String> {
     let ranges = space(method);
     if ranges.is_empty() {
         return Err(format!("params: {method} has no hyper-parameters to set"));
     }
-    let mut all = thesis_values(method, population);
+    let mut all = preset_values(method, population, preset);
     for (k, &v) in values {
         let Some(range) = ranges.iter().find(|r| r.name == k) else {
             let names: Vec<&str> = ranges.iter().map(|r| r.name).collect();
@@ -168,14 +194,14 @@ pub fn tuning(method: &str, population: usize, values: &ParamMap) -> Result<Tuni
             crossover: g("crossover"),
             mutation: g("mutation"),
             eta_m: g("eta_m"),
-            ..ga::GaParams::thesis()
+            ..ga_base(preset)
         }),
         "pso" => Tuning::Pso(pso::PsoParams {
             inertia: g("inertia"),
             cognitive: g("cognitive"),
             social: g("social"),
             vmax_fraction: g("vmax_fraction"),
-            ..pso::PsoParams::thesis()
+            ..pso_base(preset)
         }),
         _ => unreachable!("space() is empty for other methods"),
     })
@@ -191,8 +217,9 @@ mod tests {
             for pop in [5, 20] {
                 let v = thesis_values(m, pop);
                 assert_eq!(v.len(), space(m).len(), "{m}");
-                let t = tuning(m, pop, &v).unwrap();
-                assert_eq!(t, tuning(m, pop, &ParamMap::new()).unwrap(), "{m}");
+                let t = tuning(m, pop, Preset::Thesis, &v).unwrap();
+                let none = ParamMap::new();
+                assert_eq!(t, tuning(m, pop, Preset::Thesis, &none).unwrap(), "{m}");
                 assert_eq!(t.method().name(), m);
             }
         }
@@ -200,16 +227,41 @@ mod tests {
         assert_eq!(thesis_values("boa", 20)["p"], 0.395);
     }
 
+    /// A partial set fills the rest from the chosen preset, not always from Table 4.1.
+    #[test]
+    fn a_partial_set_keeps_the_chosen_presets_other_values() {
+        let mut v = ParamMap::new();
+        v.insert("mutation".into(), 0.3);
+        let Tuning::Ga(standard) = tuning("ga", 20, Preset::Standard, &v).unwrap() else {
+            panic!("not a GA tuning");
+        };
+        assert_eq!(standard.mutation, 0.3);
+        assert_eq!(standard.crossover, ga::GaParams::standard().crossover);
+        assert_eq!(standard.eta_m, ga::GaParams::standard().eta_m);
+        let Tuning::Ga(thesis) = tuning("ga", 20, Preset::Thesis, &v).unwrap() else {
+            panic!("not a GA tuning");
+        };
+        assert_eq!(thesis.crossover, ga::GaParams::thesis().crossover);
+        assert_ne!(standard.crossover, thesis.crossover);
+        v.clear();
+        v.insert("social".into(), 1.0);
+        let Tuning::Pso(p) = tuning("pso", 20, Preset::Standard, &v).unwrap() else {
+            panic!("not a PSO tuning");
+        };
+        assert_eq!(p.social, 1.0);
+        assert_eq!(p.inertia, pso::PsoParams::standard().inertia);
+    }
+
     #[test]
     fn bad_parameters_are_named() {
         let mut v = ParamMap::new();
         v.insert("q".into(), 0.5);
-        let e = tuning("xboa", 5, &v).unwrap_err();
+        let e = tuning("xboa", 5, Preset::Thesis, &v).unwrap_err();
         assert!(e.contains("params.xboa.q") && e.contains("p_c"), "{e}");
         v.clear();
         v.insert("p_c".into(), 1.5);
-        let e = tuning("xboa", 5, &v).unwrap_err();
+        let e = tuning("xboa", 5, Preset::Thesis, &v).unwrap_err();
         assert!(e.contains("0 to 1"), "{e}");
-        assert!(tuning("gwo", 5, &ParamMap::new()).is_err());
+        assert!(tuning("gwo", 5, Preset::Thesis, &ParamMap::new()).is_err());
     }
 }

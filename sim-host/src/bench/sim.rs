@@ -39,6 +39,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
             Some(values) => Some(super::params::tuning(
                 &spec.method,
                 spec.population,
+                preset_from_name(&spec.preset)?,
                 values,
             )?),
             None => None,

@@ -198,7 +198,7 @@ pub struct RunSpec {
     pub battery_steps: Option<f32>,
     /// Cell size \[m\].
     pub resolution_m: f32,
-    /// Hyper-parameters replacing Table 4.1's for this run's method (`None`: Table 4.1).
+    /// Hyper-parameters replacing the preset's for this run's method (`None`: the preset's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub params: Option<ParamMap>,
 }
@@ -402,7 +402,9 @@ impl Sweep {
         }
         for (method, values) in &self.params {
             for &p in &self.populations {
-                super::params::tuning(method, p, values)?;
+                for preset in papillon::optim::Preset::ALL {
+                    super::params::tuning(method, p, preset, values)?;
+                }
             }
         }
         if !(self.resolution_m.is_finite() && self.resolution_m > 0.0 && self.resolution_m <= 1.0) {

@@ -56,8 +56,9 @@ pub struct Args {
     /// sweep's; see docs/optimizers.md.
     #[arg(long, value_parser = ["thesis", "standard"])]
     pub preset: Option<String>,
-    /// Hyper-parameters replacing Table 4.1's: a JSON file with {"params": {METHOD: {NAME:
-    /// VALUE}}}, such as a `tune` run's best.json.
+    /// Hyper-parameters replacing the preset's (a partial set keeps the preset's other
+    /// values): a JSON file with {"params": {METHOD: {NAME: VALUE}}}, such as a `tune` run's
+    /// best.json.
     #[arg(long)]
     pub params: Option<PathBuf>,
     /// Directory with the thesis's map-empty.csv and map-house.csv, added to the named
