@@ -3,7 +3,8 @@
 //! A frontier cell is an Unknown cell with at least one Free 4-neighbour (Yamauchi, "A
 //! Frontier-Based Approach for Autonomous Exploration", IEEE CIRA 1997). Frontier cells group
 //! into 8-connected frontiers, each with its size \[cells\], its centroid \[m\] and the frontier
-//! cell nearest a given point.
+//! cell nearest a given point. Only the box around the cells known so far is scanned
+//! ([`frontier_box`]), so a search costs what the explored region holds, not the map.
 //!
 //! Grouping is a two-pass connected-component labelling with union-find (Rosenfeld & Pfaltz,
 //! "Sequential Operations in Digital Picture Processing", JACM 1966) over the list of frontier
@@ -13,7 +14,7 @@
 //! frontier cell, with capacities fixed at compile time; running out is an error.
 
 use crate::geometry::Point2;
-use crate::grid::{Cell, CellClass, OccupancyGrid};
+use crate::grid::{Cell, CellBox, CellClass, OccupancyGrid};
 
 /// Frontier search settings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
@@ -194,6 +195,14 @@ pub fn is_frontier_cell<const N: usize>(grid: &OccupancyGrid<N>, index: usize) -
         .any(|&(dc, dr)| grid.class_of(Cell::new(c.col + dc, c.row + dr)) == Some(CellClass::Free))
 }
 
+/// The cells where frontier cells can be: the grid's [known box](OccupancyGrid::known_box)
+/// grown by one cell (a frontier cell is Unknown next to a Free cell), clipped to the grid.
+/// Scanning it instead of the whole grid finds the same cells in the same (flat-index) order,
+/// at a cost that follows the explored region rather than the map.
+pub fn frontier_box<const N: usize>(grid: &OccupancyGrid<N>) -> CellBox {
+    grid.known_box().grown(1, grid.geometry())
+}
+
 /// Finds the frontiers of `grid` with at least `config.min_size_cells` cells, and in each the
 /// cell nearest `query` (map frame \[m\]). The results live in `workspace` and are returned as a
 /// slice. Allocation-free; a workspace too small for the grid's frontier is an error.
@@ -215,9 +224,10 @@ pub fn find_frontiers<'w, const N: usize, const CELLS: usize, const FRONTIERS: u
     }
     let free = |i: usize| grid.log_odds_at(i) < 0.0;
 
-    // Pass 1: collect frontier cells in flat-index order.
-    for row in 0..h {
-        for col in 0..w {
+    // Pass 1: collect frontier cells in flat-index order, from the box where they can be.
+    let area = frontier_box(grid);
+    for row in area.row_min..area.row_end {
+        for col in area.col_min..area.col_end {
             let i = row * w + col;
             if grid.log_odds_at(i) != 0.0 {
                 continue;

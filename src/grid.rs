@@ -353,12 +353,86 @@ impl<F: FnMut(usize, CellClass, CellClass)> CellObserver for F {
     }
 }
 
+/// A rectangle of cells: columns `col_min..col_end` and rows `row_min..row_end` (end
+/// exclusive).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Zeroable)]
+pub struct CellBox {
+    /// First column.
+    pub col_min: usize,
+    /// One past the last column.
+    pub col_end: usize,
+    /// First row.
+    pub row_min: usize,
+    /// One past the last row.
+    pub row_end: usize,
+}
+
+impl CellBox {
+    /// No cell (all zero: what a zeroed grid holds).
+    pub const EMPTY: CellBox = CellBox {
+        col_min: 0,
+        col_end: 0,
+        row_min: 0,
+        row_end: 0,
+    };
+
+    /// The whole grid of `geometry`.
+    pub fn all(geometry: &GridGeometry) -> Self {
+        Self {
+            col_min: 0,
+            col_end: geometry.width,
+            row_min: 0,
+            row_end: geometry.height,
+        }
+    }
+
+    /// Whether the box holds no cell.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.col_end <= self.col_min || self.row_end <= self.row_min
+    }
+
+    /// Grows the box to hold cell (`col`, `row`).
+    #[inline]
+    pub fn include(&mut self, col: usize, row: usize) {
+        if self.is_empty() {
+            *self = Self {
+                col_min: col,
+                col_end: col + 1,
+                row_min: row,
+                row_end: row + 1,
+            };
+        } else {
+            self.col_min = self.col_min.min(col);
+            self.col_end = self.col_end.max(col + 1);
+            self.row_min = self.row_min.min(row);
+            self.row_end = self.row_end.max(row + 1);
+        }
+    }
+
+    /// The box grown by `margin` cells on every side, clipped to `geometry` (empty stays
+    /// empty).
+    pub fn grown(&self, margin: usize, geometry: &GridGeometry) -> Self {
+        if self.is_empty() {
+            return Self::EMPTY;
+        }
+        Self {
+            col_min: self.col_min.saturating_sub(margin),
+            col_end: (self.col_end + margin).min(geometry.width),
+            row_min: self.row_min.saturating_sub(margin),
+            row_end: (self.row_end + margin).min(geometry.height),
+        }
+    }
+}
+
 /// An occupancy grid holding up to `N` cells.
 #[derive(Clone, bytemuck::Zeroable)]
 pub struct OccupancyGrid<const N: usize> {
     geometry: GridGeometry,
     bounds: LogOddsBounds,
     counts: CellCounts,
+    /// Every cell known since the last reset lies in this box (it never shrinks).
+    known_box: CellBox,
     log_odds: [f32; N],
 }
 
@@ -384,6 +458,7 @@ impl<const N: usize> OccupancyGrid<N> {
             geometry,
             bounds: bounds.check()?,
             counts: CellCounts::default(),
+            known_box: CellBox::EMPTY,
             log_odds: [0.0; N],
         })
     }
@@ -429,6 +504,7 @@ impl<const N: usize> OccupancyGrid<N> {
         self.geometry = geometry;
         self.log_odds[..geometry.cell_count()].fill(0.0);
         self.counts = CellCounts::default();
+        self.known_box = CellBox::EMPTY;
         Ok(())
     }
 
@@ -448,6 +524,16 @@ impl<const N: usize> OccupancyGrid<N> {
     #[inline]
     pub fn counts(&self) -> CellCounts {
         self.counts
+    }
+
+    /// A box holding every cell that has been known (Free or Occupied) since the grid was
+    /// built or reset, kept up to date on every change; it grows, never shrinks, so it may
+    /// also hold cells that went back to Unknown. Outside it every cell is Unknown: work
+    /// about known cells (and the Unknown cells next to them, one cell further) can stay in
+    /// it, whatever the size of the map.
+    #[inline]
+    pub fn known_box(&self) -> CellBox {
+        self.known_box
     }
 
     /// Number of cells in use.
@@ -511,6 +597,10 @@ impl<const N: usize> OccupancyGrid<N> {
         if old != new {
             self.count(old, -1);
             self.count(new, 1);
+            if old == CellClass::Unknown {
+                let w = self.geometry.width;
+                self.known_box.include(index % w, index / w);
+            }
             observer.class_changed(index, old, new);
         }
         (old, new)
@@ -565,14 +655,18 @@ impl<const N: usize> OccupancyGrid<N> {
     /// Recounts every cell (for tests and after bulk loads; normal updates keep the counters).
     pub fn recount(&mut self) -> CellCounts {
         let mut counts = CellCounts::default();
-        for &l in self.log_odds() {
+        let mut known_box = CellBox::EMPTY;
+        let w = self.geometry.width;
+        for (i, &l) in self.log_odds().iter().enumerate() {
             match CellClass::of_log_odds(l) {
                 CellClass::Free => counts.free += 1,
                 CellClass::Occupied => counts.occupied += 1,
-                CellClass::Unknown => {}
+                CellClass::Unknown => continue,
             }
+            known_box.include(i % w, i / w);
         }
         self.counts = counts;
+        self.known_box = known_box;
         counts
     }
 }
@@ -688,6 +782,45 @@ mod tests {
         let kept = g.counts();
         assert_eq!(kept, g.recount());
         assert!(changes > 1000);
+    }
+
+    #[test]
+    fn the_known_box_holds_every_cell_ever_known_and_no_more() {
+        use crate::random::{below, range_f32, seeded};
+        let mut rng = seeded(8);
+        for case in 0..200 {
+            let mut g = small();
+            assert!(g.known_box().is_empty());
+            // Updates in a random sub-rectangle of the 10 x 10 grid.
+            let (c0, r0) = (below(&mut rng, 10), below(&mut rng, 10));
+            let (c1, r1) = (
+                c0 + 1 + below(&mut rng, 10 - c0),
+                r0 + 1 + below(&mut rng, 10 - r0),
+            );
+            let mut ever = CellBox::EMPTY;
+            for _ in 0..below(&mut rng, 30) {
+                let (c, r) = (c0 + below(&mut rng, c1 - c0), r0 + below(&mut rng, r1 - r0));
+                let l = if below(&mut rng, 4) == 0 {
+                    0.0
+                } else {
+                    range_f32(&mut rng, -2.0, 2.0)
+                };
+                g.set_log_odds(r * 10 + c, l, &mut ());
+                if g.class(r * 10 + c).is_known() {
+                    ever.include(c, r);
+                }
+            }
+            assert_eq!(g.known_box(), ever, "case {case}");
+            for i in 0..100 {
+                if g.class(i).is_known() {
+                    let (c, r) = (i % 10, i / 10);
+                    assert!((ever.col_min..ever.col_end).contains(&c), "case {case}");
+                    assert!((ever.row_min..ever.row_end).contains(&r), "case {case}");
+                }
+            }
+            g.reset(*g.geometry()).unwrap();
+            assert!(g.known_box().is_empty());
+        }
     }
 
     #[test]

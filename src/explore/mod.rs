@@ -336,7 +336,12 @@ pub(crate) fn nearest_reachable_frontier<const N: usize>(
     let geom = grid.geometry();
     let mut reachable = false;
     let mut best: Option<(Cell, f32)> = None;
-    for i in 0..grid.cell_count() {
+    // Frontier cells lie in the frontier box: the same cells, in the same order, as a scan of
+    // the whole grid.
+    let area = crate::frontier::frontier_box(grid);
+    let rows = area.row_min..area.row_end;
+    let cells = rows.flat_map(|r| (r * geom.width + area.col_min)..(r * geom.width + area.col_end));
+    for i in cells {
         if !crate::frontier::is_frontier_cell(grid, i) {
             continue;
         }
@@ -365,8 +370,18 @@ pub(crate) fn sample_reachable_frontier<const N: usize, R: rand_core::Rng>(
 ) -> Option<Cell> {
     let n = grid.cell_count();
     let start = crate::random::below(rng, n);
-    (0..n).find_map(|k| {
-        let i = (start + k) % n;
+    // The cells from `start` onwards, then those before it, as a scan of the whole grid would
+    // meet them; only the frontier box can hold frontier cells.
+    let w = grid.geometry().width;
+    let area = crate::frontier::frontier_box(grid);
+    let in_box = move |from: usize, to: usize| {
+        (area.row_min..area.row_end).flat_map(move |r| {
+            let lo = (r * w + area.col_min).max(from);
+            let hi = (r * w + area.col_end).min(to);
+            lo..hi.max(lo)
+        })
+    };
+    in_box(start, n).chain(in_box(0, start)).find_map(|i| {
         if crate::frontier::is_frontier_cell(grid, i) {
             reach_frontier_cell(grid, field, i).map(|(c, _)| c)
         } else {

@@ -37,8 +37,8 @@ pub const MAX_VIEWPOINTS: usize = 512;
 pub const POCKET_FRONTIER_CELLS: u16 = 12;
 /// Side of the blocks that each contribute one viewpoint \[cells\] (before any doubling).
 pub const BLOCK_CELLS: i32 = 5;
-/// Most blocks across the grid in one row of blocks (grids up to 1280 cells wide at
-/// [`BLOCK_CELLS`]; wider ones double the block side).
+/// Most blocks across the known region in one row of blocks (known regions up to 1280 cells
+/// wide at [`BLOCK_CELLS`]; wider ones double the block side).
 const MAX_BLOCK_COLUMNS: usize = 256;
 
 /// One listed frontier viewpoint.
@@ -136,19 +136,25 @@ impl ReachableViewpoints {
         self.len = 0;
         self.block = block;
         let geom = *grid.geometry();
-        let (w, h) = (geom.width as i32, geom.height as i32);
-        if (w + block - 1) / block > MAX_BLOCK_COLUMNS as i32 {
+        let w = geom.width as i32;
+        // Viewpoints are known Free cells: only the grid's known box can hold them, and only
+        // its blocks need a slot.
+        let area = grid.known_box();
+        let (c0, c1) = (area.col_min as i32, area.col_end as i32);
+        let first_block = c0 / block;
+        if c1 > c0 && (c1 - 1) / block - first_block >= MAX_BLOCK_COLUMNS as i32 {
             return false;
         }
-        // Slot in `list` (plus one; 0 = none yet) of each block of the current block row.
+        // Slot in `list` (plus one; 0 = none yet) of each block of the current block row,
+        // counted from the known box's first block.
         let mut slots = [0u16; MAX_BLOCK_COLUMNS];
         let mut block_row = -1;
-        for row in 0..h {
+        for row in area.row_min as i32..area.row_end as i32 {
             if row / block != block_row {
                 block_row = row / block;
                 slots.fill(0);
             }
-            for col in 0..w {
+            for col in c0..c1 {
                 let c = Cell::new(col, row);
                 let i = (row * w + col) as usize;
                 if grid.class(i) != CellClass::Free {
@@ -167,7 +173,8 @@ impl ReachableViewpoints {
                     continue;
                 };
                 let bc = (col / block) as usize;
-                match slots[bc] {
+                let slot = bc - first_block as usize;
+                match slots[slot] {
                     0 => {
                         if self.len == MAX_VIEWPOINTS {
                             return false;
@@ -180,7 +187,7 @@ impl ReachableViewpoints {
                             block: (bc as i32, block_row),
                         };
                         self.len += 1;
-                        slots[bc] = self.len as u16;
+                        slots[slot] = self.len as u16;
                     }
                     s => {
                         let v = &mut self.list[s as usize - 1];

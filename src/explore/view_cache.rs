@@ -404,10 +404,20 @@ impl ViewCache {
         self.occupied[..words].fill(0);
         self.union[..words].fill(0);
         // Column c of row r is bit c % 64 of word `(r + margin) * stride + 1 + c / 64`.
+        // Outside the grid's known box every cell is Unknown: its words are set without
+        // reading the cells, so the pass costs what the explored region holds plus one word
+        // per 64 cells.
         let log_odds = grid.log_odds();
+        let known = grid.known_box();
         for r in 0..h {
             let at = (r + SHEET_MARGIN_ROWS) * stride + 1;
+            let known_row = (known.row_min..known.row_end).contains(&r);
             for (i, run) in log_odds[r * w..(r + 1) * w].chunks(64).enumerate() {
+                let first = 64 * i;
+                if !known_row || first + run.len() <= known.col_min || first >= known.col_end {
+                    self.unknown[at + i] = u64::MAX >> (64 - run.len());
+                    continue;
+                }
                 let (mut unknown, mut occupied) = (0u64, 0u64);
                 let eights = run.chunks_exact(8);
                 let tail = eights.remainder();

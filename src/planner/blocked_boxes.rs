@@ -11,18 +11,29 @@
 
 use super::Traversability;
 use super::traversability::{CODE_BLOCKED, band_of_code};
-use crate::grid::Cell;
+use crate::grid::{Cell, CellBox};
 
 /// Largest table \[entries\]: `(width + 1) * (height + 1)` of the grid.
 pub const MAX_BOX_TABLE: usize = (1 << 20) + (1 << 12);
 
 /// Summed-area table of the blocked cells of a traversability layer.
+///
+/// The table covers only the layer's [marked box](Traversability::marked_box) (the cells
+/// that are known, inflated or in a wall band; the whole grid if Unknown cells are blocked):
+/// outside it no cell is blocked, so building the table costs what the explored region holds,
+/// not the map, and a box query is clipped to it.
 #[derive(bytemuck::Zeroable)]
 pub struct BlockedBoxes {
     width: usize,
     height: usize,
     ready: bool,
-    /// `sums[r * (width + 1) + c]`: blocked cells in rows `< r` and columns `< c`.
+    /// The table's window: columns `col0..col0 + cols`, rows `row0..row0 + rows`.
+    col0: usize,
+    row0: usize,
+    cols: usize,
+    rows: usize,
+    /// `sums[r * (cols + 1) + c]`: blocked cells of the window in its rows `< r` and columns
+    /// `< c`.
     sums: [u32; MAX_BOX_TABLE],
 }
 
@@ -50,6 +61,10 @@ impl BlockedBoxes {
             width: 0,
             height: 0,
             ready: false,
+            col0: 0,
+            row0: 0,
+            cols: 0,
+            rows: 0,
             sums: [0; MAX_BOX_TABLE],
         }
     }
@@ -62,18 +77,33 @@ impl BlockedBoxes {
     }
 
     /// Counts the blocked cells of `trav`. Returns `false` (and answers no box query) if the
-    /// grid's table exceeds [`MAX_BOX_TABLE`].
+    /// table of its marked box exceeds [`MAX_BOX_TABLE`].
     pub fn build<const N: usize>(&mut self, trav: &Traversability<N>) -> bool {
         let g = trav.geometry();
         let (w, h) = (g.width, g.height);
         self.ready = false;
-        if (w + 1) * (h + 1) > MAX_BOX_TABLE {
+        let window = if trav.unknown_is_blocked() {
+            CellBox::all(g)
+        } else {
+            trav.marked_box()
+        };
+        let (cols, rows) = if window.is_empty() {
+            (0, 0)
+        } else {
+            (
+                window.col_end - window.col_min,
+                window.row_end - window.row_min,
+            )
+        };
+        if (cols + 1) * (rows + 1) > MAX_BOX_TABLE {
             return false;
         }
         let codes = trav.codes();
-        let stride = w + 1;
+        let stride = cols + 1;
         self.sums[..stride].fill(0);
-        for (r, row) in codes[..w * h].chunks_exact(w.max(1)).enumerate() {
+        for r in 0..rows {
+            let start = (window.row_min + r) * w + window.col_min;
+            let row = &codes[start..start + cols];
             let (below, this) = self.sums[r * stride..(r + 2) * stride].split_at_mut(stride);
             this[0] = 0;
             let mut row_sum = 0u32;
@@ -84,6 +114,10 @@ impl BlockedBoxes {
         }
         self.width = w;
         self.height = h;
+        self.col0 = window.col_min;
+        self.row0 = window.row_min;
+        self.cols = cols;
+        self.rows = rows;
         self.ready = true;
         true
     }
@@ -146,9 +180,20 @@ impl BlockedBoxes {
         if c0 < 0 || r0 < 0 || c1 as usize >= self.width || r1 as usize >= self.height {
             return false;
         }
-        let stride = self.width + 1;
-        let at = |r: i32, c: i32| self.sums[r as usize * stride + c as usize];
-        at(r1 + 1, c1 + 1) + at(r0, c0) == at(r0, c1 + 1) + at(r1 + 1, c0)
+        // Clipped to the window (no cell outside it is blocked), half-open, then in window
+        // coordinates.
+        let lo_c = (c0 as usize).max(self.col0);
+        let hi_c = (c1 as usize + 1).min(self.col0 + self.cols);
+        let lo_r = (r0 as usize).max(self.row0);
+        let hi_r = (r1 as usize + 1).min(self.row0 + self.rows);
+        if hi_c <= lo_c || hi_r <= lo_r {
+            return true;
+        }
+        let (c0, c1) = (lo_c - self.col0, hi_c - self.col0);
+        let (r0, r1) = (lo_r - self.row0, hi_r - self.row0);
+        let stride = self.cols + 1;
+        let at = |r: usize, c: usize| self.sums[r * stride + c];
+        at(r1, c1) + at(r0, c0) == at(r0, c1) + at(r1, c0)
     }
 }
 
@@ -195,6 +240,57 @@ mod tests {
             clear += boxes.is_clear(a, b) as u32;
         }
         assert!(clear > 20, "{clear}");
+    }
+
+    #[test]
+    fn a_table_of_the_marked_box_answers_as_counting_the_cells() {
+        use crate::grid::{CellClass, LogOddsBounds, OccupancyGrid};
+        use crate::planner::TraversabilityConfig;
+        let g = crate::grid::GridGeometry::new(W, H, 0.1, Point2::new(0.0, 0.0)).unwrap();
+        let mut rng = seeded(9);
+        let mut boxes = BlockedBoxes::new_boxed();
+        let mut clear = 0;
+        for case in 0..20 {
+            // Known cells (a fifth Occupied) in a random part of an Unknown grid; Unknown
+            // cells are passable, so only the marked box holds blocked cells.
+            let mut grid = OccupancyGrid::<{ W * H }>::new(g, LogOddsBounds::default()).unwrap();
+            let mut trav =
+                Traversability::<{ W * H }>::new_boxed(g, TraversabilityConfig::default()).unwrap();
+            let c0 = range_f32(&mut rng, 0.0, W as f32 - 10.0) as usize;
+            let r0 = range_f32(&mut rng, 0.0, H as f32 - 10.0) as usize;
+            for _ in 0..60 {
+                let c = c0 + range_f32(&mut rng, 0.0, 10.0) as usize;
+                let r = r0 + range_f32(&mut rng, 0.0, 10.0) as usize;
+                let class = if range_f32(&mut rng, 0.0, 1.0) < 0.2 {
+                    CellClass::Occupied
+                } else {
+                    CellClass::Free
+                };
+                grid.set_class(r * W + c, class, &mut *trav);
+            }
+            let marked = trav.marked_box();
+            assert!(
+                !marked.is_empty() && marked.col_end - marked.col_min < W,
+                "case {case}"
+            );
+            assert!(boxes.build(&*trav));
+            for _ in 0..500 {
+                let mut cell = || {
+                    Cell::new(
+                        range_f32(&mut rng, -2.0, W as f32 + 2.0) as i32,
+                        range_f32(&mut rng, -2.0, H as f32 + 2.0) as i32,
+                    )
+                };
+                let (a, b) = (cell(), cell());
+                let inside = trav.geometry().contains(a) && trav.geometry().contains(b);
+                let none_blocked = (a.row.min(b.row)..=a.row.max(b.row)).all(|r| {
+                    (a.col.min(b.col)..=a.col.max(b.col)).all(|c| trav.is_passable(Cell::new(c, r)))
+                });
+                assert_eq!(boxes.is_clear(a, b), inside && none_blocked, "{a:?} {b:?}");
+                clear += boxes.is_clear(a, b) as u32;
+            }
+        }
+        assert!(clear > 200, "{clear}");
     }
 
     #[test]

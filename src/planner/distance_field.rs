@@ -233,10 +233,15 @@ impl<const N: usize> DistanceField<N> {
     }
 
     /// Flat index of `cell` once settled; `None` if outside the grid, unreachable, or no
-    /// sweep was made.
+    /// sweep was made. A cell the robot may not enter (blocked in the layer the sweep copied)
+    /// is answered at once: it is never settled, so asking the sweep would settle every
+    /// reachable cell of the map before saying so.
     #[inline]
     fn index(&self, cell: Cell) -> Option<usize> {
         let i = self.swept()?.index(cell)?;
+        if self.state().codes[i] == CODE_BLOCKED {
+            return None;
+        }
         self.settle(Some(i));
         let memory = &self.state().memory;
         memory.is_closed_in(i, memory.generation()).then_some(i)

@@ -27,7 +27,7 @@
 //! its 3 x 3 neighbourhood, so a change of a cell between blocked and passable refreshes the nine
 //! masks around it.
 
-use crate::grid::{Cell, CellClass, CellObserver, GridGeometry, OccupancyGrid};
+use crate::grid::{Cell, CellBox, CellClass, CellObserver, GridGeometry, OccupancyGrid};
 
 /// Default robot radius \[m\]: the Pioneer P3-DX body (about 0.45 m wide, 0.38 m from the wheel
 /// axle to the front bumper) fits in a 0.25 m disc around its centre of rotation.
@@ -220,6 +220,9 @@ pub struct Traversability<const N: usize> {
     unknown_blocked: bool,
     unknown_cost_factor: f32,
     bands: WallBands,
+    /// Every cell whose step code has differed from the Unknown cells' since the last
+    /// reset lies in this box (it never shrinks).
+    marked: CellBox,
     /// Offsets of the widest band's disc, those within the robot radius first, then those of
     /// the no-turn band, then the near band's.
     stencil: [[i16; 2]; MAX_STENCIL],
@@ -270,6 +273,7 @@ impl<const N: usize> Traversability<N> {
             unknown_blocked: false,
             unknown_cost_factor: 1.0,
             bands: WallBands::NONE,
+            marked: CellBox::EMPTY,
             stencil: [[0; 2]; MAX_STENCIL],
             stencil_len: 0,
             stencil_turn_len: 0,
@@ -356,6 +360,7 @@ impl<const N: usize> Traversability<N> {
             self.near_band[i] = b as u16;
             self.code[i] = if b { CODE_BLOCKED } else { CODE_FREE };
         }
+        self.recompute_marked();
         self.refresh_all_moves();
         Ok(())
     }
@@ -408,7 +413,34 @@ impl<const N: usize> Traversability<N> {
         for i in 0..n {
             self.code[i] = self.code_of(i);
         }
+        self.recompute_marked();
         self.refresh_all_moves();
+    }
+
+    /// The box of the cells whose step code is not the Unknown cells', from scratch.
+    fn recompute_marked(&mut self) {
+        let (w, n) = (self.geometry.width, self.geometry.cell_count());
+        let plain = self.unknown_code();
+        self.marked = CellBox::EMPTY;
+        for i in 0..n {
+            if self.code[i] != plain {
+                self.marked.include(i % w, i / w);
+            }
+        }
+    }
+
+    /// A box outside which every cell has the step code of an Unknown cell away from walls
+    /// (passable at the Unknown cost factor, or blocked if Unknown cells are blocked): the
+    /// cells that are known, inflated or in a wall band lie in it. It grows, never shrinks,
+    /// until the layer is rebuilt. Work that only needs those cells can stay in it, whatever
+    /// the size of the map.
+    pub fn marked_box(&self) -> CellBox {
+        self.marked
+    }
+
+    /// Whether Unknown cells are blocked ([`UnknownPolicy::Blocked`]).
+    pub fn unknown_is_blocked(&self) -> bool {
+        self.unknown_blocked
     }
 
     /// Checks and stores geometry and configuration, recomputes the stencil. Cell arrays are
@@ -512,6 +544,7 @@ impl<const N: usize> Traversability<N> {
         self.near_band[..n].fill(0);
         let c = self.unknown_code();
         self.code[..n].fill(c);
+        self.marked = CellBox::EMPTY;
         self.refresh_all_moves();
     }
 
@@ -592,6 +625,10 @@ impl<const N: usize> Traversability<N> {
     fn set_code(&mut self, i: usize, code: u8) {
         let was_blocked = self.code[i] == CODE_BLOCKED;
         self.code[i] = code;
+        if code != self.unknown_code() {
+            let w = self.geometry.width;
+            self.marked.include(i % w, i / w);
+        }
         if was_blocked != (code == CODE_BLOCKED) {
             let w = self.geometry.width;
             let h = self.geometry.height;

@@ -66,7 +66,21 @@ impl CoverageCounter {
 
     /// Re-reads the cells of the union of `rects`: row by row, the columns between the first
     /// and the last a rectangle covers in that row.
+    ///
+    /// Only the parts inside the grid's known box are read: outside it no cell has ever been
+    /// known, so none counts now or did at its last reading (a recount then costs what the
+    /// explored region holds, not the map).
     fn update<const N: usize>(&mut self, grid: &OccupancyGrid<N>, rects: &[CellRect]) {
+        let k = grid.known_box();
+        let rects: Vec<CellRect> = rects
+            .iter()
+            .map(|r| CellRect {
+                cols: r.cols.start.max(k.col_min)..r.cols.end.min(k.col_end),
+                rows: r.rows.start.max(k.row_min)..r.rows.end.min(k.row_end),
+            })
+            .filter(|r| !r.cols.is_empty() && !r.rows.is_empty())
+            .collect();
+        let rects = rects.as_slice();
         let width = grid.geometry().width;
         let rows_from = rects.iter().map(|r| r.rows.start).min().unwrap_or(0);
         let rows_to = rects.iter().map(|r| r.rows.end).max().unwrap_or(0);
