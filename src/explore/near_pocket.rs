@@ -23,17 +23,23 @@
 //! The plan to the pocket (driven up to the viewpoint: the objective's set-back would stop it
 //! before the pocket is in view) replaces the optimizer's only if it is predicted to see at
 //! least [`worth_cells`] Unknown cells, the robot's own footprint (a disc of its radius): an
-//! unknown patch smaller than the robot hides no passage and no room, is most often a corner
-//! the laser's noise left, and lies next to walls, where driving right up to it costs the
-//! safety monitor's holds; it is left to the end of the mission as before.
+//! unknown patch smaller than the robot hides no passage and no room; it is left to the end of
+//! the mission as before.
+//!
+//! **Off by default** ([`super::ExploreConfig::near_pockets_first`]): in the runner with the
+//! board's pump it did not remove the lab's two modes (seed 1 better, seed 3 worse over 12
+//! noise draws), and on it the mission's escape test fails on one corner start (8 escapes
+//! against 6); figures and the variants tried in `docs/experiments.md` ("Issue 26: the lab's
+//! one trip more or not").
 //!
 //! A **pocket** is a group of listed frontier viewpoints ([`ReachableViewpoints`]) whose blocks
 //! touch (8-neighbours at the decision's block side) and whose frontier cells add up to at most
 //! [`POCKET_GROUP_FRONTIER_CELLS`]; the viewpoint of the group nearest the robot is where it is
 //! cleared from. The plan's target lying in the group, a pocket with a viewpoint at a blacklisted place, and
-//! a viewpoint within the robot's radius (the robot stands about there already: its scans
-//! there did not clear the pocket, and turning in place is the optimizer's business, which
-//! a robot too close to a wall cannot do) leave the plan as the optimizer chose it.
+//! a viewpoint on the robot's own cell (its scans there did not clear the pocket, so going
+//! there again would not either) leave the plan as the optimizer chose it. A viewpoint next
+//! to the robot's cell is kept: the plan is then a turn in place, which at the start of a
+//! mission looks into the laser's blind sector behind the robot.
 
 use crate::grid::Cell;
 use crate::planner::DistanceField;
@@ -56,15 +62,15 @@ pub fn worth_cells<const N: usize>(req: &super::DecisionRequest<'_, N>) -> f32 {
 }
 
 /// The viewpoint from which to clear the nearest small pocket that lies nearer the robot than
-/// `target` (the plan's first target, a cell `field` reaches) and farther than `robot_radius_m`
-/// (nearer, the robot already stands about there), or `None` (see the
+/// `target` (the plan's first target, a cell `field` reaches) and farther than `min_distance_m`
+/// (nearer, the robot already stands there), or `None` (see the
 /// [module documentation](self)). `blacklist` is checked at the cell's centre through
 /// `centre`.
 pub fn pocket_before<const N: usize>(
     viewpoints: &ReachableViewpoints,
     field: &DistanceField<N>,
     target: Cell,
-    robot_radius_m: f32,
+    min_distance_m: f32,
     blacklist: &Blacklist,
     centre: impl Fn(Cell) -> crate::geometry::Point2,
 ) -> Option<Cell> {
@@ -85,10 +91,11 @@ pub fn pocket_before<const N: usize>(
         }
         i
     }
-    for i in 0..n {
-        let a = block_of(list[i].cell);
-        for j in i + 1..n {
-            let b = block_of(list[j].cell);
+    let list = &list[..n];
+    for (i, vi) in list.iter().enumerate() {
+        let a = block_of(vi.cell);
+        for (j, vj) in list.iter().enumerate().skip(i + 1) {
+            let b = block_of(vj.cell);
             if (a.0 - b.0).abs() <= 1 && (a.1 - b.1).abs() <= 1 {
                 let (ri, rj) = (root(&mut parent, i), root(&mut parent, j));
                 if ri != rj {
@@ -100,28 +107,27 @@ pub fn pocket_before<const N: usize>(
     // Frontier cells per group (summed at its root); a group with a blacklisted viewpoint
     // counts as large (the robot failed to get there).
     let mut cells = [0u32; MAX_VIEWPOINTS];
-    for i in 0..n {
+    for (i, v) in list.iter().enumerate() {
         let r = root(&mut parent, i);
-        cells[r] += u32::from(list[i].frontier_cells);
-        if blacklist.contains(centre(list[i].cell)) {
+        cells[r] += u32::from(v.frontier_cells);
+        if blacklist.contains(centre(v.cell)) {
             cells[r] = u32::MAX / 2;
         }
     }
     let target_block = block_of(target);
     let mut target_group = None;
-    for i in 0..n {
-        if block_of(list[i].cell) == target_block {
+    for (i, v) in list.iter().enumerate() {
+        if block_of(v.cell) == target_block {
             target_group = Some(root(&mut parent, i));
         }
     }
     let mut best: Option<(f32, Cell)> = None;
-    for i in 0..n {
-        let v = list[i];
+    for (i, &v) in list.iter().enumerate() {
         let r = root(&mut parent, i);
         if cells[r] > POCKET_GROUP_FRONTIER_CELLS
             || Some(r) == target_group
             || v.distance_m >= target_m
-            || v.distance_m <= robot_radius_m
+            || v.distance_m <= min_distance_m
         {
             continue;
         }

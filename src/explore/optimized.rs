@@ -186,7 +186,7 @@ impl<const N: usize, P: Planner<N>> Optimized<'_, '_, N, P> {
             self.objective.reachable_viewpoints(),
             self.objective.field(),
             geom.cell_at(target)?,
-            req.trav.config().robot_radius_m,
+            geom.resolution_m,
             &self.blacklist,
             |c| geom.cell_center(c),
         )?;
