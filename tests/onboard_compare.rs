@@ -16,6 +16,10 @@
 //! its laser noise and wheel slip, each printed: one draw is one sample of what a mission
 //! meets, and on one seed the draws spread as much as the binary's own runs do.
 //!
+//! `PAPILLON_COMPARE_DECISIONS=1` prints each runner draw's decisions;
+//! `PAPILLON_COMPARE_NEAR_POCKETS=1` turns `ExploreConfig::near_pockets_first` on in the runner
+//! (with `PAPILLON_COMPARE_RUNNER_ONLY`: the binary keeps the board's setting, off).
+//!
 //! `PAPILLON_COMPARE_WORLD_GRID=1` gives the runner its own map (the world's extent) instead of
 //! the board's grid. It prints one line per seed and pump, then checks the targets of issue 26: coverage within
 //! 2 points and energy steps within 15 %.
@@ -191,11 +195,43 @@ fn runner(map: &str, seed: u64, decision_s: f64, draw: u64) -> Outcome {
     let mut config = RunConfig::new(mission_config(&board).unwrap(), 1, seed);
     config.pump = PumpModel::onboard(decision_s);
     config.pump.noise_draw = draw;
+    // PAPILLON_COMPARE_NEAR_POCKETS=1: the runner with `ExploreConfig::near_pockets_first` on
+    // (the binary keeps the board's, off): what the rule would change, runner only.
+    if std::env::var("PAPILLON_COMPARE_NEAR_POCKETS").is_ok() {
+        config.mission.explore.near_pockets_first = true;
+    }
     let report = Runner::new(world, Dynamics::new(), config)
         .unwrap_or_else(|e| panic!("runner on {map}: {e}"))
         .run()
         .unwrap_or_else(|e| panic!("runner on {map}: {e}"));
     let r = &report.robots[0];
+    // PAPILLON_COMPARE_DECISIONS=1: each decision of each draw (time, targets, planned length,
+    // predicted gain, energy), to see which trip one draw makes and another does not.
+    if std::env::var("PAPILLON_COMPARE_DECISIONS").is_ok() {
+        for e in &report.events {
+            if let papillon::mission::MissionEvent::Decided {
+                targets,
+                path_length_m,
+                predicted_gain_cells,
+                energy_steps,
+                ..
+            } = &e.event
+            {
+                let t: Vec<String> = targets
+                    .iter()
+                    .map(|p| format!("({:.1}, {:.1})", p.x, p.y))
+                    .collect();
+                eprintln!(
+                    "    {:6.1} s to {} planned {:.1} m, gain {} cells, {:.1} steps",
+                    e.time_s,
+                    t.join(" "),
+                    path_length_m,
+                    predicted_gain_cells,
+                    energy_steps
+                );
+            }
+        }
+    }
     Outcome {
         coverage: report.coverage,
         time_s: report.sim_time_s,

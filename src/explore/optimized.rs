@@ -138,6 +138,13 @@ impl<const N: usize, P: Planner<N>> TargetSelector<N> for Optimized<'_, '_, N, P
             }
             // The efficient objective scored the targets the points snap to.
             let snapped = self.objective.snap_targets(req, &mut pts[..k]);
+            if snapped
+                && self.config.objective == ObjectiveKind::Efficient
+                && self.config.near_pockets_first
+                && let Some(d) = self.pocket_first(req, pts[0], evaluations, opt.history())
+            {
+                return Ok(Outcome::Go(d));
+            }
             let eval = self.objective.evaluate_targets(req, &pts[..k]);
             if snapped
                 && eval.gain_cells > 0
@@ -159,6 +166,39 @@ impl<const N: usize, P: Planner<N>> TargetSelector<N> for Optimized<'_, '_, N, P
             .ok_or(DecideError::NoFeasibleTarget {
                 battery_steps: req.battery_steps,
             })
+    }
+}
+
+impl<const N: usize, P: Planner<N>> Optimized<'_, '_, N, P> {
+    /// The plan to a small unknown pocket nearer the robot than `target` (the optimizer's
+    /// first target, snapped), driven up to its viewpoint (no set-back), if there is one and
+    /// it is predicted to see at least [`super::near_pocket::worth_cells`] Unknown cells
+    /// ([`super::near_pocket`]).
+    fn pocket_first(
+        &mut self,
+        req: &DecisionRequest<'_, N>,
+        target: Point2,
+        evaluations: u32,
+        history: &[f32],
+    ) -> Option<super::Decision> {
+        let geom = *req.grid.geometry();
+        let cell = super::near_pocket::pocket_before(
+            self.objective.reachable_viewpoints(),
+            self.objective.field(),
+            geom.cell_at(target)?,
+            geom.resolution_m,
+            &self.blacklist,
+            |c| geom.cell_center(c),
+        )?;
+        let was = self.objective.set_back(false);
+        let eval = self
+            .objective
+            .evaluate_targets(req, &[geom.cell_center(cell)]);
+        self.objective.set_back(was);
+        if (eval.gain_cells as f32) < super::near_pocket::worth_cells(req) {
+            return None;
+        }
+        self.objective.decision(&eval, evaluations + 1, history)
     }
 }
 

@@ -1156,3 +1156,81 @@ fn efficient_decisions_on_the_house_fixture_aim_at_reachable_known_free_cells() 
         }
     }
 }
+
+/// A known room (x 0.1..2.9 m) with a small Unknown nook (x 0.3..0.7 m, y 1.8..2.2 m) inside
+/// it, open to the east on Unknown space (x ≥ 3 m, 2.9 m by 3.8 m); no walls but the border.
+fn nook_grid() -> Grid {
+    let g = geometry();
+    let mut grid = Grid::new(g, LogOddsBounds::default()).unwrap();
+    for i in 0..g.cell_count() {
+        let c = g.cell(i);
+        let border = c.col == 0 || c.row == 0 || c.col == W as i32 - 1 || c.row == H as i32 - 1;
+        let nook = (3..=7).contains(&c.col) && (18..=22).contains(&c.row);
+        if border {
+            grid.set_class(i, CellClass::Occupied, &mut ());
+        } else if c.col < 30 && !nook {
+            grid.set_class(i, CellClass::Free, &mut ());
+        }
+    }
+    grid
+}
+
+#[test]
+fn a_small_pocket_nearer_than_the_chosen_target_is_cleared_first() {
+    let grid = nook_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    let config = ExploreConfig {
+        near_pockets_first: true,
+        ..ExploreConfig::default()
+    };
+    let near_nook = |p: Point2| (p.x - 0.55).abs() <= 0.35 && (p.y - 2.05).abs() <= 0.35;
+    // The robot 0.5 m east of the nook, 1.7 m from the open east: the nook first.
+    let req = DecisionRequest {
+        pose: Pose2::new(1.25, 2.05, 0.0),
+        ..request(&grid, &trav, &laser)
+    };
+    for seed in 0..3 {
+        let Outcome::Go(d) = run_selector(
+            &mut Optimized::new(Method::Xboa, config, &mut obj),
+            &req,
+            seed,
+        ) else {
+            panic!("seed {seed}: no decision");
+        };
+        assert!(near_nook(d.targets[0]), "seed {seed}: {:?}", d.targets);
+        assert!(d.predicted_gain_cells > 0, "seed {seed}: {d:?}");
+        // Without the rule the optimizer's own choice, the open east, stands.
+        let off = ExploreConfig {
+            near_pockets_first: false,
+            ..config
+        };
+        let Outcome::Go(d) =
+            run_selector(&mut Optimized::new(Method::Xboa, off, &mut obj), &req, seed)
+        else {
+            panic!("seed {seed}: no decision");
+        };
+        assert!(
+            !near_nook(d.targets[0]),
+            "seed {seed} without the rule: {:?}",
+            d.targets
+        );
+    }
+    // The robot next to the open east (2.05 m from the nook): the open east first.
+    let req = DecisionRequest {
+        pose: Pose2::new(2.75, 2.05, 0.0),
+        ..request(&grid, &trav, &laser)
+    };
+    for seed in 0..3 {
+        let Outcome::Go(d) = run_selector(
+            &mut Optimized::new(Method::Xboa, config, &mut obj),
+            &req,
+            seed,
+        ) else {
+            panic!("seed {seed}: no decision");
+        };
+        assert!(!near_nook(d.targets[0]), "seed {seed}: {:?}", d.targets);
+    }
+}
