@@ -29,6 +29,7 @@ pub mod nearest_frontier;
 pub mod objective;
 pub mod optimized;
 pub mod reachable;
+pub mod tour;
 pub mod view_cache;
 
 #[cfg(all(test, feature = "std"))]
@@ -153,6 +154,11 @@ pub struct ExploreConfig {
     /// The efficient objective ends each plan this far before the frontier viewpoint it
     /// aims at \[m\] (default [`objective::SETBACK_M`]; 0 = drive up to it).
     pub setback_m: f32,
+    /// The efficient objective's weight on the frontier tour's extra length
+    /// ([`tour::FrontierTour::extra_m`]) of going to a candidate's target first: its energy
+    /// in the discount becomes `steps + tour_weight · extra_m` (default
+    /// [`objective::TOUR_WEIGHT`]; 0 = no tour).
+    pub tour_weight: f32,
     /// Optional cost weight lambda: score = gain - lambda * steps (clamped at 0) \[cells/step\].
     /// `None` (default): the thesis's pure gain.
     pub cost_weight: Option<f32>,
@@ -188,6 +194,7 @@ impl Default for ExploreConfig {
             efficiency_per_step: objective::EFFICIENCY_LAMBDA_PER_STEP,
             pocket_bonus: objective::POCKET_BONUS,
             setback_m: objective::SETBACK_M,
+            tour_weight: objective::TOUR_WEIGHT,
             cost_weight: None,
             gain_per_step: false,
             viewpoint_spacing_m: 0.5,
