@@ -108,7 +108,8 @@ pub enum ObjectiveKind {
     /// reproduction experiments).
     Thesis,
     /// Targets snapped to viewpoints the robot can reach next to frontiers, scored by gain
-    /// discounted by the path's energy, with a bonus for small unknown pockets (the default).
+    /// discounted by the path's energy and the frontier tour's detour, with a bonus for small
+    /// unknown pockets (the default).
     #[default]
     Efficient,
 }

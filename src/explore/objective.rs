@@ -52,9 +52,16 @@
 //!      its end is the decision's target. Re-plans ([`ExploreObjective::prepare_plan`]) go to
 //!      the targets as given.
 //!
+//!   5. *Visit the frontier in a good order.* A candidate's energy in the discount also
+//!      carries [`ExploreConfig::tour_weight`] (default [`TOUR_WEIGHT`]) times the extra
+//!      length of the decision's frontier tour when the candidate's first target is visited
+//!      first ([`super::tour`]: Kulich et al. 2011's TSP distance cost over coarse frontier
+//!      clusters), so the robot finishes the side of the frontier it is on instead of
+//!      leaving it half-seen for a trip back.
+//!
 //!   The optimizer's initial population puts half its individuals on the frontier
-//!   viewpoints ranked best by `frontier cells · exp(-lambda · path distance)` (see
-//!   [`super::optimized`]). Measured against the frontier baselines in `docs/experiments.md`
+//!   viewpoints ranked best by `frontier cells · exp(-lambda · (path distance + tour_weight ·
+//!   tour extra))` (see [`super::optimized`]). Measured against the frontier baselines in `docs/experiments.md`
 //!   ("Issue 17: the efficient objective").
 //!
 //! # Speed

@@ -169,8 +169,9 @@ impl FrontierTour {
         straight.max((p.distance_m - q.distance_m).abs())
     }
 
-    /// Distance from the stop before tour position `pos` (the robot for 0) to stop `s` \[m\].
-    fn from_prev(&self, pos: usize, s: usize) -> f32 {
+    /// Length of the leg into stop `s` at tour position `pos`, from the stop before it (the
+    /// robot for 0) \[m\].
+    fn leg_to(&self, pos: usize, s: usize) -> f32 {
         if pos == 0 {
             self.stops[s].distance_m
         } else {
@@ -187,7 +188,7 @@ impl FrontierTour {
             let mut best = (f32::INFINITY, 0usize);
             for (s, &u) in used[..n].iter().enumerate() {
                 if !u {
-                    let d = self.from_prev(pos, s);
+                    let d = self.leg_to(pos, s);
                     if d < best.0 {
                         best = (d, s);
                     }
@@ -202,8 +203,8 @@ impl FrontierTour {
             for i in 0..n {
                 for j in i + 1..n {
                     let (oi, oj) = (self.order[i] as usize, self.order[j] as usize);
-                    let before = self.from_prev(i, oi);
-                    let after = self.from_prev(i, oj);
+                    let before = self.leg_to(i, oi);
+                    let after = self.leg_to(i, oj);
                     let (old_next, new_next) = if j + 1 < n {
                         let on = self.order[j + 1] as usize;
                         (self.between(oj, on), self.between(oi, on))
@@ -222,7 +223,7 @@ impl FrontierTour {
         }
         let mut length = 0.0;
         for pos in 0..n {
-            length += self.from_prev(pos, self.order[pos] as usize);
+            length += self.leg_to(pos, self.order[pos] as usize);
         }
         self.length_m = length;
         // Moving the stop at position p to the front.
