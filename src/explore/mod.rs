@@ -32,6 +32,7 @@ pub mod nearest_frontier;
 pub mod objective;
 pub mod optimized;
 pub mod reachable;
+pub mod tour;
 pub mod view_cache;
 
 #[cfg(all(test, feature = "std"))]
@@ -110,7 +111,8 @@ pub enum ObjectiveKind {
     /// reproduction experiments).
     Thesis,
     /// Targets snapped to viewpoints the robot can reach next to frontiers, scored by gain
-    /// discounted by the path's energy, with a bonus for small unknown pockets (the default).
+    /// discounted by the path's energy and the frontier tour's detour, with a bonus for small
+    /// unknown pockets (the default).
     #[default]
     Efficient,
 }
@@ -161,6 +163,11 @@ pub struct ExploreConfig {
     /// house in `docs/experiments.md`, not yet on the generated set, and it breaks one of the
     /// corner starts of the mission's escape test).
     pub near_pockets_first: bool,
+    /// The efficient objective's weight on the frontier tour's extra length
+    /// ([`tour::FrontierTour::extra_m`]) of going to a candidate's target first: its energy
+    /// in the discount becomes `steps + tour_weight · extra_m` (default
+    /// [`objective::TOUR_WEIGHT`]; 0 = no tour).
+    pub tour_weight: f32,
     /// Optional cost weight lambda: score = gain - lambda * steps (clamped at 0) \[cells/step\].
     /// `None` (default): the thesis's pure gain.
     pub cost_weight: Option<f32>,
@@ -197,6 +204,7 @@ impl Default for ExploreConfig {
             pocket_bonus: objective::POCKET_BONUS,
             setback_m: objective::SETBACK_M,
             near_pockets_first: false,
+            tour_weight: objective::TOUR_WEIGHT,
             cost_weight: None,
             gain_per_step: false,
             viewpoint_spacing_m: 0.5,

@@ -240,8 +240,8 @@ const SEEDED_SHARE: f32 = 0.5;
 /// An initial population for the efficient objective: drawn uniformly as the thesis's, then
 /// the first `ceil(SEEDED_SHARE * size)` individuals put every target on one of the listed
 /// frontier viewpoints ([`super::ReachableViewpoints`]) ranked best by
-/// `frontier_cells · exp(-lambda · distance)` (the objective's discount applied to a
-/// cheap estimate of the gain), the best first.
+/// `frontier_cells · exp(-lambda · (distance + tour_weight · tour extra))` (the objective's
+/// discount applied to a cheap estimate of the gain), the best first.
 fn near_viewpoints<const N: usize, P: Planner<N>, R: rand_core::Rng>(
     problem: &BoundObjective<'_, '_, '_, N, P>,
     req: &DecisionRequest<'_, N>,
@@ -253,8 +253,10 @@ fn near_viewpoints<const N: usize, P: Planner<N>, R: rand_core::Rng>(
     let seeded = crate::math::ceil(SEEDED_SHARE * size as f32) as usize;
     let list = problem.viewpoints().as_slice();
     let lambda = problem.config().efficiency_per_step;
+    let (tour, weight) = (problem.tour(), problem.config().tour_weight);
     let rank = |v: &super::reachable::Viewpoint| {
-        v.frontier_cells as f32 * crate::math::exp(-lambda * v.distance_m)
+        let cost = v.distance_m + weight * tour.extra_m(v.cell);
+        v.frontier_cells as f32 * crate::math::exp(-lambda * cost)
     };
     // The `seeded` best viewpoints, best first (insertion into a short list).
     let mut best: heapless::Vec<(f32, usize), { optim::MAX_POP }> = heapless::Vec::new();

@@ -1233,4 +1233,61 @@ fn a_small_pocket_nearer_than_the_chosen_target_is_cleared_first() {
         };
         assert!(!near_nook(d.targets[0]), "seed {seed}: {:?}", d.targets);
     }
+/// The efficient objective charges each candidate the frontier tour's extra length of going
+/// to its target first: its score is the tour-free score times `exp(-lambda · weight ·
+/// extra_m)`, and on the house fixture some viewpoints do cost a detour.
+#[test]
+fn the_efficient_objective_discounts_a_target_by_its_detour_in_the_frontier_tour() {
+    let maps = house_fixture();
+    let laser = LaserConfig::thesis();
+    let req = house_request(&maps, &laser);
+    let mut mem = Memory::<HOUSE_CELLS>::new();
+    let mut obj = mem.objective();
+    let g = *maps.0.geometry();
+    let without = ExploreConfig {
+        tour_weight: 0.0,
+        ..ExploreConfig::default()
+    };
+    obj.prepare(&req, &without).unwrap();
+    assert!(obj.frontier_tour().is_empty());
+    let targets: Vec<Point2> = obj
+        .reachable_viewpoints()
+        .as_slice()
+        .iter()
+        .take(40)
+        .map(|v| g.cell_center(v.cell))
+        .collect();
+    let plain: Vec<Evaluation> = targets
+        .iter()
+        .map(|&t| obj.evaluate_targets(&req, &[t]))
+        .collect();
+    let config = ExploreConfig::default();
+    assert_eq!(config.tour_weight, 1.0);
+    obj.prepare(&req, &config).unwrap();
+    assert!(
+        obj.frontier_tour().len() > 1,
+        "{}",
+        obj.frontier_tour().len()
+    );
+    let lambda = config.efficiency_per_step;
+    let mut detours = 0;
+    for (&t, p) in targets.iter().zip(&plain) {
+        let e = obj.evaluate_targets(&req, &[t]);
+        assert_eq!(e.status, p.status);
+        if p.status != CandidateStatus::Feasible {
+            continue;
+        }
+        assert_eq!(e.gain_cells, p.gain_cells);
+        let extra = obj.frontier_tour().extra_m(g.cell_at(t).unwrap());
+        assert!(extra >= 0.0);
+        let expected = p.fitness * math::exp(-lambda * extra);
+        assert!(
+            (e.fitness - expected).abs() <= 1e-6,
+            "{t:?}: {e:?} {p:?} {extra}"
+        );
+        if extra > 0.5 {
+            detours += 1;
+        }
+    }
+    assert!(detours > 0, "no target costs a detour");
 }

@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""Issue 17, the frontier tour in the efficient objective: missions of one binary, and pairs of
+two runs compared (docs/experiments.md, "Issue 17: the efficient objective").
+
+Usage (from the repository root, after
+`cargo build --release -p papillon-sim --bin papillon-sim --example world_set`):
+    sim-host/scripts/tour-compare.py run OUTDIR LABEL BIN MAPS METHODS
+        seeds 25..34 of each map (comma-separated: house,empty,lab or gen-00,...) and method
+        (comma-separated), one mission at a time under nice; generated plans get the set's
+        battery rule, ceil(2 x free area in m²) steps. Writes OUTDIR/LABEL.json and prints
+        medians per map and method.
+    sim-host/scripts/tour-compare.py pairs A.json:METHOD B.json:METHOD
+        per map and over all: runs >= 99 %, mean coverage, medians of steps and metres over the
+        seeds where both reach 99 %; and at equal coverage (the lower final coverage of the
+        pair, pairs where it is >= 50 %: the first step count and distance at which each
+        mission reached it).
+"""
+import json, math, os, statistics as st, subprocess, sys
+
+SEEDS = list(range(25, 35))
+
+
+def batteries(binp):
+    exe = os.path.join(os.path.dirname(binp), "examples", "world_set")
+    table = subprocess.run([exe], capture_output=True, text=True, check=True).stdout
+    out = {}
+    for line in table.splitlines():
+        cols = [c.strip() for c in line.split("|")]
+        if len(cols) > 10 and cols[1].startswith("gen-"):
+            out[cols[1]] = math.ceil(2 * float(cols[9]))
+    return out
+
+
+def run(outdir, label, binp, maps, methods):
+    os.makedirs(outdir, exist_ok=True)
+    maps = maps.split(",")
+    batt = batteries(binp) if any(m.startswith("gen-") for m in maps) else {}
+    out = {}
+    for m in maps:
+        for meth in methods.split(","):
+            rows = []
+            for s in SEEDS:
+                cmd = ["nice", "-n", "10", binp, "mission", "--map", m, "--method", meth,
+                       "--seed", str(s), "--json"]
+                if m in batt:
+                    cmd += ["--battery", str(batt[m])]
+                d = json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout)
+                rows.append((d["coverage"], d["steps"], d["distance_m"], d["decisions"], d["reason"],
+                             d["coverage_curve"], d["coverage_distance_curve"], d["decision_ms_p50"]))
+            ok = sum(r[0] >= 0.99 for r in rows)
+            print(f"{label} {m} {meth}: runs >= 99 % {ok}/10, median steps {st.median(r[1] for r in rows):.1f}, "
+                  f"metres {st.median(r[2] for r in rows):.1f}, decisions {st.median(r[3] for r in rows):.1f}, "
+                  f"mean coverage {st.mean(r[0] for r in rows):.3f}", flush=True)
+            out[f"{m}/{meth}"] = rows
+    json.dump(out, open(os.path.join(outdir, f"{label}.json"), "w"))
+
+
+def first(curve, c):
+    return next((x for x, cov in curve if cov >= c), None)
+
+
+def pct(a, b):
+    return f"{a:.1f} vs {b:.1f} ({100 * (a / b - 1):+.1f} %)"
+
+
+def pairs(spec_a, spec_b):
+    (fa, ma), (fb, mb) = spec_a.split(":"), spec_b.split(":")
+    a, b = json.load(open(fa)), json.load(open(fb))
+    plans = sorted({k.split("/")[0] for k in a if k.endswith("/" + ma)})
+    both_all, eq = [], []
+    for p in plans:
+        ra, rb = a.get(f"{p}/{ma}"), b.get(f"{p}/{mb}")
+        if not ra or not rb:
+            continue
+        both = [(x, y) for x, y in zip(ra, rb) if x[0] >= 0.99 and y[0] >= 0.99]
+        both_all += both
+        line = (f"{p}: runs >= 99 % {sum(x[0] >= 0.99 for x in ra)} vs {sum(y[0] >= 0.99 for y in rb)}, "
+                f"mean coverage {st.mean(x[0] for x in ra):.3f} vs {st.mean(y[0] for y in rb):.3f}")
+        if both:
+            line += (f"; both at 99 % ({len(both)}): steps {pct(st.median(x[1] for x, _ in both), st.median(y[1] for _, y in both))}, "
+                     f"metres {pct(st.median(x[2] for x, _ in both), st.median(y[2] for _, y in both))}")
+        print(line)
+        for x, y in zip(ra, rb):
+            c = min(x[0], y[0])
+            if c >= 0.5 and len(x) > 6 and len(y) > 6:
+                v = (first(x[5], c), first(y[5], c), first(x[6], c), first(y[6], c))
+                if None not in v:
+                    eq.append((p, c) + v)
+    if both_all:
+        print(f"all pairs at 99 % ({len(both_all)}): steps {pct(st.median(x[1] for x, _ in both_all), st.median(y[1] for _, y in both_all))}, "
+              f"metres {pct(st.median(x[2] for x, _ in both_all), st.median(y[2] for _, y in both_all))}")
+    if eq:
+        print(f"equal coverage: {len(eq)} pairs on {len(set(e[0] for e in eq))} maps, median coverage "
+              f"{st.median(e[1] for e in eq):.3f}: steps {pct(st.median(e[2] for e in eq), st.median(e[3] for e in eq))}, "
+              f"metres {pct(st.median(e[4] for e in eq), st.median(e[5] for e in eq))}")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) == 7 and sys.argv[1] == "run":
+        run(*sys.argv[2:])
+    elif len(sys.argv) == 4 and sys.argv[1] == "pairs":
+        pairs(*sys.argv[2:])
+    else:
+        sys.exit(__doc__)
