@@ -15,7 +15,14 @@
 //! `map method seed coverage reason missing unseen left noise shut spurious_occupied steps
 //! contacts replans_by_cause`. With `GAPS_EVENTS=1` it also prints the last events, the map
 //! around the robot (or around `GAPS_AT=X,Y`) and the planning layer there; with
-//! `GAPS_GATES=1` the spurious Occupied cells next to where the final map's reach stops.
+//! `GAPS_GATES=1` the spurious Occupied cells next to where the final map's reach stops; with
+//! `GAPS_FRONTIER=1` the final map's frontier cells in clusters, each with how many of its cells
+//! the robot reaches (`reached`), could stand next to but not get to (`cut`: a door shut on the
+//! map) or only touch from the wall band (`band`), a `frontier_summary` line, and checks that
+//! the mission's own traversability layer and distance field agree with a rebuild from the
+//! final map (a mission that ended "nothing reachable" with `reached` frontier cells was cut
+//! off by something not in its final map); with `GAPS_LOGODDS=X,Y` the log-odds of the cells
+//! around a point (a door's cells, say).
 //! Results are in docs/experiments.md ("Generated world set after the obstacle-mark change").
 
 use clap::Parser;
@@ -99,6 +106,92 @@ fn seen_from(
     seen
 }
 
+/// Prints the final map's frontier cells (Unknown with a Free 4-neighbour) in 8-connected
+/// clusters, each with its size, centre, and how many of its cells have a Free neighbour the
+/// robot reaches (`reached`), one that is passable but cut off (`cut`), or only Free neighbours
+/// in the planning layer's blocked band (`band`); `wall`: cells blocked in truth.
+fn frontier_report(
+    world: &papillon_sim::world::World,
+    map: &OccupancyGrid<MAP_CAPACITY>,
+    trav: &Traversability<MAP_CAPACITY>,
+    reached: &[bool],
+) {
+    let g = *world.geometry();
+    let n4 = [(1, 0), (-1, 0), (0, 1), (0, -1)];
+    let mut kind = vec![0u8; g.cell_count()];
+    for (i, k) in kind.iter_mut().enumerate() {
+        if !papillon::frontier::is_frontier_cell(map, i) {
+            continue;
+        }
+        let c = g.cell(i);
+        let mut best = 3;
+        for (dc, dr) in n4 {
+            let n = Cell::new(c.col + dc, c.row + dr);
+            let Some(j) = g.index(n) else { continue };
+            if map.class(j) != CellClass::Free {
+                continue;
+            }
+            let v = if reached[j] {
+                1
+            } else if trav.is_passable(n) {
+                2
+            } else {
+                3
+            };
+            best = best.min(v);
+        }
+        *k = best;
+    }
+    let mut done = vec![false; g.cell_count()];
+    let mut totals = [0u32; 4];
+    let mut big = [0u32; 4];
+    for i in 0..g.cell_count() {
+        if kind[i] == 0 || done[i] {
+            continue;
+        }
+        let (mut counts, mut wall, mut sx, mut sy, mut size) = ([0u32; 4], 0, 0.0, 0.0, 0);
+        let mut stack = vec![i];
+        done[i] = true;
+        while let Some(j) = stack.pop() {
+            counts[kind[j] as usize] += 1;
+            wall += u32::from(world.is_blocked_index(j));
+            let p = g.cell_center(g.cell(j));
+            sx += p.x;
+            sy += p.y;
+            size += 1;
+            let c = g.cell(j);
+            for dr in -1..=1 {
+                for dc in -1..=1 {
+                    if let Some(k) = g.index(Cell::new(c.col + dc, c.row + dr))
+                        && kind[k] != 0
+                        && !done[k]
+                    {
+                        done[k] = true;
+                        stack.push(k);
+                    }
+                }
+            }
+        }
+        for k in 1..4 {
+            totals[k] += counts[k];
+            big[k] += u32::from(counts[k] >= 5 && wall * 2 < size);
+        }
+        eprintln!(
+            "frontier at ({:.2}, {:.2}) cells {size} reached {} cut {} band {} wall {wall}",
+            sx / size as f32,
+            sy / size as f32,
+            counts[1],
+            counts[2],
+            counts[3]
+        );
+    }
+    // Totals, and clusters mostly free in truth with at least 5 cells of each kind.
+    eprintln!(
+        "frontier_summary reached {} cut {} band {} big_reached {} big_cut {} big_band {}",
+        totals[1], totals[2], totals[3], big[1], big[2], big[3]
+    );
+}
+
 fn main() {
     let cli = Cli::parse();
     let setup = setup_from_args(&cli.args).unwrap_or_else(|e| panic!("{e}"));
@@ -111,6 +204,7 @@ fn main() {
             eprintln!("{:8.1} {:?}", e.time_s, e.event);
         }
         eprintln!("stats {:?}", runner.mission(0).stats());
+        eprintln!("mission at the end {:?}", runner.mission(0));
     }
     let g = *world.geometry();
     let truth = world.truth();
@@ -172,18 +266,77 @@ fn main() {
         .unwrap_or(start);
     trav.rebuild_from(map).unwrap();
     let reach_final = reach(&trav, end);
+    if std::env::var_os("GAPS_FRONTIER").is_some() {
+        // From where the robot believes it is (the mission decides from there).
+        let est = runner.mission(0).pose_map();
+        let est = g.cell_at(Point2::new(est.x, est.y)).unwrap_or(end);
+        let from_est = reach(&trav, est);
+        eprintln!(
+            "reached from the estimated pose {} (from the true pose {})",
+            from_est.iter().filter(|&&r| r).count(),
+            reach_final.iter().filter(|&&r| r).count()
+        );
+        let live = &runner.map().trav;
+        let differ: Vec<usize> = (0..g.cell_count())
+            .filter(|&i| live.is_passable(g.cell(i)) != trav.is_passable(g.cell(i)))
+            .collect();
+        eprintln!(
+            "mission layer differs from a rebuild in {} cells",
+            differ.len()
+        );
+        for &i in differ.iter().take(8) {
+            let c = g.cell(i);
+            eprintln!(
+                "  {c:?} live {} rebuilt {} class {:?} log-odds {:.2}",
+                live.is_passable(c),
+                trav.is_passable(c),
+                map.class(i),
+                map.log_odds_at(i)
+            );
+        }
+        let mut field = papillon::planner::DistanceField::<MAP_CAPACITY>::new_boxed();
+        eprintln!(
+            "distance field on the mission's own layer: {:?}",
+            field.compute(live, est)
+        );
+        match field.compute(&*trav, est) {
+            Ok(n) => {
+                let missed: Vec<usize> = (0..g.cell_count())
+                    .filter(|&i| from_est[i] && !field.is_reachable(g.cell(i)))
+                    .collect();
+                eprintln!(
+                    "distance field from {est:?}: {n} cells, {} of the 4-connected reach missed",
+                    missed.len()
+                );
+                for &i in missed.iter().take(5) {
+                    eprintln!("  missed {:?}", g.cell(i));
+                }
+            }
+            Err(e) => eprintln!("distance field from {est:?}: {e:?}"),
+        }
+    }
     if std::env::var_os("GAPS_EVENTS").is_some() {
         eprintln!(
             "end cell passable {} reached from it {}",
             trav.is_passable(end),
             reach_final.iter().filter(|&&r| r).count()
         );
+        // Around GAPS_AT if given, else the end cell.
+        let centre = std::env::var("GAPS_AT")
+            .ok()
+            .and_then(|v| {
+                let (x, y) = v.split_once(',')?;
+                g.cell_at(Point2::new(x.parse().ok()?, y.parse().ok()?))
+            })
+            .unwrap_or(end);
         for dr in (-6..=6).rev() {
             let line: String = (-6..=6)
                 .map(|dc| {
-                    let c = Cell::new(end.col + dc, end.row + dr);
+                    let c = Cell::new(centre.col + dc, centre.row + dr);
                     if dc == 0 && dr == 0 {
                         'R'
+                    } else if map.class_of(c) == Some(CellClass::Unknown) {
+                        ' '
                     } else if trav.is_passable(c) {
                         if trav.can_turn(c) { 'o' } else { '-' }
                     } else {
@@ -195,6 +348,27 @@ fn main() {
         }
     }
     let seen_final = seen_from(&world, &reach_final, step, 4.0);
+    if let Some(at) = std::env::var("GAPS_LOGODDS").ok().and_then(|v| {
+        let (x, y) = v.split_once(',')?;
+        g.cell_at(Point2::new(x.parse().ok()?, y.parse().ok()?))
+    }) {
+        // Log-odds of the 11 x 7 cells around the point (rows north first; '*' blocked in
+        // truth).
+        for dr in (-3..=3).rev() {
+            let mut line = String::new();
+            for dc in -5..=5 {
+                let c = Cell::new(at.col + dc, at.row + dr);
+                if let Some(i) = g.index(c) {
+                    let b = if world.is_blocked_index(i) { '*' } else { ' ' };
+                    line.push_str(&format!("{:6.2}{b}", map.log_odds_at(i)));
+                }
+            }
+            eprintln!("{line}");
+        }
+    }
+    if std::env::var_os("GAPS_FRONTIER").is_some() {
+        frontier_report(&world, map, &trav, &reach_final);
+    }
 
     // The final map without its spurious Occupied cells.
     let mut clean: Box<OccupancyGrid<MAP_CAPACITY>> =

@@ -108,6 +108,8 @@ pub struct Mission<const N: usize> {
     goal: GoalRequest,
     /// Decisions in a row that failed.
     failed_in_row: u32,
+    /// After a failed decision, the next one waits until this time (see `failed`).
+    decide_at: Time,
     /// Errands dropped in a row while the robot got nowhere (less than 1 m from where the
     /// first of them was dropped), and that place: a robot that cannot get anywhere, whatever
     /// it chooses, ends the mission instead of choosing again for ever.
@@ -182,6 +184,7 @@ impl<const N: usize> Mission<N> {
             errand: Errand::new(),
             goal: GoalRequest::default(),
             failed_in_row: 0,
+            decide_at: Time::ZERO,
             abandoned_in_row: (0, start_map.position()),
             blacklist: Blacklist::default(),
             ahead: None,

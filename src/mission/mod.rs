@@ -25,8 +25,12 @@
 //!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` (no frontier reachable) counts
 //!   as a failed decision: [`MissionConfig::max_failed_decisions`] of them in a row end the
 //!   mission with [`DoneReason::NothingReachable`] (one look can be cut off for a moment by a
-//!   return the monitor just stopped for, which fresh scans clear); `NoFeasibleTarget` with
-//!   the battery low ends it with [`DoneReason::BatteryExhausted`].
+//!   return the monitor just stopped for, which fresh scans clear). A failed decision is
+//!   retried one second later, not at the next period, so the looks that end a mission are
+//!   taken on maps several seconds apart; and a look that finds nothing reachable forgets the
+//!   bumper contacts remembered across the bumper's width (their own cells stay in the map),
+//!   which otherwise shut a corridor for two minutes. `NoFeasibleTarget` with the battery low
+//!   ends it with [`DoneReason::BatteryExhausted`].
 //! - **Rotating / Driving**: the [`WaypointFollower`](crate::control::follower::WaypointFollower)
 //!   turns in place then drives to each waypoint ([`MissionEvent::WaypointReached`]).
 //!   After every scan the remaining segments are checked against the traversability layer;

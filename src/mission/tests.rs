@@ -1191,6 +1191,47 @@ fn two_robots_explore_one_shared_map_to_done() {
     }
 }
 
+/// "Nothing reachable" is concluded from looks a second apart, not from the same map read
+/// once a period: the failed decisions that end a mission are spread over
+/// `max_failed_decisions - 1` retry periods (a mark that fresh scans clear, or a bumper
+/// contact's stamp, cut a robot off for a moment; issue 17, branch `doors`).
+#[test]
+fn nothing_reachable_is_concluded_from_looks_a_second_apart() {
+    let config = MissionConfig {
+        selector: SelectorKind::NearestFrontier,
+        ..MissionConfig::default()
+    };
+    let max_failed = config.max_failed_decisions;
+    let world = two_rooms();
+    let mut sim = Sim::new(world, &config, 5);
+    sim.add(config, Pose2::new(1.0, 1.0, 0.3), Slip::none());
+    let mut first_failure_s = None;
+    while sim.secs() < 1500.0 {
+        sim.period();
+        let m = &sim.bots[0].mission;
+        if first_failure_s.is_none() && m.stats().failed_decisions > 0 {
+            first_failure_s = Some(sim.secs());
+        }
+        if matches!(m.state(), MissionState::Done(_)) {
+            break;
+        }
+    }
+    let m = &sim.bots[0].mission;
+    assert_eq!(
+        m.state(),
+        MissionState::Done(DoneReason::NothingReachable),
+        "{:?}",
+        m.stats()
+    );
+    assert_eq!(m.stats().failed_decisions, max_failed);
+    let first = first_failure_s.expect("a failed decision");
+    let spread = sim.secs() - first;
+    assert!(
+        spread >= (max_failed - 1) as f32 * 0.95,
+        "{max_failed} failed decisions within {spread} s"
+    );
+}
+
 /// The outline of `body` at `pose` touches a wall of `world`.
 fn touches(world: &World, body: &RobotFootprint, pose: Pose2) -> bool {
     let (front, rear, half) = (body.front_m, -body.rear_m, body.width_m / 2.0);

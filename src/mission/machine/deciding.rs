@@ -106,6 +106,10 @@ impl<const N: usize> Mission<N> {
             self.finish(reason, events);
             return true;
         }
+        if now < self.decide_at {
+            // The last decision failed: wait for fresh scans before the next.
+            return false;
+        }
         // A decision computed ahead, if its path is still clear.
         if let Some(mut d) = self.ahead.take() {
             let here = self.senses.pose_map.position();
@@ -125,7 +129,7 @@ impl<const N: usize> Mission<N> {
                 let listed = self.config.selector != SelectorKind::FrontierUtility
                     && last.is_some_and(|t| self.blacklist.contains(t));
                 if listed {
-                    return self.failed(events);
+                    return self.failed(now, events);
                 }
                 events.stats.fitness_evals += u64::from(d.evaluations);
                 self.adopt(now, &d, events)
@@ -135,21 +139,23 @@ impl<const N: usize> Mission<N> {
                 // the safety monitor just stopped for, or the robot standing in a wall's band,
                 // can cut it off for a moment, and fresh scans clear that. Ended only after
                 // `max_failed_decisions` such looks in a row (as `failed` counts them).
-                self.failed(events)
+                self.forget_contacts();
+                self.failed(now, events)
             }
             Err(DecideError::NoFeasibleTarget { .. }) if self.battery_low() => {
                 self.finish(DoneReason::BatteryExhausted, events);
                 true
             }
             Err(DecideError::AllBlacklisted { .. }) => {
+                self.forget_contacts();
                 if self.failed_in_row + 1 >= self.config.max_failed_decisions {
                     // Every frontier left is one the robot failed to reach.
                     self.finish(DoneReason::NothingReachable, events);
                     return true;
                 }
-                self.failed(events)
+                self.failed(now, events)
             }
-            Err(_) => self.failed(events),
+            Err(_) => self.failed(now, events),
         }
     }
 
@@ -211,10 +217,14 @@ impl<const N: usize> Mission<N> {
             < self.config.low_battery_steps
     }
 
-    /// Counts a failed decision; after too many in a row the mission ends.
-    fn failed(&mut self, events: &mut Events<'_>) -> bool {
+    /// Counts a failed decision; after too many in a row the mission ends. The next decision
+    /// waits [`RETRY_S`]: a failure read from a map that fresh scans may change (a return the
+    /// safety monitor just stopped for cutting the robot off, a band it stands in) is looked
+    /// at again on a later map, not on the same one every period.
+    fn failed(&mut self, now: Time, events: &mut Events<'_>) -> bool {
         events.stats.failed_decisions += 1;
         self.failed_in_row += 1;
+        self.decide_at = now + secs(RETRY_S);
         if self.failed_in_row >= self.config.max_failed_decisions {
             let reason = if self.battery_low() {
                 DoneReason::BatteryExhausted
@@ -228,10 +238,18 @@ impl<const N: usize> Mission<N> {
         false
     }
 
+    /// Forgets the bumper contacts remembered across the bumper's width (the grid keeps the
+    /// cell each contact marked): stamped into every decision's map for two minutes, a
+    /// contact beside a wall can shut a corridor, and a mission must not end "nothing
+    /// reachable" for a mark that is not in its map.
+    fn forget_contacts(&mut self) {
+        self.contacts.clear();
+    }
+
     /// Starts driving decision `d`: its targets become the errand.
     fn adopt(&mut self, now: Time, d: &Decision, events: &mut Events<'_>) -> bool {
         if !self.start_path(now, &d.waypoints) {
-            return self.failed(events);
+            return self.failed(now, events);
         }
         self.errand.targets.clear();
         let _ = self.errand.targets.extend_from_slice(&d.targets);
