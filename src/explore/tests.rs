@@ -1233,6 +1233,8 @@ fn a_small_pocket_nearer_than_the_chosen_target_is_cleared_first() {
         };
         assert!(!near_nook(d.targets[0]), "seed {seed}: {:?}", d.targets);
     }
+}
+
 /// The efficient objective charges each candidate the frontier tour's extra length of going
 /// to its target first: its score is the tour-free score times `exp(-lambda · weight ·
 /// extra_m)`, and on the house fixture some viewpoints do cost a detour.
