@@ -27,6 +27,7 @@
 #![warn(missing_docs)]
 
 #[cfg(feature = "std")]
+pub mod capacity;
 pub mod command_line;
 pub mod config;
 pub mod control;
