@@ -24,7 +24,7 @@ pub struct Args {
     /// World: house, empty, factory, lab, or a map file (.csv, .png, .pgm, .map, .yaml).
     #[arg(long, default_value = "house")]
     pub map: String,
-    /// Number of robots sharing the map (1 to 8).
+    /// Number of robots sharing the map (1 to 100).
     #[arg(long, default_value = "1", allow_negative_numbers = true)]
     pub robots: String,
     /// Target selector: an optimizer on the objective, or a frontier rule.
