@@ -296,6 +296,7 @@ fn grid_rules() {
     // The start pose must be inside.
     only_problem_at("$.grid", |c| c.grid.origin_x_m = 1.0);
     // A 100 m x 100 m floor at 10 cm (1 000 000 cells) and 50 m x 50 m at 5 cm fit (issue 24).
+    #[cfg(not(feature = "fixed-capacity"))]
     for (size_m, resolution_m) in [(100.0, 0.1), (50.0, 0.05)] {
         let mut c = BoardConfig::default();
         c.grid.width_m = size_m;
