@@ -1089,9 +1089,17 @@ mod tests {
                 .unwrap_err()
                 .starts_with("$.mission.method")
         );
+        // A 100 m x 100 m storey fits (issue 24); 300 m x 300 m at 0.1 m (9 000 000 cells)
+        // is beyond the largest capacity, and the error names it.
         let mut board = BoardConfig::default();
         board.grid.width_m = 100.0;
         board.grid.height_m = 100.0;
-        assert!(grid_geometry(&board).unwrap_err().starts_with("$.grid"));
+        #[cfg(not(feature = "fixed-capacity"))]
+        assert!(grid_geometry(&board).is_ok());
+        board.grid.width_m = 300.0;
+        board.grid.height_m = 300.0;
+        let e = grid_geometry(&board).unwrap_err();
+        assert!(e.starts_with("$.grid"), "{e}");
+        assert!(e.contains(&GRID_CELLS.to_string()), "{e}");
     }
 }
