@@ -51,13 +51,15 @@ pub fn capacity_for(cells: usize) -> Option<usize> {
 /// program turns a map's size into a capacity:
 ///
 /// ```
-/// use papillon::grid::OccupancyGrid;
-/// fn capacity_of<const N: usize>() -> usize {
-///     core::mem::size_of::<OccupancyGrid<N>>() / 4
+/// // A program's generic entry point, e.g. one that builds `SharedMap::<N>` and runs.
+/// fn run<const N: usize>(cells: usize) -> usize {
+///     assert!(cells <= N);
+///     N
 /// }
 /// let cells = 240 * 240;
-/// let n = papillon::with_cell_capacity!(cells, N => capacity_of::<N>()).unwrap();
-/// assert!(n >= cells);
+/// let n = papillon::with_cell_capacity!(cells, N => run::<N>(cells)).unwrap();
+/// assert_eq!(n, papillon::capacity::CELL_TIERS[0]);
+/// assert_eq!(papillon::with_cell_capacity!(usize::MAX, N => run::<N>(0)), None);
 /// ```
 #[macro_export]
 macro_rules! with_cell_capacity {

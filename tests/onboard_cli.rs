@@ -62,7 +62,10 @@ fn check_accepts_populations_up_to_the_limit_and_names_it_beyond() {
     for (population, ok) in [(50, true), (limit, true), (limit + 1, false)] {
         let p = temp_file(
             &format!("pop{population}.json"),
-            &text.replace("\"population\": 5", &format!("\"population\": {population}")),
+            &text.replace(
+                "\"population\": 5",
+                &format!("\"population\": {population}"),
+            ),
         );
         let out = Command::new(BIN)
             .args(["check", "--board", p.to_str().unwrap()])

@@ -188,13 +188,11 @@ pub fn execute_recorded(
         execute_sized::<N>(setup, frames, png, mcap, live)
     })
     .unwrap_or_else(|| {
-        Err(Failure::Setup(
-            runner::RunError::MapTooLarge {
-                cells,
-                capacity: runner::MAP_CAPACITY,
-            }
-            .to_string(),
-        ))
+        let e = runner::RunError::MapTooLarge {
+            cells,
+            capacity: runner::MAP_CAPACITY,
+        };
+        Err(Failure::Setup(format!("{}: {e}", setup.world.name())))
     })
 }
 

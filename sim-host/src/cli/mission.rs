@@ -296,6 +296,7 @@ mod tests {
             live: None,
             live_speed: 1.0,
             return_to_start: false,
+            max_time: None,
         }
     }
 

@@ -731,6 +731,41 @@ mod tests {
     }
 
     #[test]
+    fn a_runner_sized_to_the_world_holds_what_the_fixed_one_refuses() {
+        // The factory at 0.05 m: more cells than Runner::new's capacity, fewer than the
+        // largest.
+        let w = builtin::factory(0.05).unwrap();
+        let cells = w.geometry().cell_count();
+        assert!(cells > FIXED_CAPACITY && cells <= MAP_CAPACITY, "{cells}");
+        let mut cfg = RunConfig::new(MissionConfig::default(), 1, 3);
+        cfg.max_sim_time_s = 1.0;
+        let e = Runner::new(w.clone(), Dynamics::new(), cfg.clone()).unwrap_err();
+        assert_eq!(
+            e,
+            RunError::MapTooLarge {
+                cells,
+                capacity: FIXED_CAPACITY
+            }
+        );
+        assert!(e.to_string().contains(&FIXED_CAPACITY.to_string()), "{e}");
+        let report = run_sized(w, Dynamics::new(), cfg.clone()).unwrap();
+        assert_eq!(report.reason, Some(EndReason::TimeLimit));
+        assert!(report.known_cells > 0);
+        // Beyond the largest capacity: refused, the limit named.
+        let g = papillon::grid::GridGeometry::from_extent(
+            210.0,
+            210.0,
+            0.1,
+            papillon::geometry::Point2::default(),
+        )
+        .unwrap();
+        let big = World::new("big".to_string(), g);
+        let e = run_sized(big, Dynamics::new(), cfg).unwrap_err();
+        assert!(matches!(e, RunError::MapTooLarge { .. }), "{e}");
+        assert!(e.to_string().contains(&MAP_CAPACITY.to_string()), "{e}");
+    }
+
+    #[test]
     fn a_time_limit_ends_a_run_with_its_reason() {
         let w = builtin::lab(0.1).unwrap();
         let mut cfg = RunConfig::new(MissionConfig::default(), 1, 3);
