@@ -92,7 +92,8 @@ mod tests {
 
     #[test]
     fn the_smallest_tier_that_holds_the_map_is_chosen() {
-        for cells in [0, 1, 240 * 240, 1000 * 1000, 1920 * 1920, MAX_CELLS] {
+        let sizes = [0, 1, 240 * 240, 1000 * 1000, 1920 * 1920, MAX_CELLS];
+        for cells in sizes.into_iter().filter(|&c| c <= MAX_CELLS) {
             let i = tier(cells).unwrap();
             assert!(CELL_TIERS[i] >= cells, "{cells}");
             if i > 0 {
