@@ -108,7 +108,7 @@ pub struct Args {
     /// return to start, as `papillon run --return-to-start`).
     #[arg(long)]
     pub return_to_start: bool,
-    /// End the run after this much simulated time [s] (reason `time-limit`), e.g. to sample
+    /// End the run after this many simulated seconds (reason `time-limit`), e.g. to sample
     /// a mission on a big map; default 600 s plus 10 s per step of battery.
     #[arg(long, value_name = "SECONDS", value_parser = max_time)]
     pub max_time: Option<f64>,
