@@ -18,7 +18,6 @@ use core::fmt;
 use core::ops::Deref;
 
 use crate::geometry::Pose2;
-use crate::grid::DEFAULT_CELL_CAPACITY;
 use crate::math;
 use crate::sensor::{LaserConfig, MAX_BEAMS};
 use crate::units::deg_to_rad;

@@ -7,7 +7,9 @@
 //! Layers, bottom up:
 //! - [`math`], [`units`], [`geometry`], [`random`]: numbers, units and frames; `heap` (host
 //!   only, crate-private): large fixed-capacity structures allocated zero-filled on the heap.
-//! - [`grid`], [`raycast`], [`sensor`], [`frontier`]: the occupancy grid and the LIDAR model.
+//! - [`grid`], [`raycast`], [`sensor`], [`frontier`]: the occupancy grid and the LIDAR model;
+//!   [`capacity`]: the ladder of grid capacities a host program picks from at start-up
+//!   ([`with_cell_capacity!`]).
 //! - [`planner`]: traversability, A*, distance fields, waypoints.
 //! - [`optim`]: xBOA and the methods the thesis compares.
 //! - [`explore`]: the exploration objective and target selectors.
@@ -26,6 +28,7 @@
 #![cfg_attr(not(feature = "std"), no_std)]
 #![warn(missing_docs)]
 
+pub mod capacity;
 #[cfg(feature = "std")]
 pub mod command_line;
 pub mod config;

@@ -53,6 +53,54 @@ fn every_problem_is_printed_with_its_path_and_exit_is_1() {
     std::fs::remove_file(p).unwrap();
 }
 
+/// Issue 24: populations the optimizers hold pass `check` (50, and the limit itself); one
+/// more is refused with the limit named, and so is a grid beyond the largest capacity.
+#[test]
+fn check_accepts_populations_up_to_the_limit_and_names_it_beyond() {
+    let text = std::fs::read_to_string(board("sim.json")).unwrap();
+    let limit = papillon::config::MAX_POPULATION;
+    for (population, ok) in [(50, true), (limit, true), (limit + 1, false)] {
+        let p = temp_file(
+            &format!("pop{population}.json"),
+            &text.replace(
+                "\"population\": 5",
+                &format!("\"population\": {population}"),
+            ),
+        );
+        let out = Command::new(BIN)
+            .args(["check", "--board", p.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8(out.stdout).unwrap();
+        if ok {
+            assert_eq!(out.status.code(), Some(0), "{population}: {stdout}");
+        } else {
+            assert_eq!(out.status.code(), Some(1), "{population}: {stdout}");
+            assert!(
+                stdout.contains(&format!("$.mission.population: must be in 2..={limit}")),
+                "{stdout}"
+            );
+        }
+        std::fs::remove_file(p).unwrap();
+    }
+    let huge = text.replace("\"width_m\": 26.0", "\"width_m\": 2600.0");
+    let p = temp_file("grid-huge.json", &huge);
+    let out = Command::new(BIN)
+        .args(["check", "--board", p.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains(&format!(
+            "more than the {} the grid holds",
+            papillon::capacity::MAX_CELLS
+        )),
+        "{stdout}"
+    );
+    std::fs::remove_file(p).unwrap();
+}
+
 #[test]
 fn syntax_error_names_line_and_column() {
     let p = temp_file("syntax.json", "{\n  \"robot\": {,\n}");

@@ -152,6 +152,71 @@ fn a_lab_mission_finishes_with_95_percent_coverage() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Issue 24: a board describing a 100 m x 100 m storey at 0.1 m (a million cells: the
+/// program sizes its grid to the board at start-up) with an optimizer population of 50 runs
+/// against `serve` on a generated storey: it maps and decides, and on SIGTERM stops cleanly with
+/// the whole storey's map saved.
+#[test]
+fn a_hundred_metre_storey_board_with_population_50_maps_and_decides() {
+    let world = World::load("gen-floor-1", MAP_RESOLUTION_M).unwrap();
+    let start = world.start();
+    assert_eq!(start.theta, 0.0, "a generated plan starts heading east");
+    let mut b: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(board()).unwrap()).unwrap();
+    // The map frame is the odometry's, from the start pose: the storey from -start.
+    b["grid"]["width_m"] = 101.0.into();
+    b["grid"]["height_m"] = 101.0.into();
+    b["grid"]["origin_x_m"] = (-f64::from(start.x) - 0.5).into();
+    b["grid"]["origin_y_m"] = (-f64::from(start.y) - 0.5).into();
+    b["mission"]["population"] = 50.into();
+    // Few generations keep the test short (297 s with the board's 30 on a debug build); the
+    // population is what is checked.
+    b["mission"]["generations"] = 5.into();
+    let boards = temp_dir("floor-board");
+    let board_path = boards.join("floor.json");
+    std::fs::write(&board_path, b.to_string()).unwrap();
+
+    let sim = Sim::start(
+        "gen-floor-1",
+        None,
+        &["--laser-noise", &sim_board_laser_noise()],
+    );
+    let dir = temp_dir("mission-floor");
+    let log = dir.join("log");
+    let child = papillon(
+        &[
+            "run",
+            "--board",
+            board_path.to_str().unwrap(),
+            "--tcp",
+            &sim.arcos_tcp(),
+            "--laser",
+            &sim.laser(),
+            "--log-dir",
+            log.to_str().unwrap(),
+        ],
+        &dir,
+    );
+    wait_for_progress(&log, 1500, Duration::from_secs(120));
+    // At least two decisions (population 50) before the stop.
+    let deadline = Instant::now() + Duration::from_secs(300);
+    while saved(&log).0.counters.decisions < 2 {
+        assert!(Instant::now() < deadline, "no two decisions saved");
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    signal(&child, libc::SIGTERM);
+    let out = wait_bounded(child, Duration::from_secs(30));
+    assert_exit_0(&out);
+    let (state, map) = saved(&log);
+    assert!(!state.finished);
+    assert_eq!((map.width, map.height), (1010, 1010));
+    let telemetry = std::fs::read_to_string(log.join("telemetry.jsonl")).unwrap();
+    assert!(telemetry.contains("\"kind\":\"decision\""));
+    only_the_log_in(&dir, &log);
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&boards).unwrap();
+}
+
 #[test]
 fn sigterm_saves_the_mission_and_resume_finishes_it_without_losing_the_map() {
     let sim = Sim::start("lab", None, &["--laser-noise", &sim_board_laser_noise()]);

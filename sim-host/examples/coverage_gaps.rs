@@ -31,7 +31,7 @@ use papillon::grid::{Cell, CellClass, OccupancyGrid};
 use papillon::planner::Traversability;
 use papillon_sim::cli::mission::{Args, setup_from_args};
 use papillon_sim::dynamic::Dynamics;
-use papillon_sim::runner::{MAP_CAPACITY, Runner};
+use papillon_sim::runner::{FIXED_CAPACITY, Runner};
 
 #[derive(Parser)]
 struct Cli {
@@ -40,7 +40,7 @@ struct Cli {
 }
 
 /// Cells the layer lets a robot's centre reach from `from` (4-connected over passable cells).
-fn reach(trav: &Traversability<MAP_CAPACITY>, from: Cell) -> Vec<bool> {
+fn reach(trav: &Traversability<FIXED_CAPACITY>, from: Cell) -> Vec<bool> {
     let g = *trav.geometry();
     let mut seen = vec![false; g.cell_count()];
     // Start from the nearest passable cell within 3 cells (the robot may sit in a band).
@@ -251,8 +251,8 @@ fn main() {
     let config = setup.run.mission.traversability;
 
     // The true map's reachable poses and what they see.
-    let true_grid = world.to_occupancy_grid::<MAP_CAPACITY>().unwrap();
-    let mut trav = Traversability::<MAP_CAPACITY>::new_boxed(g, config).unwrap();
+    let true_grid = world.to_occupancy_grid::<FIXED_CAPACITY>().unwrap();
+    let mut trav = Traversability::<FIXED_CAPACITY>::new_boxed(g, config).unwrap();
     trav.rebuild_from(&true_grid).unwrap();
     let start = world.start_cell().unwrap();
     let step = 2;
@@ -371,7 +371,7 @@ fn main() {
     }
 
     // The final map without its spurious Occupied cells.
-    let mut clean: Box<OccupancyGrid<MAP_CAPACITY>> =
+    let mut clean: Box<OccupancyGrid<FIXED_CAPACITY>> =
         OccupancyGrid::new_boxed(g, map.bounds()).unwrap();
     let mut spurious = 0;
     for i in 0..g.cell_count() {

@@ -11,7 +11,7 @@ use papillon::planner::{Traversability, UnknownPolicy};
 use papillon::random;
 use papillon::sensor::{LaserConfig, SensorModel, integrate_scan};
 use papillon_sim::laser::LaserSim;
-use papillon_sim::runner::MAP_CAPACITY;
+use papillon_sim::runner::FIXED_CAPACITY;
 use papillon_sim::world::builtin;
 
 fn env(name: &str, default: f32) -> f32 {
@@ -53,8 +53,8 @@ fn main() {
     let mut passed = 0;
     for seed in 0..seeds {
         let mut grid =
-            OccupancyGrid::<MAP_CAPACITY>::new_boxed(geom, LogOddsBounds::default()).unwrap();
-        let mut trav = Traversability::<MAP_CAPACITY>::new_boxed(geom, layer).unwrap();
+            OccupancyGrid::<FIXED_CAPACITY>::new_boxed(geom, LogOddsBounds::default()).unwrap();
+        let mut trav = Traversability::<FIXED_CAPACITY>::new_boxed(geom, layer).unwrap();
         let mut laser = LaserSim::new(laser_cfg, 1000 + seed);
         let mut rng = random::seeded(seed);
         for _ in 0..scans {

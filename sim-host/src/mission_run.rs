@@ -182,8 +182,30 @@ pub fn execute_recorded(
     mcap: Option<&Path>,
     live: Option<&crate::record::LiveOptions>,
 ) -> Result<RunReport, Failure> {
+    // The map's capacity follows the world (`papillon::capacity`).
+    let cells = setup.world.geometry().cell_count();
+    papillon::with_cell_capacity!(cells, N => {
+        execute_sized::<N>(setup, frames, png, mcap, live)
+    })
+    .unwrap_or_else(|| {
+        let e = runner::RunError::MapTooLarge {
+            cells,
+            capacity: runner::MAP_CAPACITY,
+        };
+        Err(Failure::Setup(format!("{}: {e}", setup.world.name())))
+    })
+}
+
+/// [`execute_recorded`] on a map of `N` cells.
+fn execute_sized<const N: usize>(
+    setup: &Setup,
+    frames: Option<&Path>,
+    png: Option<&Path>,
+    mcap: Option<&Path>,
+    live: Option<&crate::record::LiveOptions>,
+) -> Result<RunReport, Failure> {
     let scale = picture_scale(&setup.world);
-    let mut runner = Runner::new(setup.world.clone(), Dynamics::new(), setup.run.clone())
+    let mut runner = Runner::<N>::sized(setup.world.clone(), Dynamics::new(), setup.run.clone())
         .map_err(|e| Failure::Setup(e.to_string()))?;
     if let Some(dir) = frames {
         std::fs::create_dir_all(dir).map_err(|e| {

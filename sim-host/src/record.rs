@@ -95,7 +95,7 @@ impl RunRecorder {
     }
 
     /// Records what `progress` says happened in `runner`.
-    pub fn observe(&mut self, runner: &Runner, progress: Progress) {
+    pub fn observe<const N: usize>(&mut self, runner: &Runner<N>, progress: Progress) {
         if let Some((start, speed)) = self.pace
             && matches!(progress, Progress::Controlled)
         {
@@ -112,9 +112,9 @@ impl RunRecorder {
         }
     }
 
-    fn record(
+    fn record<const N: usize>(
         &mut self,
-        runner: &Runner,
+        runner: &Runner<N>,
         progress: Progress,
     ) -> Result<(), papillon::record::RecordError> {
         let t = runner.sim_time_s();

@@ -11,7 +11,7 @@ use std::fmt;
 
 use papillon::geometry::Pose2;
 use papillon::mission::{MissionConfig, SelectorKind, footprint};
-use papillon::optim::{Method, Preset};
+use papillon::optim::{MAX_POP, MIN_POP, Method, Preset};
 
 use crate::physics::SlipConfig;
 use crate::runner::{self, RunConfig};
@@ -229,8 +229,8 @@ impl Setup {
             ));
         }
         let pop = spec.population;
-        if !(2..=64).contains(&pop) {
-            return Err(format!("--pop: expected 2 to 64, got {pop}"));
+        if !(MIN_POP..=MAX_POP).contains(&pop) {
+            return Err(format!("--pop: expected {MIN_POP} to {MAX_POP}, got {pop}"));
         }
         if !(1..=MAX_GENERATIONS).contains(&spec.generations) {
             return Err(format!(

@@ -274,22 +274,38 @@ fn grid_rules() {
         c.grid.resolution_m = 0.5;
     });
     only_problem_at("$.grid.origin_x_m", |c| c.grid.origin_x_m = f32::NAN);
-    // 50 m x 50 m at 10 cm = 250 000 cells > 150 000.
+    // 300 m x 300 m at 10 cm = 9 000 000 cells, beyond the largest capacity; the problem
+    // names the limit.
     only_problem_at("$.grid", |c| {
-        c.grid.width_m = 50.0;
-        c.grid.height_m = 50.0;
-        c.grid.origin_x_m = -25.0;
-        c.grid.origin_y_m = -25.0;
+        c.grid.width_m = 300.0;
+        c.grid.height_m = 300.0;
+        c.grid.origin_x_m = -150.0;
+        c.grid.origin_y_m = -150.0;
     });
+    let mut c = BoardConfig::default();
+    c.grid.width_m = 300.0;
+    c.grid.height_m = 300.0;
+    c.grid.origin_x_m = -150.0;
+    c.grid.origin_y_m = -150.0;
+    let limit = crate::capacity::MAX_CELLS.to_string();
+    assert!(
+        problems(&c).iter().any(|(_, p)| p.contains(&limit)),
+        "{:?}",
+        problems(&c)
+    );
     // The start pose must be inside.
     only_problem_at("$.grid", |c| c.grid.origin_x_m = 1.0);
-    // 30 m x 50 m at 10 cm is exactly the capacity.
-    let mut c = BoardConfig::default();
-    c.grid.width_m = 30.0;
-    c.grid.height_m = 50.0;
-    c.grid.origin_x_m = -15.0;
-    c.grid.origin_y_m = -25.0;
-    assert_eq!(problems(&c), []);
+    // A 100 m x 100 m floor at 10 cm (1 000 000 cells) and 50 m x 50 m at 5 cm fit (issue 24).
+    #[cfg(not(feature = "fixed-capacity"))]
+    for (size_m, resolution_m) in [(100.0, 0.1), (50.0, 0.05)] {
+        let mut c = BoardConfig::default();
+        c.grid.width_m = size_m;
+        c.grid.height_m = size_m;
+        c.grid.resolution_m = resolution_m;
+        c.grid.origin_x_m = -size_m / 2.0;
+        c.grid.origin_y_m = -size_m / 2.0;
+        assert_eq!(problems(&c), [], "{size_m} m at {resolution_m} m");
+    }
 }
 
 #[test]

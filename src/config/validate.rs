@@ -1,6 +1,9 @@
 //! The semantic checks of a board file: each problem reported with its JSON path.
 
+use core::fmt::Write as _;
+
 use super::*;
+use crate::capacity::MAX_CELLS;
 
 impl BoardConfig {
     /// Checks every semantic constraint and calls `report(path, problem)` once per problem,
@@ -203,11 +206,13 @@ impl BoardConfig {
         }
         if sizes_ok {
             let (cols, rows) = g.size_cells();
-            if cols.saturating_mul(rows) > DEFAULT_CELL_CAPACITY {
-                r(
-                    "$.grid",
-                    "width_m x height_m at resolution_m needs more cells than the grid holds (150000)",
+            if cols.saturating_mul(rows) > MAX_CELLS {
+                let mut problem = heapless::String::<160>::new();
+                let _ = write!(
+                    problem,
+                    "width_m x height_m at resolution_m needs {cols} x {rows} cells, more than the {MAX_CELLS} the grid holds"
                 );
+                r("$.grid", &problem);
             }
             if positive(self.robot.radius_m) && g.resolution_m > self.robot.radius_m {
                 r(
@@ -248,7 +253,9 @@ impl BoardConfig {
             );
         }
         if !(2..=MAX_POPULATION).contains(&m.population) {
-            r("$.mission.population", "must be in 2..=64");
+            let mut problem = heapless::String::<48>::new();
+            let _ = write!(problem, "must be in 2..={MAX_POPULATION}");
+            r("$.mission.population", &problem);
         }
         if m.generations == 0 {
             r("$.mission.generations", "must be at least 1");

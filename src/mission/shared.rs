@@ -16,8 +16,11 @@ use crate::planner::{AStar, DistanceField, Planner, Traversability};
 
 use super::{MissionConfig, MissionError};
 
-/// Most robots sharing one map.
-pub const MAX_ROBOTS: usize = 8;
+/// Most robots sharing one map: a hundred, as the thesis's simulator (issue 24). A mark is
+/// 160 bytes, so the marks of a hundred robots take 16 KB of every [`SharedMap`], whatever the
+/// number of robots; a robot reads only the marks written (`mark_count`), so fewer robots
+/// cost nothing more. (The onboard binary runs one robot.)
+pub const MAX_ROBOTS: usize = 100;
 /// Most remaining waypoints a robot publishes on the shared map.
 pub const MAX_SHARED_WAYPOINTS: usize = 16;
 /// Most frontiers a frontier-based decision handles.

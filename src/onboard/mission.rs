@@ -68,8 +68,11 @@ use crate::wire::arcos::StatusPacket;
 /// none (`papillon calibrate --wheelbase-mm`'s default) \[m\].
 pub const DEFAULT_WHEELBASE_M: f32 = 0.33;
 
-/// Cells the onboard grid can hold (512 x 512: 51 m square at 10 cm).
-pub const GRID_CELLS: usize = 1 << 18;
+/// Most cells the onboard grid can hold: the largest capacity of [`crate::capacity`] (2048 x
+/// 2048, a 200 m square at 10 cm; with the feature `fixed-capacity`, 512 x 512). The mission
+/// is built for the smallest capacity that holds the board's `$.grid`, so memory follows the
+/// board's area.
+pub const GRID_CELLS: usize = crate::capacity::MAX_CELLS;
 /// The mission steps after each status packet (the P3-DX sends one every 100 ms), at most
 /// this often \[s\]...
 pub const MIN_STEP_S: f64 = 0.05;
@@ -108,8 +111,6 @@ pub const PUBLISH_EVERY_S: f64 = 1.0;
 pub const CONTINUED_ODOMETRY_M: f32 = 3.0;
 /// Trajectory points kept in the saved state (older ones are thinned out).
 pub const MAX_TRAJECTORY: usize = 4000;
-
-type Map = SharedMap<GRID_CELLS>;
 
 /// The grid geometry a board asks for, checked against [`GRID_CELLS`].
 pub fn grid_geometry(board: &BoardConfig) -> Result<GridGeometry, String> {
@@ -291,7 +292,46 @@ impl CoreMission {
                 (config.battery_steps - state.counters.energy_used_steps).max(0.0);
         }
         let geometry = grid_geometry(board)?;
-        let mut map = Map::new_boxed(geometry, &config).map_err(|e| format!("$.grid: {e}"))?;
+        // The capacity follows the board's grid (checked against GRID_CELLS just above).
+        let (tx, out, worker) = crate::with_cell_capacity!(geometry.cell_count(), N => {
+            start_worker::<N>(board, config, geometry, resume, recording)
+        })
+        .ok_or_else(|| format!("$.grid: more than {GRID_CELLS} cells"))??;
+        Ok(Self {
+            tx,
+            out,
+            step_sent_s: f64::NEG_INFINITY,
+            status_pending: false,
+            status_t_s: 0.0,
+            core_step_s: f64::NEG_INFINITY,
+            commands_seen: 0,
+            last_command_s: 0.0,
+            last_moving: false,
+            fault_at_s: None,
+            done: false,
+            worker: Some(worker),
+        })
+    }
+}
+
+/// What [`start_worker`] hands back: the thread's input, what it publishes, the thread.
+type Started = (
+    Sender<Input>,
+    Arc<Mutex<Published>>,
+    std::thread::JoinHandle<()>,
+);
+
+/// Builds the map of `N` cells and starts the mission thread on it.
+fn start_worker<const N: usize>(
+    board: &BoardConfig,
+    config: MissionConfig,
+    geometry: GridGeometry,
+    resume: Option<&(SavedState, Option<MapImage>)>,
+    recording: Option<MissionRecording>,
+) -> Result<Started, String> {
+    {
+        let mut map =
+            SharedMap::<N>::new_boxed(geometry, &config).map_err(|e| format!("$.grid: {e}"))?;
         let mut saved = SavedState {
             version: STATE_VERSION,
             ..SavedState::default()
@@ -347,20 +387,7 @@ impl CoreMission {
             .name("mission".into())
             .spawn(move || worker.run(rx))
             .map_err(|e| format!("cannot start the mission thread: {e}"))?;
-        Ok(Self {
-            tx,
-            out,
-            step_sent_s: f64::NEG_INFINITY,
-            status_pending: false,
-            status_t_s: 0.0,
-            core_step_s: f64::NEG_INFINITY,
-            commands_seen: 0,
-            last_command_s: 0.0,
-            last_moving: false,
-            fault_at_s: None,
-            done: false,
-            worker: Some(worker),
-        })
+        Ok((tx, out, worker))
     }
 }
 
@@ -452,13 +479,13 @@ impl MissionDriver for CoreMission {
 }
 
 /// The mission thread's state.
-struct Worker {
+struct Worker<const N: usize> {
     config: MissionConfig,
-    map: Box<Map>,
-    ws: Box<Workspace<GRID_CELLS>>,
+    map: Box<SharedMap<N>>,
+    ws: Box<Workspace<N>>,
     rng: crate::random::ProjectRng,
     /// Built at the first status packet (the start pose depends on it when resuming).
-    mission: Option<Mission<GRID_CELLS>>,
+    mission: Option<Mission<N>>,
     odometry: ArcosOdometry,
     /// The board's odometry corrections (`papillon calibrate`), applied to every reading.
     correction: crate::control::umbmark::OdometryCorrection,
@@ -491,7 +518,7 @@ struct Worker {
     recording: Option<MissionRecording>,
 }
 
-impl Drop for Worker {
+impl<const N: usize> Drop for Worker<N> {
     fn drop(&mut self) {
         if let Some(rec) = &mut self.recording {
             rec.finish(self.last_status_s, &self.map.grid);
@@ -499,7 +526,7 @@ impl Drop for Worker {
     }
 }
 
-impl Worker {
+impl<const N: usize> Worker<N> {
     fn run(mut self, rx: Receiver<Input>) {
         while let Ok(first) = rx.recv() {
             let mut batch = vec![first];
@@ -903,7 +930,7 @@ impl Worker {
 
 /// Known (Free or Occupied) cells of the grid: without the world's truth the onboard program
 /// cannot tell how much of the building this is, so it is reported, never a target.
-fn known_cells(map: &Map) -> usize {
+fn known_cells<const N: usize>(map: &SharedMap<N>) -> usize {
     let g = map.grid.geometry();
     (0..g.cell_count())
         .filter(|&i| map.grid.class(i) != CellClass::Unknown)
@@ -925,7 +952,7 @@ fn battery_v(status: &StatusPacket) -> f32 {
 }
 
 /// How far the mission's pose estimate is from its start \[m\].
-fn start_distance_m(mission: &Mission<GRID_CELLS>) -> f32 {
+fn start_distance_m<const N: usize>(mission: &Mission<N>) -> f32 {
     let start = mission.start_pose_map().position();
     mission.pose_map().position().distance(start)
 }
@@ -1063,9 +1090,17 @@ mod tests {
                 .unwrap_err()
                 .starts_with("$.mission.method")
         );
+        // A 100 m x 100 m storey fits (issue 24); 300 m x 300 m at 0.1 m (9 000 000 cells)
+        // is beyond the largest capacity, and the error names it.
         let mut board = BoardConfig::default();
         board.grid.width_m = 100.0;
         board.grid.height_m = 100.0;
-        assert!(grid_geometry(&board).unwrap_err().starts_with("$.grid"));
+        #[cfg(not(feature = "fixed-capacity"))]
+        assert!(grid_geometry(&board).is_ok());
+        board.grid.width_m = 300.0;
+        board.grid.height_m = 300.0;
+        let e = grid_geometry(&board).unwrap_err();
+        assert!(e.starts_with("$.grid"), "{e}");
+        assert!(e.contains(&GRID_CELLS.to_string()), "{e}");
     }
 }

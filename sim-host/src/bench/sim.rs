@@ -8,7 +8,7 @@
 use super::record::RunResult;
 use super::sweep::RunSpec;
 use crate::dynamic::Dynamics;
-use crate::runner::Runner;
+use crate::runner;
 use crate::scenario::{
     ScenarioSpec, Setup, Slip, Strategy, objective_from_name, preset_from_name, selector_from_name,
 };
@@ -50,9 +50,8 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
 /// Runs `spec` in the simulator.
 pub fn run(spec: &RunSpec) -> Result<RunResult, String> {
     let setup = Setup::new(&scenario(spec)?)?;
-    let mut runner = Runner::new(setup.world.clone(), Dynamics::new(), setup.run.clone())
+    let report = runner::run_sized(setup.world.clone(), Dynamics::new(), setup.run.clone())
         .map_err(|e| e.to_string())?;
-    let report = runner.run().map_err(|e| e.to_string())?;
     let convergence = report
         .robots
         .first()

@@ -13,6 +13,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+use papillon::optim::{MAX_POP, MIN_POP};
+
 use super::params::ParamMap;
 
 /// The thesis's base seed.
@@ -368,8 +370,10 @@ impl Sweep {
             ));
         }
         for (i, &p) in self.populations.iter().enumerate() {
-            if !(2..=64).contains(&p) {
-                return Err(format!("populations[{i}]: expected 2 to 64, got {p}"));
+            if !(MIN_POP..=MAX_POP).contains(&p) {
+                return Err(format!(
+                    "populations[{i}]: expected {MIN_POP} to {MAX_POP}, got {p}"
+                ));
             }
         }
         for (i, &r) in self.robots.iter().enumerate() {

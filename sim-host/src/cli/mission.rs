@@ -24,7 +24,7 @@ pub struct Args {
     /// World: house, empty, factory, lab, or a map file (.csv, .png, .pgm, .map, .yaml).
     #[arg(long, default_value = "house")]
     pub map: String,
-    /// Number of robots sharing the map (1 to 8).
+    /// Number of robots sharing the map (1 to 100).
     #[arg(long, default_value = "1", allow_negative_numbers = true)]
     pub robots: String,
     /// Target selector: an optimizer on the objective, or a frontier rule.
@@ -108,6 +108,20 @@ pub struct Args {
     /// return to start, as `papillon run --return-to-start`).
     #[arg(long)]
     pub return_to_start: bool,
+    /// End the run after this many simulated seconds (reason `time-limit`), e.g. to sample
+    /// a mission on a big map; default 600 s plus 10 s per step of battery.
+    #[arg(long, value_name = "SECONDS", value_parser = max_time)]
+    pub max_time: Option<f64>,
+}
+
+/// `--max-time`: a positive number of simulated seconds.
+fn max_time(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!(
+            "expected a positive number of simulated seconds, got '{text}'"
+        )),
+    }
 }
 
 /// `--live-speed`: a number above 0 and at most 1000.
@@ -206,6 +220,9 @@ pub fn run(args: Args) -> ExitCode {
     let setup = match setup_from_args(&args) {
         Ok(mut s) => {
             s.run.mission.return_to_start = args.return_to_start;
+            if let Some(limit_s) = args.max_time {
+                s.run.max_sim_time_s = limit_s;
+            }
             s
         }
         Err(e) => {
@@ -279,6 +296,7 @@ mod tests {
             live: None,
             live_speed: 1.0,
             return_to_start: false,
+            max_time: None,
         }
     }
 

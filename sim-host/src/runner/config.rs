@@ -162,6 +162,8 @@ pub enum RunError {
     MapTooLarge {
         /// Cells of the world.
         cells: usize,
+        /// Cells the runner's map holds.
+        capacity: usize,
     },
     /// A start pose puts the robot in or against an obstacle, or outside the world.
     StartBlocked {
@@ -183,9 +185,13 @@ impl fmt::Display for RunError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             RunError::Robots(n) => write!(f, "robots must be 1 to {MAX_ROBOTS}, got {n}"),
-            RunError::MapTooLarge { cells } => write!(
+            RunError::MapTooLarge { cells, capacity } if *capacity < MAP_CAPACITY => write!(
                 f,
-                "the world has {cells} cells, more than the {MAP_CAPACITY} the runner's map holds (use a coarser resolution)"
+                "the world has {cells} cells, more than the {capacity} this runner's map holds (a runner sized to the map holds up to {MAP_CAPACITY})"
+            ),
+            RunError::MapTooLarge { cells, .. } => write!(
+                f,
+                "the world has {cells} cells, more than the {MAP_CAPACITY} the simulator's largest map holds (use a coarser resolution or a smaller world)"
             ),
             RunError::StartBlocked { robot, pose } => write!(
                 f,

@@ -31,7 +31,7 @@ use papillon::control::Time;
 use papillon::control::command::RobotCommand;
 use papillon::control::safety::RobotFlags;
 use papillon::geometry::Pose2;
-use papillon::grid::{CellClass, DEFAULT_CELL_CAPACITY};
+use papillon::grid::CellClass;
 use papillon::mission::{DoneReason, Mission, MissionEvent, MissionState, SharedMap, Workspace};
 use papillon::random::{self, ProjectRng};
 use papillon::sensor::Scan;
@@ -57,8 +57,15 @@ use config::{STREAM_BODY, STREAM_DECIDE, STREAM_LASER};
 use coverage::CoverageCounter;
 pub use report::{EndReason, LoggedEvent, RobotReport, RunReport};
 
-/// Largest map the runner holds \[cells\] (the core's default: the factory at 0.1 m fits).
-pub const MAP_CAPACITY: usize = DEFAULT_CELL_CAPACITY;
+/// Largest map the runner holds \[cells\]: the largest of the capacities it picks from
+/// ([`papillon::capacity`]; [`run_sized`] and [`papillon::with_cell_capacity!`] pick the
+/// smallest that holds the world).
+pub const MAP_CAPACITY: usize = papillon::capacity::MAX_CELLS;
+
+/// The capacity of [`Runner::new`]'s runner \[cells\] (tests and examples on small maps; a
+/// program sizes its runner to the map with [`Runner::sized`] through
+/// [`papillon::with_cell_capacity!`], or [`run_sized`]).
+pub const FIXED_CAPACITY: usize = papillon::capacity::FIXED_CELLS;
 
 /// Control period \[µs\] (10 Hz).
 pub const CONTROL_PERIOD_US: u64 = 100_000;
@@ -75,9 +82,9 @@ const TRACK_SPACING_M: f32 = 0.05;
 
 /// One simulated robot's laser, mission and decision generator (its body lives in
 /// [`Runner::bodies`], so that the physics can step all bodies together).
-struct Robot {
+struct Robot<const N: usize> {
     laser: LaserSim,
-    mission: Mission<MAP_CAPACITY>,
+    mission: Mission<N>,
     rng: ProjectRng,
     report: RobotReport,
     last_odom: Option<Pose2>,
@@ -89,7 +96,7 @@ struct Robot {
     stall: std::collections::VecDeque<(usize, f32)>,
 }
 
-impl Robot {
+impl<const N: usize> Robot<N> {
     /// Feeds the body's odometry to the mission and accumulates distance and rotation.
     fn feed_odometry(&mut self, now: Time, body: &RobotBody) {
         let odom = body.odometry_pose();
@@ -155,13 +162,13 @@ pub enum Progress {
 }
 
 /// A run in progress: the world, the robots and the shared map.
-pub struct Runner {
+pub struct Runner<const N: usize = FIXED_CAPACITY> {
     world: World,
     dynamics: Dynamics,
     bodies: Vec<RobotBody>,
-    robots: Vec<Robot>,
-    map: Box<SharedMap<MAP_CAPACITY>>,
-    ws: Box<Workspace<MAP_CAPACITY>>,
+    robots: Vec<Robot<N>>,
+    map: Box<SharedMap<N>>,
+    ws: Box<Workspace<N>>,
     coverage: CoverageCounter,
     config: RunConfig,
     now_us: u64,
@@ -177,27 +184,54 @@ pub struct Runner {
     last_sample: Option<(f32, f32)>,
 }
 
-impl fmt::Debug for Runner {
+impl<const N: usize> fmt::Debug for Runner<N> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Runner")
             .field("world", &self.world.name())
             .field("robots", &self.robots.len())
+            .field("capacity", &N)
             .field("now_s", &(self.now_us as f64 * 1e-6))
             .finish_non_exhaustive()
     }
 }
 
+/// Sets up a run sized to `world` (the smallest capacity of [`papillon::capacity`] that
+/// holds it) and runs it to the end: [`Runner::sized`] and [`Runner::run`] in one call.
+pub fn run_sized(
+    world: World,
+    dynamics: Dynamics,
+    config: RunConfig,
+) -> Result<RunReport, RunError> {
+    let cells = world.geometry().cell_count();
+    papillon::with_cell_capacity!(cells, N => {
+        Runner::<N>::sized(world, dynamics, config)?.run()
+    })
+    .unwrap_or(Err(RunError::MapTooLarge {
+        cells,
+        capacity: MAP_CAPACITY,
+    }))
+}
+
 impl Runner {
     /// Sets up a run in `world` (the truth is taken from its current state and start pose),
-    /// with `dynamics` (doors and people; empty for none).
+    /// with `dynamics` (doors and people; empty for none), on a map of [`FIXED_CAPACITY`]
+    /// cells (a bigger world is refused: size the runner with [`Runner::sized`]).
     pub fn new(world: World, dynamics: Dynamics, config: RunConfig) -> Result<Self, RunError> {
+        Self::sized(world, dynamics, config)
+    }
+}
+
+impl<const N: usize> Runner<N> {
+    /// [`Runner::new`] on a map of `N` cells (pick `N` with [`papillon::with_cell_capacity!`]).
+    pub fn sized(world: World, dynamics: Dynamics, config: RunConfig) -> Result<Self, RunError> {
         if config.robots == 0 || config.robots > MAX_ROBOTS {
             return Err(RunError::Robots(config.robots));
         }
         let g = *world.geometry();
-        if g.cell_count() > MAP_CAPACITY {
+        if g.cell_count() > N {
             return Err(RunError::MapTooLarge {
                 cells: g.cell_count(),
+                capacity: N,
             });
         }
         config.mission.validate()?;
@@ -261,8 +295,8 @@ impl Runner {
                 stall: std::collections::VecDeque::new(),
             });
         }
-        let map = SharedMap::<MAP_CAPACITY>::new_boxed(g, &config.mission)?;
-        let ws = Workspace::<MAP_CAPACITY>::new_boxed();
+        let map = SharedMap::<N>::new_boxed(g, &config.mission)?;
+        let ws = Workspace::<N>::new_boxed();
         let truth = world.truth();
         let rate = config.mission.laser.rate_hz;
         let scan_period_us = if rate.is_finite() && rate > 0.0 {
@@ -302,7 +336,7 @@ impl Runner {
     }
 
     /// The shared map.
-    pub fn map(&self) -> &SharedMap<MAP_CAPACITY> {
+    pub fn map(&self) -> &SharedMap<N> {
         &self.map
     }
 
@@ -317,7 +351,7 @@ impl Runner {
     }
 
     /// Robot `k`'s mission.
-    pub fn mission(&self, k: usize) -> &Mission<MAP_CAPACITY> {
+    pub fn mission(&self, k: usize) -> &Mission<N> {
         &self.robots[k].mission
     }
 
@@ -367,7 +401,7 @@ impl Runner {
     /// The time spent in `observer` is left out of the report's wall time.
     pub fn run_with(
         &mut self,
-        mut observer: impl FnMut(&Runner, Progress),
+        mut observer: impl FnMut(&Runner<N>, Progress),
     ) -> Result<RunReport, RunError> {
         let wall = Instant::now();
         let mut observing_s = 0.0;
@@ -694,6 +728,41 @@ mod tests {
         let e = Runner::new(blocked, Dynamics::new(), cfg).unwrap_err();
         assert!(matches!(e, RunError::StartBlocked { robot: 0, .. }), "{e}");
         assert!(e.to_string().contains("(0.10 m, 0.10 m)"), "{e}");
+    }
+
+    #[test]
+    fn a_runner_sized_to_the_world_holds_what_the_fixed_one_refuses() {
+        // The factory at 0.05 m: more cells than Runner::new's capacity, fewer than the
+        // largest.
+        let w = builtin::factory(0.05).unwrap();
+        let cells = w.geometry().cell_count();
+        assert!(cells > FIXED_CAPACITY && cells <= MAP_CAPACITY, "{cells}");
+        let mut cfg = RunConfig::new(MissionConfig::default(), 1, 3);
+        cfg.max_sim_time_s = 1.0;
+        let e = Runner::new(w.clone(), Dynamics::new(), cfg.clone()).unwrap_err();
+        assert_eq!(
+            e,
+            RunError::MapTooLarge {
+                cells,
+                capacity: FIXED_CAPACITY
+            }
+        );
+        assert!(e.to_string().contains(&FIXED_CAPACITY.to_string()), "{e}");
+        let report = run_sized(w, Dynamics::new(), cfg.clone()).unwrap();
+        assert_eq!(report.reason, Some(EndReason::TimeLimit));
+        assert!(report.known_cells > 0);
+        // Beyond the largest capacity: refused, the limit named.
+        let g = papillon::grid::GridGeometry::from_extent(
+            210.0,
+            210.0,
+            0.1,
+            papillon::geometry::Point2::default(),
+        )
+        .unwrap();
+        let big = World::new("big".to_string(), g);
+        let e = run_sized(big, Dynamics::new(), cfg).unwrap_err();
+        assert!(matches!(e, RunError::MapTooLarge { .. }), "{e}");
+        assert!(e.to_string().contains(&MAP_CAPACITY.to_string()), "{e}");
     }
 
     #[test]

@@ -68,6 +68,11 @@ pub enum Kind {
     Clutter,
     /// 18–28 m x 15–24 m: a house wing beside a pillared hall or a store.
     Mixed,
+    /// 100 m x 100 m: a storey of a large building (issue 24): a lattice of corridors of
+    /// 1.8–2.4 m (three across the whole width, three between each pair of them) around 16
+    /// blocks of about 23 m, each a house block, offices, a pillared hall or stores. Not in the
+    /// test set ([`Kind::ALL`]); `gen-floor-SEED`.
+    Floor,
 }
 
 impl Kind {
@@ -88,12 +93,16 @@ impl Kind {
             Kind::Hall => "hall",
             Kind::Clutter => "clutter",
             Kind::Mixed => "mixed",
+            Kind::Floor => "floor",
         }
     }
 
     /// The kind called `name`.
     pub fn from_name(name: &str) -> Option<Kind> {
-        Kind::ALL.into_iter().find(|k| k.name() == name)
+        Kind::ALL
+            .into_iter()
+            .chain([Kind::Floor])
+            .find(|k| k.name() == name)
     }
 }
 
@@ -576,8 +585,60 @@ fn layout(rng: &mut ProjectRng, kind: Kind, b: Rect, t: i32) -> Vec<Room> {
             );
             cut_corner(rng, &mut rooms, b, fx, fy);
         }
+        Kind::Floor => floor(rng, b, t, &mut rooms),
     }
     rooms
+}
+
+/// `n` bands of equal size across `lo..hi`, `gap` cells apart: their `(start, end)`.
+fn bands(lo: i32, hi: i32, n: i32, gap: i32) -> Vec<(i32, i32)> {
+    let each = (hi - lo - (n - 1) * gap) / n;
+    (0..n)
+        .map(|k| {
+            let a = lo + k * (each + gap);
+            (a, if k == n - 1 { hi } else { a + each })
+        })
+        .collect()
+}
+
+/// The rooms of a [`Kind::Floor`] storey inside `b`: a lattice of corridors around blocks.
+fn floor(rng: &mut ProjectRng, b: Rect, t: i32, rooms: &mut Vec<Room>) {
+    const BLOCKS: i32 = 4;
+    let ch = int(rng, 18, 24);
+    let rows = bands(b.y0, b.y1, BLOCKS, ch + 2 * t);
+    let cols = bands(b.x0, b.x1, BLOCKS, ch + 2 * t);
+    let mut corridors = Vec::new();
+    for (k, &(ry0, ry1)) in rows.iter().enumerate() {
+        if k + 1 < rows.len() {
+            // East-west, the whole width.
+            corridors.push(Rect::new(b.x0, ry1 + t, b.x1, rows[k + 1].0 - t));
+        }
+        // North-south segments in this row of blocks, open onto the corridors at their ends.
+        let y0 = if k > 0 { ry0 - t } else { ry0 };
+        let y1 = if k + 1 < rows.len() { ry1 + t } else { ry1 };
+        for j in 0..cols.len() - 1 {
+            corridors.push(Rect::new(cols[j].1 + t, y0, cols[j + 1].0 - t, y1));
+        }
+        for &(bx0, bx1) in &cols {
+            let block = Rect::new(bx0, ry0, bx1, ry1);
+            match random::below(rng, 4) {
+                0 => house_block(rng, block, t, rooms),
+                1 => {
+                    let mut rects = Vec::new();
+                    bsp(rng, block, t, 30, 60, &mut rects);
+                    push_rooms(rooms, rects, Style::Office);
+                }
+                2 => push_rooms(rooms, vec![block], Style::Pillars),
+                _ => {
+                    let mut rects = Vec::new();
+                    bsp(rng, block, t, 50, 120, &mut rects);
+                    push_rooms(rooms, rects, Style::Store);
+                }
+            }
+        }
+    }
+    push_rooms(rooms, corridors, Style::Corridor);
+    add_closets(rng, rooms, t, 0.2, false);
 }
 
 /// Where two rooms share a wall: the free rectangle a door would open, before choosing its
@@ -987,6 +1048,7 @@ impl Plan {
             Kind::Hall => (int(&mut rng, 160, 280), int(&mut rng, 130, 240)),
             Kind::Clutter => (int(&mut rng, 120, 220), int(&mut rng, 120, 200)),
             Kind::Mixed => (int(&mut rng, 180, 280), int(&mut rng, 150, 240)),
+            Kind::Floor => (1000, 1000),
         };
         let outer = int(&mut rng, 2, 3);
         let t = [1, 1, 1, 2, 2, 3][random::below(&mut rng, 6)];
@@ -1357,6 +1419,21 @@ mod tests {
             (p.name(), p.kind(), p.seed()),
             ("gen-office-5", Kind::Office, 5)
         );
+    }
+
+    #[test]
+    fn a_floor_is_a_connected_hundred_metre_square_of_many_rooms() {
+        let plan = Plan::by_name("gen-floor-1").unwrap();
+        assert_eq!(plan.kind(), Kind::Floor);
+        assert_eq!(plan.size_cells(), (1000, 1000));
+        let reach = plan.reach();
+        assert!(reach.is_connected(), "{} stranded", reach.stranded_cells());
+        // Most of the storey is floor a robot can reach, and it has many doors.
+        assert!(plan.free_area_m2() > 5000.0, "{} m2", plan.free_area_m2());
+        assert!(plan.openings().len() > 100, "{}", plan.openings().len());
+        let world = plan.world(0.1).unwrap();
+        assert_eq!(world.geometry().cell_count(), 1_000_000);
+        assert!(world.start_is_clear(0.25));
     }
 
     #[test]
