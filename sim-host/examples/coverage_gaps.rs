@@ -112,8 +112,8 @@ fn seen_from(
 /// in the planning layer's blocked band (`band`); `wall`: cells blocked in truth.
 fn frontier_report(
     world: &papillon_sim::world::World,
-    map: &OccupancyGrid<MAP_CAPACITY>,
-    trav: &Traversability<MAP_CAPACITY>,
+    map: &OccupancyGrid<FIXED_CAPACITY>,
+    trav: &Traversability<FIXED_CAPACITY>,
     reached: &[bool],
 ) {
     let g = *world.geometry();
@@ -294,7 +294,7 @@ fn main() {
                 map.log_odds_at(i)
             );
         }
-        let mut field = papillon::planner::DistanceField::<MAP_CAPACITY>::new_boxed();
+        let mut field = papillon::planner::DistanceField::<FIXED_CAPACITY>::new_boxed();
         eprintln!(
             "distance field on the mission's own layer: {:?}",
             field.compute(live, est)
