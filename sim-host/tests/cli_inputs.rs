@@ -419,7 +419,7 @@ fn a_sweep_with_values_no_run_can_have_is_refused_naming_the_field() {
         ("method", "methods", r#"["nope"]"#),
         ("map", "maps", r#"["nowhere"]"#),
         ("pop", "populations", "[0]"),
-        ("robots", "robots", "[100]"),
+        ("robots", "robots", "[101]"),
         ("runs", "runs", "1000000000000"),
     ] {
         let mut sweep = serde_json::json!({
