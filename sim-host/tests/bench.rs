@@ -186,3 +186,54 @@ fn bad_bench_arguments_exit_with_status_2_and_one_line() {
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
     }
 }
+
+/// The `scale` experiment, shrunk: two small generated storeys (240² and 320² cells), one and
+/// two robots, 3 simulated seconds each; every run is cut by the time limit and the cost table
+/// has a row per run with its cells, CPU time and rates.
+#[test]
+fn a_tiny_scale_experiment_writes_its_cost_table() {
+    let mut sweep = bench::select::named("scale", &bench::select::ThesisMaps::Find, 1).unwrap();
+    // The named experiment: four storeys from 24 to 192 m, 1 to 100 robots, cut in time.
+    assert_eq!(sweep.maps.len(), 4);
+    assert_eq!(sweep.robots, vec![1, 10, 50, 100]);
+    assert!(sweep.max_time_s.is_some());
+    sweep.maps = vec!["gen-floor-24m-1".into(), "gen-floor-32m-2".into()];
+    sweep.robots = vec![1, 2];
+    sweep.max_time_s = Some(3.0);
+    sweep.check_runnable().unwrap();
+    let out = scratch("scale");
+    let failed = run_sweep(&sweep, Shard::ALL, 1, &out, &sim::run, ProgressMode::Quiet).unwrap();
+    assert_eq!(failed, 0);
+    let records = record::read_jsonl(&out.join(bench::RUNS_FILE)).unwrap();
+    assert_eq!(records.len(), 4);
+    for r in &records {
+        let m = r.result.as_ref().unwrap();
+        let side = if r.spec.map_label == "gen-floor-24m-1" {
+            240
+        } else {
+            320
+        };
+        assert_eq!(m.cells, Some(side * side), "{}", r.spec.map_label);
+        assert_eq!(m.reason, "time-limit", "{}", r.spec.map_label);
+        assert!((m.sim_time_s - 3.0).abs() < 0.5, "{}", m.sim_time_s);
+        assert!(m.cpu_time_s.is_some_and(|c| c > 0.0), "{:?}", m.cpu_time_s);
+        assert!(m.decisions >= r.spec.robots as u32, "{}", m.decisions);
+    }
+    let cost = fs::read_to_string(out.join("cost.md")).unwrap();
+    let rows: Vec<&str> = cost
+        .lines()
+        .filter(|l| l.starts_with("| gen-floor"))
+        .collect();
+    assert_eq!(rows.len(), 4, "{cost}");
+    assert!(
+        rows[0].starts_with("| gen-floor-24m-1 | 57600 | 1 |"),
+        "{}",
+        rows[0]
+    );
+    assert!(
+        rows[3].starts_with("| gen-floor-32m-2 | 102400 | 2 |"),
+        "{}",
+        rows[3]
+    );
+    let _ = fs::remove_dir_all(&out);
+}

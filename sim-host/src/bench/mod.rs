@@ -8,11 +8,14 @@
 //! - [`sim`]: one run in the simulator ([`crate::runner`]);
 //! - [`record`]: per-run records (`runs.jsonl`, `results.csv`);
 //! - [`summary`]: per-group statistics (`summary.json`, `summary.md`);
-//! - [`plot`]: the plots.
+//! - [`plot`]: the plots;
+//! - [`cost`]: what a run costs the machine (CPU, peak memory) and the `scale` experiment's
+//!   cost table (`cost.md`).
 //!
 //! Every output is rebuilt from `runs.jsonl` ([`write_outputs`]), so the shards of a sweep
 //! run anywhere and [`merge`] combines their directories.
 
+pub mod cost;
 pub mod exec;
 pub mod params;
 pub mod plot;
@@ -137,6 +140,9 @@ pub fn write_outputs(
     files.push(write("summary.md", summary::markdown(name, &groups))?);
     if let Some(md) = thesis::markdown(name, records) {
         files.push(write("thesis.md", md)?);
+    }
+    if name == "scale" {
+        files.push(write("cost.md", cost::markdown(name, records))?);
     }
     files.extend(plot::write_plots(dir, records)?);
     Ok(files)

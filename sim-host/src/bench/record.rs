@@ -40,6 +40,18 @@ pub struct RunResult {
     /// Best fitness per generation of the run's first decision (robot 0), initial population
     /// first; empty for the frontier selectors.
     pub convergence: Vec<f32>,
+    /// Cells of the map (the world's grid at the run's cell size).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cells: Option<u64>,
+    /// CPU time of the thread that ran the mission's run loop (the span of `wall_time_s`, not
+    /// the world's generation nor the runner's set-up) \[s\]; `None` where the platform gives
+    /// none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpu_time_s: Option<f64>,
+    /// Peak resident memory of the whole process during the run \[MB\] (Linux's `VmHWM`,
+    /// reset before the run): the run's own peak only when runs do not overlap (`--jobs 1`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_rss_mb: Option<f64>,
 }
 
 /// One run: what was asked and what came out (or the error that stopped it).

@@ -175,7 +175,9 @@ pub fn check_overrides(overrides: &Overrides) -> Result<(), SelectError> {
 pub fn select(source: &Source, overrides: &Overrides) -> Result<Sweep, SelectError> {
     let sweep = match source {
         Source::Named { name, thesis_maps } => {
-            let runs = overrides.runs.unwrap_or(sweep::DEFAULT_RUNS);
+            let runs = overrides
+                .runs
+                .unwrap_or_else(|| sweep::default_runs_for(name));
             named(name, thesis_maps, runs)?
         }
         Source::File(path) => from_file(path)?,

@@ -47,11 +47,34 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
     })
 }
 
-/// Runs `spec` in the simulator.
+/// Runs `spec` in the simulator (sized to its world, as [`runner::run_sized`]), cut at its
+/// `max_time_s` if it has one; measures the CPU time of the run loop (the span of the
+/// report's `wall_time_s`, not the world's generation nor the runner's set-up) and the
+/// process's peak memory over the whole run ([`super::cost`]).
 pub fn run(spec: &RunSpec) -> Result<RunResult, String> {
-    let setup = Setup::new(&scenario(spec)?)?;
-    let report = runner::run_sized(setup.world.clone(), Dynamics::new(), setup.run.clone())
-        .map_err(|e| e.to_string())?;
+    let reset = super::cost::reset_peak_rss();
+    let Setup { world, mut run, .. } = Setup::new(&scenario(spec)?)?;
+    if let Some(t) = spec.max_time_s {
+        run.max_sim_time_s = t;
+    }
+    let cells = world.geometry().cell_count();
+    let (report, cpu_time_s) = papillon::with_cell_capacity!(cells, N => {
+        let mut r = runner::Runner::<N>::sized(world, Dynamics::new(), run)
+            .map_err(|e| e.to_string())?;
+        let cpu0 = super::cost::thread_cpu_s();
+        let report = r.run().map_err(|e| e.to_string())?;
+        let cpu = cpu0.zip(super::cost::thread_cpu_s()).map(|(a, b)| b - a);
+        (report, cpu)
+    })
+    .ok_or_else(|| {
+        runner::RunError::MapTooLarge {
+            cells,
+            capacity: runner::MAP_CAPACITY,
+        }
+        .to_string()
+    })?;
+    let cells = cells as u64;
+    let peak_rss_mb = super::cost::peak_rss_mb().filter(|_| reset);
     let convergence = report
         .robots
         .first()
@@ -75,5 +98,8 @@ pub fn run(spec: &RunSpec) -> Result<RunResult, String> {
         reason: report.reason.map_or("running", |r| r.name()).to_string(),
         coverage_curve: report.coverage_curve.clone(),
         convergence: convergence.unwrap_or_default(),
+        cells: Some(cells),
+        cpu_time_s,
+        peak_rss_mb,
     })
 }

@@ -35,13 +35,36 @@ pub const FRONTIER_SELECTORS: [&str; 2] = ["nearest-frontier", "frontier-utility
 pub const BOA_VARIANTS: [&str; 5] = ["boa", "mboa", "aboa", "saboa", "xboa"];
 
 /// The named experiments.
-pub const EXPERIMENTS: [&str; 5] = [
+pub const EXPERIMENTS: [&str; 6] = [
     "multi-robot",
     "horizon",
     "methods",
     "population",
     "boa-variants",
+    "scale",
 ];
+
+/// The maps of the `scale` experiment: generated square storeys
+/// ([`crate::world::generated`], `gen-floor-SIDEm-SEED`) of 24, 48, 96 and 192 m, at 0.1 m
+/// 240², 480², 960² and 1920² cells.
+pub const SCALE_MAPS: [&str; 4] = [
+    "gen-floor-24m-1",
+    "gen-floor-48m-1",
+    "gen-floor-96m-1",
+    "gen-floor-192m-1",
+];
+
+/// The robot counts of the `scale` experiment.
+pub const SCALE_ROBOTS: [usize; 4] = [1, 10, 50, 100];
+
+/// Simulated time each run of the `scale` experiment is cut at \[s\].
+pub const SCALE_MAX_TIME_S: f64 = 60.0;
+
+/// Runs per combination of a named experiment when `--runs` does not say: one for `scale`
+/// (a cost measurement, not a statistic), [`DEFAULT_RUNS`] for the others.
+pub fn default_runs_for(name: &str) -> usize {
+    if name == "scale" { 1 } else { DEFAULT_RUNS }
+}
 
 /// A decision strategy: short-term (one target per decision) or long-term (`targets` per
 /// decision).
@@ -161,6 +184,9 @@ pub struct Sweep {
     /// parameter name -> value, see [`super::params`]); `papillon-sim tune` writes them.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub params: BTreeMap<String, ParamMap>,
+    /// Simulated time each run is cut at \[s\] (`mission --max-time`); `None`: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_time_s: Option<f64>,
 }
 
 /// One run of a sweep.
@@ -203,6 +229,9 @@ pub struct RunSpec {
     /// Hyper-parameters replacing the preset's for this run's method (`None`: the preset's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub params: Option<ParamMap>,
+    /// Simulated time the run is cut at \[s\]; `None`: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_time_s: Option<f64>,
 }
 
 /// The label of a world spec: a built-in name as is, a file by its stem.
@@ -285,10 +314,20 @@ impl Sweep {
                 vec![5],
                 vec![1],
             ),
+            "scale" => (
+                owned(&SCALE_MAPS),
+                owned(&["xboa"]),
+                vec![Strategy::short()],
+                vec![5],
+                SCALE_ROBOTS.to_vec(),
+            ),
             _ => return None,
         };
         let mut maps = maps;
-        maps.extend(extra_maps.iter().cloned());
+        // `scale` measures cost on its own storeys; the thesis's maps add nothing to it.
+        if name != "scale" {
+            maps.extend(extra_maps.iter().cloned());
+        }
         Some(Self {
             name: name.to_string(),
             maps,
@@ -306,6 +345,7 @@ impl Sweep {
             resolution_m: default_resolution(),
             objectives: Vec::new(),
             params: BTreeMap::new(),
+            max_time_s: (name == "scale").then_some(SCALE_MAX_TIME_S),
         })
     }
 
@@ -422,6 +462,13 @@ impl Sweep {
         {
             return Err(format!("battery_steps must be positive, got {b}"));
         }
+        if let Some(t) = self.max_time_s
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(format!(
+                "max_time_s must be a positive number of seconds, got {t}"
+            ));
+        }
         Ok(())
     }
 
@@ -489,6 +536,7 @@ impl Sweep {
                                             battery_steps: self.battery_steps,
                                             resolution_m: self.resolution_m,
                                             params: self.params.get(method).cloned(),
+                                            max_time_s: self.max_time_s,
                                         });
                                     }
                                 }

@@ -278,6 +278,7 @@ pub fn sweep(name: &str, runs: usize, maps: &[String; 2]) -> Option<Sweep> {
         base_seed: super::sweep::BASE_SEED,
         resolution_m: 0.1,
         params: BTreeMap::new(),
+        max_time_s: None,
     })
 }
 

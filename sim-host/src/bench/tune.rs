@@ -144,6 +144,7 @@ impl Settings {
             base_seed: self.base_seed,
             resolution_m: self.resolution_m,
             params,
+            max_time_s: None,
         }
     }
 

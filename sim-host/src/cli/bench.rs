@@ -20,17 +20,18 @@ pub struct Args {
     /// Merge shard directories.
     #[command(subcommand)]
     pub command: Option<BenchCommand>,
-    /// Named experiment: multi-robot, horizon, methods, population, boa-variants; the
+    /// Named experiment: multi-robot, horizon, methods, population, boa-variants, scale (cost
+    /// on generated storeys of 240² to 1920² cells, 1 to 100 robots, 1 run); the
     /// thesis's, side by side with its tables: thesis-methods, thesis-methods-long,
     /// thesis-horizon, thesis-population, thesis-pop5, thesis-boa-variants,
     /// thesis-multi-robot, or thesis-all (all of them, each into OUT/NAME).
     #[arg(long, conflicts_with = "config")]
     pub experiment: Option<String>,
     /// Sweep file (JSON: maps, methods, strategies, populations, robots, runs, generations,
-    /// battery_steps, base_seed, resolution_m, objective(s), preset(s), params).
+    /// battery_steps, base_seed, resolution_m, objective(s), preset(s), params, max_time_s).
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Runs per combination (default: the sweep's, 10 for the named experiments).
+    /// Runs per combination (default: the sweep's; 10 for the named experiments, 1 for scale).
     #[arg(long, allow_negative_numbers = true)]
     pub runs: Option<usize>,
     /// Worker threads (default: one per core; at most 1024).

@@ -34,7 +34,8 @@
 //!    box where a disc of 0.35 m (P3-DX radius 0.25 m plus 0.1 m) fits, heading east.
 //!
 //! Names: `gen-NN` for the fixed test set ([`SET`], NN = 00..23) and `gen-KIND-SEED` for any
-//! seed, KIND one of `house`, `office`, `hall`, `clutter`, `mixed`.
+//! seed, KIND one of `house`, `office`, `hall`, `clutter`, `mixed`, `floor`; and
+//! `gen-floor-SIDEm-SEED` for a square storey of SIDE metres ([`FLOOR_SIDES_M`]).
 
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::GridGeometry;
@@ -71,7 +72,9 @@ pub enum Kind {
     /// 100 m x 100 m: a storey of a large building (issue 24): a lattice of corridors of
     /// 1.8–2.4 m (three across the whole width, three between each pair of them) around 16
     /// blocks of about 23 m, each a house block, offices, a pillared hall or stores. Not in the
-    /// test set ([`Kind::ALL`]); `gen-floor-SEED`.
+    /// test set ([`Kind::ALL`]); `gen-floor-SEED`. `gen-floor-SIDEm-SEED` draws a square storey
+    /// of SIDE metres (20 to 200, [`FLOOR_SIDES_M`]) with blocks of about the same size: one
+    /// block at 24 m, 2 x 2 at 48 m, 4 x 4 at 96 m, 8 x 8 at 192 m.
     Floor,
 }
 
@@ -105,6 +108,12 @@ impl Kind {
             .find(|k| k.name() == name)
     }
 }
+
+/// Side of the `gen-floor-SEED` storey \[m\].
+pub const FLOOR_SIDE_M: u32 = 100;
+/// The sides a `gen-floor-SIDEm-SEED` storey may have \[m\] (at 0.1 m, 200 m is 2000² cells,
+/// inside the largest capacity of [`papillon::capacity`]).
+pub const FLOOR_SIDES_M: std::ops::RangeInclusive<u32> = 20..=200;
 
 /// Number of plans in the fixed test set.
 pub const SET_LEN: usize = 24;
@@ -601,12 +610,16 @@ fn bands(lo: i32, hi: i32, n: i32, gap: i32) -> Vec<(i32, i32)> {
         .collect()
 }
 
+/// Lattice cells a block of a [`Kind::Floor`] storey aims at (blocks per side: the side
+/// over this, rounded, at least one; four on the 100 m storey).
+const FLOOR_BLOCK_CELLS: f32 = 250.0;
+
 /// The rooms of a [`Kind::Floor`] storey inside `b`: a lattice of corridors around blocks.
 fn floor(rng: &mut ProjectRng, b: Rect, t: i32, rooms: &mut Vec<Room>) {
-    const BLOCKS: i32 = 4;
+    let blocks = ((b.w() as f32 / FLOOR_BLOCK_CELLS).round() as i32).max(1);
     let ch = int(rng, 18, 24);
-    let rows = bands(b.y0, b.y1, BLOCKS, ch + 2 * t);
-    let cols = bands(b.x0, b.x1, BLOCKS, ch + 2 * t);
+    let rows = bands(b.y0, b.y1, blocks, ch + 2 * t);
+    let cols = bands(b.x0, b.x1, blocks, ch + 2 * t);
     let mut corridors = Vec::new();
     for (k, &(ry0, ry1)) in rows.iter().enumerate() {
         if k + 1 < rows.len() {
@@ -1012,13 +1025,34 @@ impl Plan {
     /// Generates the plan of `kind` for `seed` (a connected one, see the module docs).
     pub fn generate(kind: Kind, seed: u64) -> Plan {
         let name = format!("gen-{}-{seed}", kind.name());
+        Self::generate_named(&name, kind, seed, FLOOR_SIDE_M as i32 * 10)
+    }
+
+    /// Generates the square [`Kind::Floor`] storey of `side_m` metres for `seed`, named
+    /// `gen-floor-SIDEm-SEED`; `None` when `side_m` is outside [`FLOOR_SIDES_M`].
+    pub fn floor(side_m: u32, seed: u64) -> Option<Plan> {
+        if !FLOOR_SIDES_M.contains(&side_m) {
+            return None;
+        }
+        let name = format!("gen-floor-{side_m}m-{seed}");
+        Some(Self::generate_named(
+            &name,
+            Kind::Floor,
+            seed,
+            side_m as i32 * 10,
+        ))
+    }
+
+    /// A connected plan (or, after [`MAX_ATTEMPTS`], one without furniture); `floor_side` is
+    /// the side of a [`Kind::Floor`] storey in lattice cells.
+    fn generate_named(name: &str, kind: Kind, seed: u64, floor_side: i32) -> Plan {
         for attempt in 0..MAX_ATTEMPTS {
-            let plan = Self::draw(&name, kind, seed, attempt, true);
+            let plan = Self::draw(name, kind, seed, attempt, true, floor_side);
             if plan.reach().is_connected() {
                 return plan;
             }
         }
-        Self::draw(&name, kind, seed, MAX_ATTEMPTS, false)
+        Self::draw(name, kind, seed, MAX_ATTEMPTS, false, floor_side)
     }
 
     /// Plan `NN` of the fixed test set, named `gen-NN`.
@@ -1029,17 +1063,31 @@ impl Plan {
         Some(plan)
     }
 
-    /// The plan called `name` (`gen-NN` or `gen-KIND-SEED`), or `None`.
+    /// The plan called `name` (`gen-NN`, `gen-KIND-SEED` or `gen-floor-SIDEm-SEED`), or `None`.
     pub fn by_name(name: &str) -> Option<Plan> {
         let rest = name.strip_prefix("gen-")?;
         if rest.len() == 2 && rest.bytes().all(|b| b.is_ascii_digit()) {
             return Self::from_set(rest.parse().ok()?);
         }
         let (kind, seed) = rest.split_once('-')?;
+        if let Some((side, seed)) = seed.split_once('-') {
+            let side = side.strip_suffix('m')?;
+            if kind != Kind::Floor.name() || !side.bytes().all(|b| b.is_ascii_digit()) {
+                return None;
+            }
+            return Self::floor(side.parse().ok()?, seed.parse().ok()?);
+        }
         Some(Self::generate(Kind::from_name(kind)?, seed.parse().ok()?))
     }
 
-    fn draw(name: &str, kind: Kind, seed: u64, attempt: u64, furniture: bool) -> Plan {
+    fn draw(
+        name: &str,
+        kind: Kind,
+        seed: u64,
+        attempt: u64,
+        furniture: bool,
+        floor_side: i32,
+    ) -> Plan {
         let mut rng =
             random::seeded(seed.wrapping_add(attempt.wrapping_mul(0x9E37_79B9_7F4A_7C15)));
         let (w, h) = match kind {
@@ -1048,7 +1096,7 @@ impl Plan {
             Kind::Hall => (int(&mut rng, 160, 280), int(&mut rng, 130, 240)),
             Kind::Clutter => (int(&mut rng, 120, 220), int(&mut rng, 120, 200)),
             Kind::Mixed => (int(&mut rng, 180, 280), int(&mut rng, 150, 240)),
-            Kind::Floor => (1000, 1000),
+            Kind::Floor => (floor_side, floor_side),
         };
         let outer = int(&mut rng, 2, 3);
         let t = [1, 1, 1, 2, 2, 3][random::below(&mut rng, 6)];
@@ -1398,8 +1446,8 @@ impl Reach {
     }
 }
 
-/// The generated world called `name` (`gen-NN`, `gen-KIND-SEED`), or `None` if the name is
-/// not one.
+/// The generated world called `name` (`gen-NN`, `gen-KIND-SEED`, `gen-floor-SIDEm-SEED`), or
+/// `None` if the name is not one.
 pub fn by_name(name: &str, resolution_m: f32) -> Option<Result<World, WorldError>> {
     Plan::by_name(name).map(|p| p.world(resolution_m))
 }
@@ -1434,6 +1482,42 @@ mod tests {
         let world = plan.world(0.1).unwrap();
         assert_eq!(world.geometry().cell_count(), 1_000_000);
         assert!(world.start_is_clear(0.25));
+    }
+
+    #[test]
+    fn a_floor_takes_its_side_from_its_name() {
+        for (name, side, blocks) in [("gen-floor-24m-3", 240, 1), ("gen-floor-48m-3", 480, 2)] {
+            let plan = Plan::by_name(name).unwrap();
+            assert_eq!((plan.name(), plan.kind()), (name, Kind::Floor));
+            assert_eq!(plan.size_cells(), (side, side), "{name}");
+            assert!(plan.reach().is_connected(), "{name}");
+            // Blocks of about 23 m: a 24 m storey is one block, 48 m has corridors between four.
+            let rooms_per_block = plan.openings().len() as f32 / (blocks * blocks) as f32;
+            assert!(
+                rooms_per_block >= 2.0,
+                "{name}: {} doors",
+                plan.openings().len()
+            );
+            assert_eq!(
+                plan.world(0.1).unwrap().geometry().cell_count(),
+                (side * side) as usize
+            );
+        }
+        assert_eq!(
+            Plan::floor(24, 3).unwrap().name(),
+            Plan::by_name("gen-floor-24m-3").unwrap().name()
+        );
+        for bad in [
+            "gen-floor-19m-1",
+            "gen-floor-201m-1",
+            "gen-floor-24-1",
+            "gen-floor-m-1",
+            "gen-floor-+24m-1",
+            "gen-house-24m-1",
+            "gen-floor-24m-x",
+        ] {
+            assert!(Plan::by_name(bad).is_none(), "{bad}");
+        }
     }
 
     #[test]

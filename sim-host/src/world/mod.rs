@@ -233,7 +233,8 @@ impl World {
 
     /// A built-in world or a map file, chosen by `spec`:
     /// - `empty`, `house`, `factory`, `lab`: the built-in designs ([`builtin`]);
-    /// - `gen-NN`, `gen-KIND-SEED`: generated floor plans ([`generated`]);
+    /// - `gen-NN`, `gen-KIND-SEED`, `gen-floor-SIDEm-SEED`: generated floor plans
+    ///   ([`generated`]);
     /// - `*.csv`: the thesis's CSV format ([`csv`]), upsampled to `resolution_m`;
     /// - `*.png`, `*.pgm`: a plain image, one pixel per cell of `resolution_m` ([`image`]);
     /// - `*.map`: a Moving AI grid, one character per cell of `resolution_m` ([`movingai`]);
