@@ -18,7 +18,8 @@
 //!
 //! `PAPILLON_COMPARE_DECISIONS=1` prints each runner draw's decisions;
 //! `PAPILLON_COMPARE_NEAR_POCKETS=1` turns `ExploreConfig::near_pockets_first` on in the runner
-//! (with `PAPILLON_COMPARE_RUNNER_ONLY`: the binary keeps the board's setting, off).
+//! (with `PAPILLON_COMPARE_RUNNER_ONLY`: the binary keeps the board's setting, off);
+//! `PAPILLON_COMPARE_LOOK_AROUND=1` turns `MissionConfig::look_around` on in the runner.
 //!
 //! `PAPILLON_COMPARE_WORLD_GRID=1` gives the runner its own map (the world's extent) instead of
 //! the board's grid. It prints one line per seed and pump, then checks the targets of issue 26: coverage within
@@ -199,6 +200,11 @@ fn runner(map: &str, seed: u64, decision_s: f64, draw: u64) -> Outcome {
     // (the binary keeps the board's, off): what the rule would change, runner only.
     if std::env::var("PAPILLON_COMPARE_NEAR_POCKETS").is_ok() {
         config.mission.explore.near_pockets_first = true;
+    }
+    // PAPILLON_COMPARE_LOOK_AROUND=1: the runner with `MissionConfig::look_around` on (the
+    // binary keeps the default's).
+    if std::env::var("PAPILLON_COMPARE_LOOK_AROUND").is_ok() {
+        config.mission.look_around = true;
     }
     let report = Runner::new(world, Dynamics::new(), config)
         .unwrap_or_else(|e| panic!("runner on {map}: {e}"))

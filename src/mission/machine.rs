@@ -30,12 +30,14 @@ use super::{
 
 mod deciding;
 mod following;
+mod look_around;
 mod reactions;
 mod robots;
 mod senses;
 
 use deciding::{Errand, GoalRequest};
 use following::PathWatch;
+use look_around::LookAround;
 use reactions::{Escape, Holds};
 use robots::Yield;
 use senses::Senses;
@@ -64,6 +66,9 @@ enum Phase {
     Escaping(Escape),
     /// Waiting for, or stepping out of the way of, another robot.
     Yielding(Yield),
+    /// Turning in place before the first decision ([`MissionConfig::look_around`]; reported
+    /// as [`MissionState::Rotating`]).
+    LookingAround(LookAround),
     /// Finished.
     Done(DoneReason),
     /// Stopped by a fault.
@@ -75,7 +80,7 @@ impl Phase {
         match self {
             Phase::Starting => MissionState::Starting,
             Phase::Deciding => MissionState::Deciding,
-            Phase::Rotating => MissionState::Rotating,
+            Phase::Rotating | Phase::LookingAround(_) => MissionState::Rotating,
             Phase::Driving => MissionState::Driving,
             Phase::Replanning | Phase::Escaping(_) => MissionState::Replanning,
             Phase::Yielding(_) => MissionState::Yielding,
@@ -488,7 +493,7 @@ impl<const N: usize> Mission<N> {
             if !self.senses.ready() {
                 return MotionCommand::ZERO;
             }
-            self.phase = Phase::Deciding;
+            self.phase = self.after_start(now);
         }
         // Faults first: zero velocity, forget the path.
         if let Some(reason) = self.senses.fault_now(now, self.config.safety.max_input_age) {
@@ -529,6 +534,11 @@ impl<const N: usize> Mission<N> {
         }
         if let Phase::Escaping(escape) = self.phase
             && let Some(cmd) = self.escape_step(now, escape)
+        {
+            return cmd;
+        }
+        if let Phase::LookingAround(look) = self.phase
+            && let Some(cmd) = self.look_around_step(now, look)
         {
             return cmd;
         }

@@ -21,6 +21,9 @@
 //!
 //! - **Starting**: commands zero until the first odometry (which fixes the map-from-odom
 //!   transform at the start pose) and the first scan integrated.
+//! - **Looking around** (reported as Rotating; [`MissionConfig::look_around`], off by
+//!   default): before the first decision, a turn in place at 15 deg/s by the laser's blind
+//!   sector plus 10°, ended early when the safety monitor refuses it.
 //! - **Deciding**: a decision by the configured selector ([`SelectorKind`]), computed inside
 //!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` (no frontier reachable) counts
 //!   as a failed decision: [`MissionConfig::max_failed_decisions`] of them in a row end the
@@ -206,6 +209,14 @@ pub struct MissionConfig {
     /// [`Mission::end`]), drive back to the start position first, with the same planner and
     /// safety monitor, then report [`MissionEvent::Done`].
     pub return_to_start: bool,
+    /// Before the first decision, turn in place by the laser's blind sector (plus 10°) at
+    /// 15 deg/s, when the safety monitor lets the robot turn: the first decision then sees
+    /// behind the start pose (`machine/look_around.rs`). Only with an optimizer on the
+    /// efficient objective; the thesis objective and the frontier rules never turn. Default
+    /// off: on the lab (board pump) it saves a quarter to a half of the steps, on the
+    /// simulator's default house missions (seeds 25..34) it costs 10 steps on average
+    /// (`docs/experiments.md`, issue 26).
+    pub look_around: bool,
 }
 
 impl Default for MissionConfig {
@@ -239,6 +250,7 @@ impl Default for MissionConfig {
             localize: crate::localize::LocalizeConfig::default(),
             voltage: VoltageConfig::default(),
             return_to_start: false,
+            look_around: false,
         }
     }
 }

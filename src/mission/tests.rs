@@ -1585,3 +1585,74 @@ fn the_caller_can_end_a_mission() {
         .distance(start.position());
     assert!(truth <= 0.2, "{truth}");
 }
+
+/// Heading turned (sum of the per-period changes) and distance driven by robot 0 until its
+/// first decision, and whether it decided at all within `max_s`.
+fn motion_before_first_decision(config: MissionConfig, max_s: f32) -> (f32, f32, bool) {
+    let start = Pose2::new(1.0, 1.0, 0.3);
+    let mut sim = Sim::new(two_rooms(), &config, 3);
+    sim.add(config, start, Slip::none());
+    let mut turned = 0.0;
+    let mut last = sim.bots[0].true_pose();
+    while sim.secs() < max_s {
+        sim.period();
+        let bot = &sim.bots[0];
+        let decided = bot
+            .log
+            .iter()
+            .any(|(_, e)| matches!(e, MissionEvent::Decided { .. }));
+        if decided {
+            let driven = start.position().distance(last.position());
+            return (turned, driven, true);
+        }
+        let pose = bot.true_pose();
+        turned += crate::geometry::normalize_angle(pose.theta - last.theta).abs();
+        last = pose;
+    }
+    (turned, start.position().distance(last.position()), false)
+}
+
+/// With `look_around` on, the efficient objective's optimizer first turns in place by the
+/// laser's blind sector (the thesis laser sees 180°: 180° + 10° turned) before it decides;
+/// the thesis objective and the frontier rules decide at once, without turning.
+#[test]
+fn the_look_around_turns_by_the_blind_sector_before_the_first_decision_only_when_efficient() {
+    let on = MissionConfig {
+        look_around: true,
+        ..MissionConfig::default()
+    };
+    assert_eq!(
+        on.explore.objective,
+        crate::explore::ObjectiveKind::Efficient
+    );
+    let (turned, driven, decided) = motion_before_first_decision(on.clone(), 40.0);
+    assert!(decided, "no decision within 40 s");
+    let blind = core::f32::consts::TAU - 180f32.to_radians();
+    assert!(
+        turned >= blind && turned < blind + 30f32.to_radians(),
+        "turned {} deg before deciding",
+        turned.to_degrees()
+    );
+    assert!(driven < 0.05, "drove {driven} m while looking around");
+
+    let thesis = MissionConfig {
+        explore: crate::explore::ExploreConfig {
+            objective: crate::explore::ObjectiveKind::Thesis,
+            ..on.explore
+        },
+        ..on.clone()
+    };
+    let frontier = MissionConfig {
+        look_around: true,
+        ..frontier_config()
+    };
+    for (name, config) in [("thesis", thesis), ("nearest frontier", frontier)] {
+        let (turned, _, decided) = motion_before_first_decision(config, 40.0);
+        assert!(decided, "{name}: no decision within 40 s");
+        assert!(
+            turned < 1e-3,
+            "{name}: turned {} deg before deciding",
+            turned.to_degrees()
+        );
+    }
+}

@@ -93,6 +93,8 @@ impl<const N: usize> Mission<N> {
                         // another manoeuvre from the scan.
                         self.enter_replanning(ReplanCause::ObstacleAhead);
                     }
+                    // The turn at the start does not fit: the mission decides from here.
+                    Phase::LookingAround(_) => self.phase = Phase::Deciding,
                     Phase::Yielding(Yield::SteppingAside { other, .. }) => {
                         self.follower.clear();
                         self.phase = Phase::Yielding(Yield::Waiting {
