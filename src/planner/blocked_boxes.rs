@@ -223,12 +223,25 @@ mod tests {
         let mut boxes = BlockedBoxes::new_boxed();
         assert!(boxes.build(&*trav));
         let mut rng = seeded(2);
+        let clear = random_boxes_answer_as_counting(&boxes, &*trav, &mut rng, 2000);
+        assert!(clear > 20, "{clear}");
+    }
+
+    /// Asks `boxes` about `queries` random boxes (corners up to 2 cells outside the grid),
+    /// asserts each answer equals counting the blocked cells of `trav`, and returns how many
+    /// were clear.
+    fn random_boxes_answer_as_counting<const N: usize>(
+        boxes: &BlockedBoxes,
+        trav: &Traversability<N>,
+        rng: &mut crate::random::ProjectRng,
+        queries: usize,
+    ) -> u32 {
         let mut clear = 0;
-        for _ in 0..2000 {
+        for _ in 0..queries {
             let mut cell = || {
                 Cell::new(
-                    range_f32(&mut rng, -2.0, W as f32 + 2.0) as i32,
-                    range_f32(&mut rng, -2.0, H as f32 + 2.0) as i32,
+                    range_f32(rng, -2.0, W as f32 + 2.0) as i32,
+                    range_f32(rng, -2.0, H as f32 + 2.0) as i32,
                 )
             };
             let (a, b) = (cell(), cell());
@@ -239,7 +252,7 @@ mod tests {
             assert_eq!(boxes.is_clear(a, b), inside && none_blocked, "{a:?} {b:?}");
             clear += boxes.is_clear(a, b) as u32;
         }
-        assert!(clear > 20, "{clear}");
+        clear
     }
 
     #[test]
@@ -274,21 +287,7 @@ mod tests {
                 "case {case}"
             );
             assert!(boxes.build(&*trav));
-            for _ in 0..500 {
-                let mut cell = || {
-                    Cell::new(
-                        range_f32(&mut rng, -2.0, W as f32 + 2.0) as i32,
-                        range_f32(&mut rng, -2.0, H as f32 + 2.0) as i32,
-                    )
-                };
-                let (a, b) = (cell(), cell());
-                let inside = trav.geometry().contains(a) && trav.geometry().contains(b);
-                let none_blocked = (a.row.min(b.row)..=a.row.max(b.row)).all(|r| {
-                    (a.col.min(b.col)..=a.col.max(b.col)).all(|c| trav.is_passable(Cell::new(c, r)))
-                });
-                assert_eq!(boxes.is_clear(a, b), inside && none_blocked, "{a:?} {b:?}");
-                clear += boxes.is_clear(a, b) as u32;
-            }
+            clear += random_boxes_answer_as_counting(&boxes, &*trav, &mut rng, 500);
         }
         assert!(clear > 200, "{clear}");
     }
