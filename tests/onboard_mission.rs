@@ -30,6 +30,25 @@ fn run(arcos: &str, laser: &str, log: &Path, resume: bool) -> Child {
     run_on_sim_board(arcos, laser, log, if resume { &["--resume"] } else { &[] })
 }
 
+/// `papillon run --board BOARD` against `sim`'s TCP robot and laser, logging into `log`, run
+/// in `dir`.
+fn run_board(board: &str, sim: &Sim, log: &Path, dir: &Path) -> Child {
+    papillon(
+        &[
+            "run",
+            "--board",
+            board,
+            "--tcp",
+            &sim.arcos_tcp(),
+            "--laser",
+            &sim.laser(),
+            "--log-dir",
+            log.to_str().unwrap(),
+        ],
+        dir,
+    )
+}
+
 fn assert_exit_0(out: &Output) -> String {
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert_eq!(out.status.code(), Some(0), "stderr:\n{stderr}");
@@ -183,20 +202,7 @@ fn a_hundred_metre_storey_board_with_population_50_maps_and_decides() {
     );
     let dir = temp_dir("mission-floor");
     let log = dir.join("log");
-    let child = papillon(
-        &[
-            "run",
-            "--board",
-            board_path.to_str().unwrap(),
-            "--tcp",
-            &sim.arcos_tcp(),
-            "--laser",
-            &sim.laser(),
-            "--log-dir",
-            log.to_str().unwrap(),
-        ],
-        &dir,
-    );
+    let child = run_board(board_path.to_str().unwrap(), &sim, &log, &dir);
     wait_for_progress(&log, 1500, Duration::from_secs(120));
     // At least two decisions (population 50) before the stop.
     let deadline = Instant::now() + Duration::from_secs(300);
@@ -545,20 +551,7 @@ fn lab_missions_finish_at_a_tenth_of_a_percent_corruption() {
                 let board_path = dir.join("board.json");
                 std::fs::write(&board_path, board.to_string()).unwrap();
                 let log = dir.join("log");
-                let child = papillon(
-                    &[
-                        "run",
-                        "--board",
-                        board_path.to_str().unwrap(),
-                        "--tcp",
-                        &sim.arcos_tcp(),
-                        "--laser",
-                        &sim.laser(),
-                        "--log-dir",
-                        log.to_str().unwrap(),
-                    ],
-                    &dir,
-                );
+                let child = run_board(board_path.to_str().unwrap(), &sim, &log, &dir);
                 let out = wait_bounded(child, MISSION_LIMIT);
                 assert_exit_0(&out);
                 let (state, map) = saved(&log);
@@ -610,20 +603,7 @@ fn house_mission_manual_check() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(1800);
     let mut child = match &house_board {
-        Some(b) => papillon(
-            &[
-                "run",
-                "--board",
-                b,
-                "--tcp",
-                &sim.arcos_tcp(),
-                "--laser",
-                &sim.laser(),
-                "--log-dir",
-                log.to_str().unwrap(),
-            ],
-            &dir,
-        ),
+        Some(b) => run_board(b, &sim, &log, &dir),
         None => run(&sim.arcos_tcp(), &sim.laser(), &log, false),
     };
     // Past the limit the mission is stopped with SIGTERM and its saved map scored.
