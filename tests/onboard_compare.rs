@@ -31,7 +31,7 @@ mod e2e;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use e2e::{Sim, papillon, signal, temp_dir, wait_bounded};
+use e2e::{Sim, run_on_board, signal, temp_dir, wait_bounded};
 use papillon::config::BoardConfig;
 use papillon::geometry::Pose2;
 use papillon::onboard::mission::mission_config;
@@ -81,19 +81,12 @@ fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
     let sim = Sim::start(map, None, &["--seed", &seed_text, "--laser-noise", &noise]);
     let log = dir.join("log");
     let began = Instant::now();
-    let child = papillon(
-        &[
-            "run",
-            "--board",
-            board_path.to_str().unwrap(),
-            "--tcp",
-            &sim.arcos_tcp(),
-            "--laser",
-            &sim.laser(),
-            "--log-dir",
-            log.to_str().unwrap(),
-        ],
-        &dir,
+    let child = run_on_board(
+        board_path.to_str().unwrap(),
+        &sim.arcos_tcp(),
+        &sim.laser(),
+        &log,
+        &[],
     );
     let mut child = child;
     let mut end = None;

@@ -11,8 +11,8 @@ use std::process::{Child, Output};
 use std::time::{Duration, Instant};
 
 use e2e::{
-    Relay, Sim, papillon, read_truth, run_on_sim_board, signal, sim_board, sim_board_laser_noise,
-    temp_dir, unix_now_s, wait_bounded,
+    Relay, Sim, papillon, read_truth, run_on_board, run_on_sim_board, signal, sim_board,
+    sim_board_laser_noise, temp_dir, unix_now_s, wait_bounded,
 };
 use papillon::onboard::persist::{MapImage, MissionState, PGM_UNKNOWN, StateStore};
 use papillon_sim::serve::MAP_RESOLUTION_M;
@@ -28,25 +28,6 @@ fn board() -> String {
 /// `papillon run` on `boards/sim.json` against these endpoints, logging into `log`.
 fn run(arcos: &str, laser: &str, log: &Path, resume: bool) -> Child {
     run_on_sim_board(arcos, laser, log, if resume { &["--resume"] } else { &[] })
-}
-
-/// `papillon run --board BOARD` against `sim`'s TCP robot and laser, logging into `log`, run
-/// in `dir`.
-fn run_board(board: &str, sim: &Sim, log: &Path, dir: &Path) -> Child {
-    papillon(
-        &[
-            "run",
-            "--board",
-            board,
-            "--tcp",
-            &sim.arcos_tcp(),
-            "--laser",
-            &sim.laser(),
-            "--log-dir",
-            log.to_str().unwrap(),
-        ],
-        dir,
-    )
 }
 
 fn assert_exit_0(out: &Output) -> String {
@@ -202,7 +183,13 @@ fn a_hundred_metre_storey_board_with_population_50_maps_and_decides() {
     );
     let dir = temp_dir("mission-floor");
     let log = dir.join("log");
-    let child = run_board(board_path.to_str().unwrap(), &sim, &log, &dir);
+    let child = run_on_board(
+        board_path.to_str().unwrap(),
+        &sim.arcos_tcp(),
+        &sim.laser(),
+        &log,
+        &[],
+    );
     wait_for_progress(&log, 1500, Duration::from_secs(120));
     // At least two decisions (population 50) before the stop.
     let deadline = Instant::now() + Duration::from_secs(300);
@@ -551,7 +538,7 @@ fn lab_missions_finish_at_a_tenth_of_a_percent_corruption() {
                 let board_path = dir.join("board.json");
                 std::fs::write(&board_path, board.to_string()).unwrap();
                 let log = dir.join("log");
-                let child = run_board(board_path.to_str().unwrap(), &sim, &log, &dir);
+                let child = run_on_board(board_path.to_str().unwrap(), &sim.arcos_tcp(), &sim.laser(), &log, &[]);
                 let out = wait_bounded(child, MISSION_LIMIT);
                 assert_exit_0(&out);
                 let (state, map) = saved(&log);
@@ -603,7 +590,7 @@ fn house_mission_manual_check() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(1800);
     let mut child = match &house_board {
-        Some(b) => run_board(b, &sim, &log, &dir),
+        Some(b) => run_on_board(b, &sim.arcos_tcp(), &sim.laser(), &log, &[]),
         None => run(&sim.arcos_tcp(), &sim.laser(), &log, false),
     };
     // Past the limit the mission is stopped with SIGTERM and its saved map scored.

@@ -9,7 +9,9 @@ use std::path::Path;
 use std::process::{Child, Output};
 use std::time::{Duration, Instant};
 
-use e2e::{Sim, papillon, run_on_sim_board, signal, sim_board, temp_dir, wait_bounded};
+use e2e::{
+    Sim, papillon, run_on_board, run_on_sim_board, signal, sim_board, temp_dir, wait_bounded,
+};
 use papillon::onboard::persist::StateStore;
 
 fn board() -> String {
@@ -466,23 +468,13 @@ fn soak_mission(name: &str, seed: u64, spec: &str, resume: bool) -> Soaked {
     std::fs::write(&board_file, board.to_string()).unwrap();
     let log = dir.join("log");
     let run = |extra: &[&str]| {
-        let mut args = vec![
-            "run",
-            "--board",
+        run_on_board(
             board_file.to_str().unwrap(),
-            "--tcp",
             &sim.arcos_tcp(),
-            "--laser",
             &sim.laser(),
-            "--log-dir",
-            log.to_str().unwrap(),
-        ]
-        .into_iter()
-        .map(str::to_string)
-        .collect::<Vec<_>>();
-        args.extend(extra.iter().map(|s| s.to_string()));
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        papillon(&args, &dir)
+            &log,
+            extra,
+        )
     };
     let out = wait_bounded(run(&[]), SOAK_LIMIT);
     let (_, stderr) = text(&out);

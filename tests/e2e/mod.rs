@@ -224,11 +224,16 @@ pub fn sim_board_laser_noise() -> String {
 /// `extra` flags. The working directory is the log's parent: nothing may be written there but
 /// the log.
 pub fn run_on_sim_board(arcos: &str, laser: &str, log: &Path, extra: &[&str]) -> Child {
-    let board = sim_board();
+    run_on_board(&sim_board(), arcos, laser, log, extra)
+}
+
+/// `papillon run --board BOARD` against these endpoints, logging into `log`, plus `extra`
+/// flags; the working directory is the log's parent, as in [`run_on_sim_board`].
+pub fn run_on_board(board: &str, arcos: &str, laser: &str, log: &Path, extra: &[&str]) -> Child {
     let mut args = vec![
         "run",
         "--board",
-        &board,
+        board,
         "--tcp",
         arcos,
         "--laser",
