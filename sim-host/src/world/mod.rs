@@ -136,8 +136,10 @@ impl fmt::Display for WorldError {
         match self {
             WorldError::UnknownWorld { spec } => write!(
                 f,
-                "unknown world '{spec}': expected one of {}, gen-00..gen-23, gen-KIND-SEED or a .csv, .png, .pgm, .map or .yaml file",
-                builtin::NAMES.join(", ")
+                "unknown world '{spec}': expected one of {}, gen-00..gen-23, gen-KIND-SEED, gen-floor-SEED, gen-floor-SIDEm-SEED (SIDE {}..={} m) or a .csv, .png, .pgm, .map or .yaml file",
+                builtin::NAMES.join(", "),
+                generated::FLOOR_SIDES_M.start(),
+                generated::FLOOR_SIDES_M.end()
             ),
             WorldError::UnsupportedFormat { path, extension } => write!(
                 f,
@@ -486,6 +488,13 @@ mod tests {
     fn load_names_the_problem() {
         let e = World::load("nowhere", 0.1).unwrap_err();
         assert!(e.to_string().contains("unknown world 'nowhere'"), "{e}");
+        let e = World::load("gen-floor-300m-1", 0.1).unwrap_err();
+        assert!(
+            e.to_string().contains("unknown world 'gen-floor-300m-1'")
+                && e.to_string()
+                    .contains("gen-floor-SIDEm-SEED (SIDE 20..=200 m)"),
+            "{e}"
+        );
         let e = World::load("maps/x.map", 0.1).unwrap_err();
         assert!(e.to_string().starts_with("maps/x.map: cannot read"), "{e}");
         let e = World::load("a.yaml", 0.1).unwrap_err();
