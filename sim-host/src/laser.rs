@@ -92,7 +92,9 @@ fn cast_ray_along(
         t_delta_y,
         max_t,
     };
-    // The start cell is free: it may be the first of a run of open space.
+    // The start cell is free: the walk first jumps over the open space around it. (Jumping
+    // again from cells met along the way saved instructions but cost time: the extra branch
+    // and the column and row it keeps in the loop; see docs/benchmarks.md.)
     let c = world.clearance().at_index((row * width + col) as usize);
     let (col, row, t_max_x, t_max_y) = walk.skip_open((col, row), c, 0.0, t_max_x, t_max_y);
     let t = if inside {
@@ -196,11 +198,6 @@ impl Walk<'_> {
                     return Some(t);
                 }
                 t_max_x += self.t_delta_x;
-                if c >= SKIP_CLEARANCE {
-                    (col, row, t_max_x, t_max_y) =
-                        self.skip_open((col, row), c, t, t_max_x, t_max_y);
-                    index = row * self.width + col;
-                }
             } else {
                 let t = t_max_y;
                 if t > self.max_t {
@@ -216,11 +213,6 @@ impl Walk<'_> {
                     return Some(t);
                 }
                 t_max_y += self.t_delta_y;
-                if c >= SKIP_CLEARANCE {
-                    (col, row, t_max_x, t_max_y) =
-                        self.skip_open((col, row), c, t, t_max_x, t_max_y);
-                    index = row * self.width + col;
-                }
             }
         }
     }
