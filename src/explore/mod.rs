@@ -26,6 +26,7 @@
 pub mod blacklist;
 pub mod evaluation;
 pub mod frontier_utility;
+pub mod leg_memo;
 pub mod memo;
 pub mod near_pocket;
 pub mod nearest_frontier;
