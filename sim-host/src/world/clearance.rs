@@ -25,7 +25,7 @@ impl Clearance {
 
     /// The clearance of a `width` x (`blocked.len() / width`) world.
     pub fn new(width: usize, blocked: &[bool]) -> Self {
-        let height = if width == 0 { 0 } else { blocked.len() / width };
+        let height = blocked.len().checked_div(width).unwrap_or(0);
         let mut d: Vec<u8> = blocked
             .iter()
             .map(|&b| if b { 0 } else { Self::MAX })
