@@ -427,14 +427,20 @@ pub fn integrate_scan<const N: usize>(
         let evidence = ray.evidence(origin, inv_two_sigma_sq);
         let walk = raycast::traverse(&geom, origin, ray.end, |cell, index| {
             let occupied = index == hit_index;
-            if model.hits_before_misses && (occupied || hit_cells.binary_search(&index).is_ok()) {
+            if model.hits_before_misses && occupied {
                 // Its Occupied evidence is in already; no Free evidence from this scan.
                 return ControlFlow::Continue(());
             }
             // A cell saturated at the bound this evidence pushes towards stays there whatever
             // the weight (the sum is clamped back to the bound), so the weight is not needed.
+            // Tested before the search among the scan's returns: most cells a beam crosses
+            // are saturated Free, and a skipped cell is skipped either way.
             let current = grid.log_odds_at(index);
             if (occupied && current >= bounds.max) || (!occupied && current <= bounds.min) {
+                return ControlFlow::Continue(());
+            }
+            if model.hits_before_misses && hit_cells.binary_search(&index).is_ok() {
+                // Another beam's return: no Free evidence from this scan.
                 return ControlFlow::Continue(());
             }
             let delta = if occupied {

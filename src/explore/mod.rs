@@ -17,8 +17,9 @@
 //!   around them changes.
 //! - [`evaluation`]: a candidate's status and score, what the objective computes and the memo
 //!   keeps.
-//! - [`view_cache`] and [`memo`]: what one decision computes once and reuses (each viewpoint's
-//!   visible Unknown cells; each candidate's evaluation).
+//! - [`view_cache`], [`memo`] and [`leg_memo`]: what one decision computes once and reuses
+//!   (each viewpoint's visible Unknown cells; each candidate's evaluation; the waypoints of
+//!   each leg between two targets).
 //!
 //! Every selector implements [`TargetSelector`] and fills the same [`Decision`]; the caller
 //! measures the compute time (the core reads no clock).
@@ -26,6 +27,7 @@
 pub mod blacklist;
 pub mod evaluation;
 pub mod frontier_utility;
+pub mod leg_memo;
 pub mod memo;
 pub mod near_pocket;
 pub mod nearest_frontier;

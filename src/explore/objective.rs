@@ -106,6 +106,7 @@ use crate::sensor::LaserConfig;
 use crate::units;
 
 use super::evaluation::{CandidateStatus, Evaluation, WORST_FITNESS};
+use super::leg_memo::LegMemo;
 use super::memo::EvalMemo;
 use super::reachable::ReachableViewpoints;
 use super::tour::FrontierTour;
@@ -154,6 +155,8 @@ pub struct ExploreObjective<'m, const N: usize, P: Planner<N> = AStar<N>> {
     budget_steps: f32,
     config: ExploreConfig,
     memo: EvalMemo,
+    /// Legs between targets planned in this decision.
+    legs: LegMemo,
     views: Option<&'m mut ViewCache>,
     cached: bool,
     reachable: ReachableViewpoints,
@@ -220,6 +223,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             budget_steps: 0.0,
             config: ExploreConfig::default(),
             memo: EvalMemo::new(),
+            legs: LegMemo::new(),
             views,
             cached: false,
             reachable: ReachableViewpoints::new(),
@@ -279,6 +283,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         self.budget_steps = req.battery_steps - config.reserve_steps;
         self.config = *config;
         self.memo.clear();
+        self.legs.clear();
         let efficient = predict && config.objective == ObjectiveKind::Efficient;
         self.set_back_plans = efficient && config.setback_m > 0.0;
         if efficient {
@@ -504,22 +509,55 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                 self.targets[k] = geom.cell_center(cell);
                 self.target_len = k + 1;
             }
-            let planned = if k == 0 {
-                self.field.path_to(cell, &mut self.leg)
-            } else {
-                self.planner.plan(req.trav, prev, cell, &mut self.leg)
-            };
-            let planned = planned.map_err(|e| match e {
-                crate::planner::PlanError::CapacityExceeded { .. } => CandidateStatus::TooLong,
-                _ => CandidateStatus::Unreachable,
-            })?;
             let out = &mut self.waypoints[self.waypoint_len..];
-            let leg = &self.leg[..planned.len];
-            let n = match self.views.as_deref() {
-                Some(v) => prune_to_waypoints_with_boxes(req.trav, &v.boxes, leg, out),
-                None => prune_to_waypoints(req.trav, leg, out),
-            }
-            .map_err(|_| CandidateStatus::TooLong)?;
+            // A leg between two targets planned earlier in this decision: the same
+            // waypoints, copied (see `leg_memo`).
+            let remembered = if k == 0 {
+                None
+            } else {
+                self.legs.get(prev, cell)
+            };
+            let n = match remembered {
+                Some(Ok(w)) => {
+                    out.get_mut(..w.len())
+                        .ok_or(CandidateStatus::TooLong)?
+                        .copy_from_slice(w);
+                    w.len()
+                }
+                Some(Err(status)) => return Err(status),
+                None => {
+                    let planned = if k == 0 {
+                        self.field.path_to(cell, &mut self.leg)
+                    } else {
+                        self.planner.plan(req.trav, prev, cell, &mut self.leg)
+                    };
+                    let planned = planned.map_err(|e| match e {
+                        crate::planner::PlanError::CapacityExceeded { .. } => {
+                            CandidateStatus::TooLong
+                        }
+                        _ => CandidateStatus::Unreachable,
+                    });
+                    let planned = match planned {
+                        Ok(p) => p,
+                        Err(status) => {
+                            if k > 0 {
+                                self.legs.put(prev, cell, Err(status));
+                            }
+                            return Err(status);
+                        }
+                    };
+                    let leg = &self.leg[..planned.len];
+                    let n = match self.views.as_deref() {
+                        Some(v) => prune_to_waypoints_with_boxes(req.trav, &v.boxes, leg, out),
+                        None => prune_to_waypoints(req.trav, leg, out),
+                    }
+                    .map_err(|_| CandidateStatus::TooLong)?;
+                    if k > 0 {
+                        self.legs.put(prev, cell, Ok(&out[..n]));
+                    }
+                    n
+                }
+            };
             // Later legs start where the previous one ended: drop the repeated waypoint.
             if self.waypoint_len > 0 && n > 0 {
                 self.waypoints.copy_within(

@@ -38,7 +38,7 @@ impl CoverageCounter {
             cols: 0..g.width,
             rows: 0..g.height,
         };
-        self.update(grid, &[all]);
+        self.update(grid, [all]);
     }
 
     /// Re-reads the cells a scan integrated at `pose_map` may have changed: the cells the
@@ -61,7 +61,7 @@ impl CoverageCounter {
             0.5 * (hi.x - lo.x) + FIELD_MARGIN_M,
             0.5 * (hi.y - lo.y) + FIELD_MARGIN_M,
         );
-        self.update(grid, &[near, seen]);
+        self.update(grid, [near, seen]);
     }
 
     /// Re-reads the cells of the union of `rects`: row by row, the columns between the first
@@ -70,30 +70,31 @@ impl CoverageCounter {
     /// Only the parts inside the grid's known box are read: outside it no cell has ever been
     /// known, so none counts now or did at its last reading (a recount then costs what the
     /// explored region holds, not the map).
-    fn update<const N: usize>(&mut self, grid: &OccupancyGrid<N>, rects: &[CellRect]) {
+    fn update<const N: usize, const M: usize>(
+        &mut self,
+        grid: &OccupancyGrid<N>,
+        rects: [CellRect; M],
+    ) {
         let k = grid.known_box();
-        let rects: Vec<CellRect> = rects
-            .iter()
-            .map(|r| CellRect {
-                cols: r.cols.start.max(k.col_min)..r.cols.end.min(k.col_end),
-                rows: r.rows.start.max(k.row_min)..r.rows.end.min(k.row_end),
-            })
-            .filter(|r| !r.cols.is_empty() && !r.rows.is_empty())
-            .collect();
-        let rects = rects.as_slice();
+        // Clipped in place (no allocation per scan); an emptied rectangle takes no part.
+        let rects = rects.map(|r| CellRect {
+            cols: r.cols.start.max(k.col_min)..r.cols.end.min(k.col_end),
+            rows: r.rows.start.max(k.row_min)..r.rows.end.min(k.row_end),
+        });
+        let rects = || {
+            rects
+                .iter()
+                .filter(|r| !r.cols.is_empty() && !r.rows.is_empty())
+        };
         let width = grid.geometry().width;
-        let rows_from = rects.iter().map(|r| r.rows.start).min().unwrap_or(0);
-        let rows_to = rects.iter().map(|r| r.rows.end).max().unwrap_or(0);
+        let rows_from = rects().map(|r| r.rows.start).min().unwrap_or(0);
+        let rows_to = rects().map(|r| r.rows.end).max().unwrap_or(0);
         let log_odds = grid.log_odds();
         // Branch-free over each row (the compiler vectorises it): a cell counts when it is
         // observable and known; `known` only ever holds observable cells.
         let (mut now_known, mut was_known) = (0usize, 0usize);
         for row in rows_from..rows_to {
-            let in_row = || {
-                rects
-                    .iter()
-                    .filter(|r| r.rows.contains(&row) && !r.cols.is_empty())
-            };
+            let in_row = || rects().filter(|r| r.rows.contains(&row));
             let (Some(c0), Some(c1)) = (
                 in_row().map(|r| r.cols.start).min(),
                 in_row().map(|r| r.cols.end).max(),

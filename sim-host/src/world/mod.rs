@@ -8,6 +8,7 @@
 //! map_server YAML + PGM maps ([`rosmap`]). Ground truth for scoring lives in [`truth`].
 
 pub mod builtin;
+pub mod clearance;
 pub mod csv;
 pub mod generated;
 pub mod image;
@@ -17,10 +18,13 @@ pub mod truth;
 
 use std::fmt;
 use std::path::Path;
+use std::sync::OnceLock;
 
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::{Cell, CellClass, GridError, GridGeometry, LogOddsBounds, OccupancyGrid};
 use papillon::mapfile::MapImage;
+
+use self::clearance::Clearance;
 
 pub use truth::Truth;
 
@@ -200,6 +204,19 @@ pub struct World {
     geometry: GridGeometry,
     blocked: Vec<bool>,
     start: Pose2,
+    /// The blocked cells' [`Clearance`], computed at its first use after a change.
+    clearance: ClearanceCache,
+}
+
+/// A world's clearance, worked out when first asked for and dropped when a cell changes. It
+/// is a function of the bitmap, so it takes no part in comparisons.
+#[derive(Clone, Debug, Default)]
+struct ClearanceCache(OnceLock<Clearance>);
+
+impl PartialEq for ClearanceCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 impl World {
@@ -210,6 +227,7 @@ impl World {
             blocked: vec![false; geometry.cell_count()],
             geometry,
             start: DEFAULT_START,
+            clearance: ClearanceCache::default(),
         }
     }
 
@@ -230,6 +248,7 @@ impl World {
             geometry,
             blocked,
             start: DEFAULT_START,
+            clearance: ClearanceCache::default(),
         })
     }
 
@@ -342,9 +361,20 @@ impl World {
 
     /// Blocks or frees one cell; cells outside the grid are ignored.
     pub fn set_blocked(&mut self, cell: Cell, blocked: bool) {
-        if let Some(i) = self.geometry.index(cell) {
+        if let Some(i) = self.geometry.index(cell)
+            && self.blocked[i] != blocked
+        {
             self.blocked[i] = blocked;
+            self.clearance.0.take();
         }
+    }
+
+    /// Per cell, the chessboard distance \[cells\] to the nearest blocked cell or the grid's
+    /// edge ([`Clearance`]), worked out at the first call after a change.
+    pub fn clearance(&self) -> &Clearance {
+        self.clearance
+            .0
+            .get_or_init(|| Clearance::new(self.geometry.width, &self.blocked))
     }
 
     /// Blocks or frees every cell whose centre lies in `[x0, x1) x [y0, y1)` \[m\].
@@ -450,6 +480,25 @@ impl World {
         let c1 = ((p.x + radius_m - g.origin.x) / r).floor() as i32;
         let r0 = ((p.y - radius_m - g.origin.y) / r).floor() as i32;
         let r1 = ((p.y + radius_m - g.origin.y) / r).floor() as i32;
+        // Open space: when the cell holding `p` is farther from every blocked cell (and the
+        // grid's edge) than from any cell of the box, no cell of the box is blocked and the
+        // loop below would find nothing.
+        if p.x.is_finite() && p.y.is_finite() && radius_m >= 0.0 {
+            let (col, row) = (
+                ((p.x - g.origin.x) / r).floor() as i32,
+                ((p.y - g.origin.y) / r).floor() as i32,
+            );
+            if let Some(i) = g.index(Cell::new(col, row)) {
+                let (col, row) = (i64::from(col), i64::from(row));
+                let reach = (col - i64::from(c0))
+                    .max(i64::from(c1) - col)
+                    .max(row - i64::from(r0))
+                    .max(i64::from(r1) - row);
+                if i64::from(self.clearance().at_index(i)) > reach {
+                    return 0.0;
+                }
+            }
+        }
         let mut depth = 0.0f32;
         for row in r0..=r1 {
             let y0 = g.origin.y + row as f32 * r;
@@ -471,6 +520,60 @@ impl World {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`World::wall_penetration`] without its open-space shortcut: every cell of the box.
+    fn wall_penetration_by_cells(w: &World, p: Point2, radius_m: f32) -> f32 {
+        let g = w.geometry();
+        let r = g.resolution_m;
+        let c0 = ((p.x - radius_m - g.origin.x) / r).floor() as i32;
+        let c1 = ((p.x + radius_m - g.origin.x) / r).floor() as i32;
+        let r0 = ((p.y - radius_m - g.origin.y) / r).floor() as i32;
+        let r1 = ((p.y + radius_m - g.origin.y) / r).floor() as i32;
+        let mut depth = 0.0f32;
+        for row in r0..=r1 {
+            let y0 = g.origin.y + row as f32 * r;
+            let dy = (y0 - p.y).max(p.y - (y0 + r)).max(0.0);
+            for col in c0..=c1 {
+                if w.is_blocked(Cell::new(col, row)) {
+                    let x0 = g.origin.x + col as f32 * r;
+                    let dx = (x0 - p.x).max(p.x - (x0 + r)).max(0.0);
+                    depth = depth.max(radius_m - (dx * dx + dy * dy).sqrt());
+                }
+            }
+        }
+        depth
+    }
+
+    #[test]
+    fn wall_penetration_is_the_cell_by_cell_answer_in_open_space_too() {
+        let mut rng = papillon::random::seeded(3);
+        let g = GridGeometry::from_extent(10.0, 8.0, 0.1, Point2::default()).unwrap();
+        let mut w = World::new("blocks", g);
+        let mut touching = 0;
+        for round in 0..3 {
+            // More blocks each round: the clearance must follow the changes.
+            for _ in 0..4 {
+                let x = papillon::random::range_f32(&mut rng, 0.0, 10.0);
+                let y = papillon::random::range_f32(&mut rng, 0.0, 8.0);
+                w.fill_rect(x, y, x + 0.4, y + 0.2, true);
+            }
+            for _ in 0..5_000 {
+                let p = Point2::new(
+                    papillon::random::range_f32(&mut rng, -0.5, 10.5),
+                    papillon::random::range_f32(&mut rng, -0.5, 8.5),
+                );
+                let radius_m = papillon::random::range_f32(&mut rng, 0.0, 0.6);
+                let want = wall_penetration_by_cells(&w, p, radius_m);
+                assert_eq!(
+                    w.wall_penetration(p, radius_m).to_bits(),
+                    want.to_bits(),
+                    "round {round}: {p:?}, radius {radius_m}"
+                );
+                touching += (want > 0.0) as usize;
+            }
+        }
+        assert!(touching > 500 && touching < 14_000, "{touching} touching");
+    }
 
     #[test]
     fn rectangles_fill_cells_by_centre() {
