@@ -34,7 +34,7 @@ use papillon::geometry::Pose2;
 use papillon::grid::CellClass;
 use papillon::mission::{DoneReason, Mission, MissionEvent, MissionState, SharedMap, Workspace};
 use papillon::random::{self, ProjectRng};
-use papillon::sensor::Scan;
+use papillon::sensor::{LaserConfig, Scan};
 
 use crate::dynamic::Dynamics;
 use crate::laser::LaserSim;
@@ -140,6 +140,24 @@ fn deciding_now(events: &[MissionEvent]) -> bool {
     events
         .iter()
         .any(|e| matches!(e, MissionEvent::Decided { .. }))
+}
+
+/// The discs of `discs` a laser on a robot at `pose` can see: those whose boundary comes
+/// within the laser's maximum range of the laser's origin (with a centimetre to spare), into
+/// `out` in their order. A beam returns from a disc only at a distance within the range
+/// ([`crate::laser::LaserSim::scan_into`] takes the nearest return), so a scan against these
+/// is the scan against all of `discs`, bit for bit; the filter is one squared distance per
+/// disc, against the beams x discs ray tests it saves (a hundred robots: 100 discs for each
+/// of 181 beams).
+pub fn discs_in_reach(laser: &LaserConfig, pose: Pose2, discs: &[Disc], out: &mut Vec<Disc>) {
+    let origin = pose.compose(laser.mount).position();
+    out.clear();
+    out.extend(discs.iter().copied().filter(|d| {
+        let reach = laser.max_range_m + d.radius_m + 0.01;
+        let (dx, dy) = (d.center.x - origin.x, d.center.y - origin.y);
+        // A NaN range keeps every disc (the comparison is false), as the laser would.
+        !(dx * dx + dy * dy > reach * reach)
+    }));
 }
 
 /// What [`Runner::run_with`] reports to its observer.
@@ -499,6 +517,7 @@ impl<const N: usize> Runner<N> {
     fn scan_all(&mut self, now: Time) -> Result<(), RunError> {
         let mut discs = self.robot_discs();
         discs.extend(self.dynamics.people_discs(self.sim_time_s()));
+        let mut near = Vec::with_capacity(discs.len());
         for ((r, body), scan) in self
             .robots
             .iter_mut()
@@ -506,8 +525,12 @@ impl<const N: usize> Runner<N> {
             .zip(&mut self.scans)
         {
             let pose = body.true_pose();
+            // Only the discs within the laser's reach can return (`discs_in_reach`): the
+            // same scan as against all of them, at a cost that does not grow with the robots
+            // far away.
+            discs_in_reach(r.laser.config(), pose, &discs, &mut near);
             // A laser with more beams than a scan holds keeps the first ones.
-            let _ = r.laser.scan_into(&self.world, pose, &discs, scan);
+            let _ = r.laser.scan_into(&self.world, pose, &near, scan);
             r.feed_odometry(now, body);
             let turning = self
                 .config
