@@ -155,8 +155,8 @@ pub fn discs_in_reach(laser: &LaserConfig, pose: Pose2, discs: &[Disc], out: &mu
     out.extend(discs.iter().copied().filter(|d| {
         let reach = laser.max_range_m + d.radius_m + 0.01;
         let (dx, dy) = (d.center.x - origin.x, d.center.y - origin.y);
-        // A NaN range keeps every disc (the comparison is false), as the laser would.
-        !(dx * dx + dy * dy > reach * reach)
+        // A NaN range keeps every disc (no ordering), as the laser would test them all.
+        (dx * dx + dy * dy).partial_cmp(&(reach * reach)) != Some(std::cmp::Ordering::Greater)
     }));
 }
 
@@ -737,6 +737,48 @@ mod tests {
     use crate::physics::SlipConfig;
     use crate::world::builtin;
     use papillon::mission::MissionConfig;
+
+    #[test]
+    fn a_laser_sees_the_same_against_the_discs_in_reach() {
+        // Random robots and poses in the house, the thesis's and the LMS1xx's lasers (4 m and
+        // 20 m, one mounted ahead of the centre): the scan against the discs in reach is the
+        // scan against all of them, bit for bit, and most discs are out of the 4 m reach.
+        let w = builtin::house(0.1).unwrap();
+        let g = *w.geometry();
+        let (wm, hm) = (g.width as f32 * 0.1, g.height as f32 * 0.1);
+        let mut rng = random::seeded(11);
+        let mut near = Vec::new();
+        let (mut kept, mut total) = (0, 0);
+        for laser in [LaserConfig::thesis(), LaserConfig::lms1xx()] {
+            for trial in 0..200 {
+                let discs: Vec<Disc> = (0..30)
+                    .map(|_| {
+                        Disc::new(
+                            papillon::geometry::Point2::new(
+                                random::range_f32(&mut rng, 0.0, wm),
+                                random::range_f32(&mut rng, 0.0, hm),
+                            ),
+                            0.25,
+                        )
+                    })
+                    .collect();
+                let pose = Pose2::new(
+                    random::range_f32(&mut rng, 0.0, wm),
+                    random::range_f32(&mut rng, 0.0, hm),
+                    random::range_f32(&mut rng, -3.2, 3.2),
+                );
+                discs_in_reach(&laser, pose, &discs, &mut near);
+                if laser.max_range_m < 5.0 {
+                    kept += near.len();
+                    total += discs.len();
+                }
+                let all = LaserSim::new(laser, trial).scan(&w, pose, &discs);
+                let some = LaserSim::new(laser, trial).scan(&w, pose, &near);
+                assert_eq!(all, some, "trial {trial} at {pose:?}");
+            }
+        }
+        assert!(kept < total / 2, "{kept} of {total} discs kept at 4 m");
+    }
 
     #[test]
     fn bad_setups_are_refused() {
