@@ -61,8 +61,8 @@ enum Phase {
     Driving,
     /// About to plan a fresh path to the errand's remaining targets.
     Replanning,
-    /// Backing or turning away from the nearest laser return, then replanning (reported as
-    /// [`MissionState::Replanning`]).
+    /// Driving or turning out of a place where the plans keep being refused, then replanning
+    /// (reported as [`MissionState::Replanning`]).
     Escaping(Escape),
     /// Waiting for, or stepping out of the way of, another robot.
     Yielding(Yield),

@@ -1,7 +1,7 @@
 //! What the mission does when the safety monitor intervenes: an obstacle ahead goes on the
 //! map and the path is planned again (or the robot yields, when the obstacle is another
 //! robot); a bumper contact is remembered; repeated holds without progress start an escape,
-//! a slow manoeuvre away from the nearest laser return.
+//! a slow manoeuvre out of the place, the way the body fits (straight to where it can turn).
 
 use core::time::Duration;
 
@@ -46,9 +46,9 @@ const ESCAPE_TURN_DEG_S: i16 = 20;
 /// Longest escape manoeuvre.
 const ESCAPE_TIMEOUT: Duration = Duration::from_secs(6);
 
-/// A slow manoeuvre away from the nearest laser return, after repeated obstacle holds: the
-/// plans kept starting with a command the safety monitor refuses (the robot too close to a
-/// wall to turn, facing it). Every command still goes through the monitor.
+/// A slow manoeuvre out of a place where the plans kept starting with a command the safety
+/// monitor refuses (the robot too close to a wall to turn), after repeated obstacle holds.
+/// Every command still goes through the monitor.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Escape {
     command: MotionCommand,
