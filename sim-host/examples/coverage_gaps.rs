@@ -197,7 +197,48 @@ fn main() {
     let setup = setup_from_args(&cli.args).unwrap_or_else(|e| panic!("{e}"));
     let world = setup.world.clone();
     let mut runner = Runner::new(world.clone(), Dynamics::new(), setup.run.clone()).unwrap();
-    let report = runner.run().unwrap();
+    // GAPS_TRACE=FROM,TO: every control period between those simulated times [s], the true
+    // pose, the body's speed and turn rate, the mission's phase, the safety monitor's state,
+    // the next waypoints and the mission's events.
+    let trace = std::env::var("GAPS_TRACE").ok().and_then(|v| {
+        let (a, b) = v.split_once(',')?;
+        Some((a.parse::<f64>().ok()?, b.parse::<f64>().ok()?))
+    });
+    let mut logged = 0;
+    let report = runner
+        .run_with(|r, progress| {
+            let Some((from, to)) = trace else { return };
+            let t = r.sim_time_s();
+            if !matches!(progress, papillon_sim::runner::Progress::Controlled) || t < from || t > to
+            {
+                logged = r.events().len();
+                return;
+            }
+            let (b, m) = (r.body(0), r.mission(0));
+            let p = b.true_pose();
+            let path: Vec<String> = m
+                .path()
+                .iter()
+                .take(3)
+                .map(|w| format!("({:.2},{:.2})", w.x, w.y))
+                .collect();
+            eprintln!(
+                "{t:7.1} true ({:.2},{:.2},{:.2}) v {:4.0} w {:4.0} {:?} {:?} path {}",
+                p.x,
+                p.y,
+                p.theta,
+                b.speed_mm_s(),
+                b.turn_deg_s(),
+                m.state(),
+                m.monitor().state(),
+                path.join(" ")
+            );
+            for e in &r.events()[logged..] {
+                eprintln!("        {:?}", e.event);
+            }
+            logged = r.events().len();
+        })
+        .unwrap();
     if std::env::var_os("GAPS_EVENTS").is_some() {
         let ev = runner.events();
         for e in &ev[ev.len().saturating_sub(40)..] {

@@ -605,6 +605,33 @@ impl SafetyMonitor {
         self.nearest_in_path(v, points)
     }
 
+    /// The nearest obstacle remembered on the map (`remembered`, base frame \[m\], as in
+    /// [`SafetyInputs::remembered`]) that `v` would run into, by the rule [`Self::filter`]
+    /// applies: turning in place and backing only (driving forward, the laser watches).
+    pub fn remembered_in_path(&self, v: Velocity, remembered: &[Point2]) -> Option<(f32, Point2)> {
+        if v.speed_mm_s() > 0 {
+            return None;
+        }
+        self.nearest_in_path(v, remembered.iter().map(|&p| (p, p)))
+    }
+
+    /// How far from the robot's centre a remembered obstacle can matter when turning in place
+    /// or backing at up to `backing_mm_s` \[m\]: the turning circle with its margin, and the
+    /// corners of the corridor watched behind the body (its rear edge plus the stopping
+    /// distance, half its width plus the side margin). A caller passing
+    /// [`SafetyInputs::remembered`] collects the map's obstacles this far out; a smaller
+    /// radius leaves the rear corners unwatched (a back-off into a wall the 180° laser
+    /// cannot see).
+    pub fn remembered_reach_m(&self, backing_mm_s: i16) -> f32 {
+        let fp = self.config.footprint;
+        let v = mm_to_m(f32::from(backing_mm_s.saturating_abs()));
+        let behind = math::hypot(
+            fp.rear_m + self.stopping_distance_m(v),
+            self.corridor_half_width_m(v),
+        );
+        (fp.radius_m + self.config.turn_margin_m).max(behind)
+    }
+
     /// The nearest of `points` (base frame \[m\]) that `v` would run into: its clearance \[m\]
     /// and the point. Each point comes with where it may truly lie farthest out along its beam
     /// (the same point for a remembered obstacle): a point in the corridor's side margin, not
@@ -960,6 +987,33 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A wall behind a rear corner, which a back-off runs into: the map's obstacles must be
+    /// collected as far out as that corner of the corridor watched behind, farther than the
+    /// turning circle (issue 17: a radius of the turning circle alone let escapes back into a
+    /// wall behind the laser, gen-15 seed 27).
+    #[test]
+    fn remembered_obstacles_reach_the_rear_corners_of_a_back_off() {
+        let b = Bench::new();
+        let fp = b.monitor.config().footprint;
+        let back = MotionCommand {
+            speed_mm_s: -100,
+            turn_rate_deg_s: 0,
+        };
+        let v = b.monitor.limits().clamp(back);
+        // Just behind the rear corner, inside the corridor watched at this speed.
+        let corner = Point2::new(-fp.rear_m - 0.02, -0.5 * fp.width_m);
+        let reach = b.monitor.remembered_reach_m(100);
+        assert!(math::hypot(corner.x, corner.y) <= reach, "{reach}");
+        assert!(reach > fp.radius_m + b.monitor.config().turn_margin_m);
+        assert!(b.monitor.remembered_in_path(v, &[corner]).is_some());
+        // Driving forward, the map's obstacles are not checked (the laser watches).
+        assert!(
+            b.monitor
+                .remembered_in_path(b.monitor.limits().clamp(forward(100)), &[corner])
+                .is_none()
+        );
     }
 
     #[test]

@@ -105,8 +105,8 @@ pub fn creep_near_obstacles(
 pub const NARROW_LOOKAHEAD_M: f32 = 0.4;
 
 /// The Occupied cells of `grid` within `radius_m` of the robot at `pose`, as the point of
-/// each cell nearest the robot, in the robot's frame, into `out` (the nearest first fill it;
-/// the rest are dropped). What the laser cannot see (behind a 180° laser, inside its blind
+/// each cell nearest the robot, in the robot's frame, into `out` (ring by ring outward from
+/// the robot's cell, so the nearest fill it first; the rest are dropped). What the laser cannot see (behind a 180° laser, inside its blind
 /// zone) the map still knows: the safety monitor checks turns and back-offs against it.
 pub fn remembered_obstacles<const N: usize>(
     grid: &crate::grid::OccupancyGrid<N>,
@@ -124,8 +124,19 @@ pub fn remembered_obstacles<const N: usize>(
         return;
     };
     let (sin, cos) = (crate::math::sin(pose.theta), crate::math::cos(pose.theta));
-    for dr in -reach..=reach {
-        for dc in -reach..=reach {
+    // Square rings of cells around the robot's cell, the nearest first.
+    let ring = |k: i32| {
+        (-k..=k).flat_map(move |dr| {
+            let step = if dr.abs() == k {
+                1
+            } else {
+                (2 * k).max(1) as usize
+            };
+            (-k..=k).step_by(step).map(move |dc| (dr, dc))
+        })
+    };
+    for (dr, dc) in (0..=reach).flat_map(ring) {
+        {
             let cell = Cell::new(centre.col + dc, centre.row + dr);
             let Some(i) = g.index(cell) else { continue };
             if grid.class(i) != CellClass::Occupied {

@@ -61,8 +61,8 @@ enum Phase {
     Driving,
     /// About to plan a fresh path to the errand's remaining targets.
     Replanning,
-    /// Backing or turning away from the nearest laser return, then replanning (reported as
-    /// [`MissionState::Replanning`]).
+    /// Driving or turning out of a place where the plans keep being refused, then replanning
+    /// (reported as [`MissionState::Replanning`]).
     Escaping(Escape),
     /// Waiting for, or stepping out of the way of, another robot.
     Yielding(Yield),
@@ -434,14 +434,7 @@ impl<const N: usize> Mission<N> {
                 &self.config.laser,
             );
         }
-        let mut remembered = heapless::Vec::new();
-        let fp = self.config.safety.footprint;
-        footprint::remembered_obstacles(
-            &map.grid,
-            self.senses.pose_map,
-            fp.radius_m.max(fp.front_m).max(fp.rear_m) + self.config.safety.turn_margin_m,
-            &mut remembered,
-        );
+        let remembered = self.remembered_around(map);
         for &(i, value) in lifted.iter().rev() {
             map.grid.set_log_odds(i, value, &mut map.trav);
         }
@@ -533,7 +526,7 @@ impl<const N: usize> Mission<N> {
             }
         }
         if let Phase::Escaping(escape) = self.phase
-            && let Some(cmd) = self.escape_step(now, escape)
+            && let Some(cmd) = self.escape_step(now, escape, map)
         {
             return cmd;
         }
@@ -601,6 +594,27 @@ impl<const N: usize> Mission<N> {
         self.ahead = None;
         events.push(MissionEvent::Done(reason));
         MotionCommand::ZERO
+    }
+
+    /// The map's Occupied cells around the robot that a turn in place or a back-off could run
+    /// into, in the base frame, for the safety monitor ([`SafetyInputs::remembered`]): out to
+    /// the corners of the corridor it watches when backing at the fastest backing speed the
+    /// mission commands (the escape, the monitor's own back-off, the follower's back-up).
+    fn remembered_around(
+        &self,
+        map: &SharedMap<N>,
+    ) -> heapless::Vec<Point2, { footprint::MAX_REMEMBERED }> {
+        let backing_mm_s = reactions::ESCAPE_SPEED_MM_S
+            .max(self.config.safety.backoff_speed_mm_s.saturating_abs())
+            .max(self.config.follower.backup_speed_mm_s as i16);
+        let mut remembered = heapless::Vec::new();
+        footprint::remembered_obstacles(
+            &map.grid,
+            self.senses.pose_map,
+            self.monitor.remembered_reach_m(backing_mm_s),
+            &mut remembered,
+        );
+        remembered
     }
 
     fn enter_replanning(&mut self, cause: ReplanCause) {

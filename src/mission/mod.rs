@@ -48,10 +48,14 @@
 //!   is dropped: its target is blacklisted and the mission decides again.
 //!   After two obstacle holds in a row without progress (no waypoint reached, less than
 //!   0.3 m moved: typically a robot too close to a wall to turn, whose every plan starts with
-//!   a command the monitor refuses), the robot first escapes: it backs away from the nearest
-//!   laser return (or turns away from it, or drives away when it is behind) at 100 mm/s or
-//!   20 deg/s for 0.25 m or 60°, each command still checked by the monitor, then replans
-//!   ([`MissionStats::escapes`]).
+//!   a command the monitor refuses), the robot first escapes, then replans
+//!   ([`MissionStats::escapes`]). The escape is chosen as the monitor will check it (the
+//!   scan, and the map's obstacles the 180° laser cannot see): a straight drive at 100 mm/s,
+//!   forward or back, to the nearest cell where the planning layer lets the body turn (at
+//!   most 0.8 m; between walls on both sides it steers to the middle), the direction that
+//!   does not undo the previous escape first, then the direction of the path given up; else
+//!   a 60° turn in place at 20 deg/s away from the nearest return; else a 0.25 m drive. Each
+//!   command is still checked by the monitor.
 //! - **Yielding**: the thing in the way is another robot (its mark on the shared map is at
 //!   the obstacle). The robot with the higher id waits [`MissionConfig::yield_wait_s`], then
 //!   replans around; if no way around exists it steps out of the other robot's path and waits
@@ -440,8 +444,8 @@ pub struct MissionStats {
     pub decisions_ahead: u32,
     /// Decisions computed ahead that were used.
     pub decisions_ahead_used: u32,
-    /// Escapes: slow manoeuvres away from the nearest laser return after repeated obstacle
-    /// holds without progress.
+    /// Escapes: slow manoeuvres out of a place where the plans' first commands keep being
+    /// refused (repeated obstacle holds without progress).
     pub escapes: u32,
 }
 

@@ -1322,6 +1322,90 @@ fn a_robot_facing_a_wall_too_close_to_turn_backs_away_and_explores() {
     }
 }
 
+/// A room with a dead-end pocket 0.55 m wide and 0.7 m deep in its east wall (a narrow
+/// corridor's closed end, a door into a cupboard), from x = 5 to 5.7 around y = 2.
+fn room_with_pocket() -> World {
+    let mut w = World::new(8.0, 4.0);
+    w.fill(5.0, 0.0, 8.0, 4.0, true);
+    w.fill(5.0, 1.75, 5.7, 2.3, false);
+    w
+}
+
+/// A robot deep in a narrow dead end, facing out of it a little askew, its back 5 cm from
+/// the dead end's wall, which the map knows (the robot saw it driving in) but its 180° laser
+/// cannot see: the side walls are too close to turn in place, so the plans' first turn is
+/// refused. Its escape must not back into the wall behind it (issue 17: gen-15 seed 27 backed
+/// into a wall only the map knew, again and again, and gave the mission up at 5 %): it drives
+/// out the way it faces, to where it can turn, and explores the room without touching a
+/// wall.
+#[test]
+fn a_wedged_robot_escapes_the_way_it_fits_not_into_the_wall_behind_it() {
+    for (seed, skew) in [(51u64, 0.15f32), (52, -0.15), (53, 0.2)] {
+        let config = MissionConfig::default();
+        let body = config.safety.footprint;
+        let world = room_with_pocket();
+        let mut sim = Sim::new(world, &config, seed);
+        // The dead end's wall on the map, as seen when the robot drove in.
+        let g = *sim.map.grid.geometry();
+        for i in 0..g.cell_count() {
+            let c = g.cell_center(g.cell(i));
+            if c.x > 5.7 && c.x < 6.0 && c.y > 1.6 && c.y < 2.5 {
+                sim.map.grid.set_class(i, CellClass::Occupied, &mut ());
+            }
+        }
+        sim.map.rebuild_traversability().unwrap();
+        let heading = core::f32::consts::PI - skew;
+        // How far the outline reaches east of the centre at this heading.
+        let half = body.width_m / 2.0;
+        let east = [
+            (body.front_m, half),
+            (body.front_m, -half),
+            (-body.rear_m, half),
+            (-body.rear_m, -half),
+        ]
+        .iter()
+        .map(|&(x, y)| {
+            Pose2::new(0.0, 0.0, heading)
+                .transform_point(Point2::new(x, y))
+                .x
+        })
+        .fold(0.0f32, f32::max);
+        let start = Pose2::new(5.7 - 0.05 - east, 2.025, heading);
+        assert!(!touches(&sim.world, &body, start));
+        sim.add(config, start, Slip::thesis());
+        // Too close to the side walls to turn in place.
+        assert!(sim.world.clearance(start.position()) < 0.29);
+        while sim.secs() < 900.0 {
+            sim.period();
+            let pose = sim.bots[0].true_pose();
+            assert!(
+                !touches(&sim.world, &body, pose),
+                "seed {seed}: touched a wall at {pose:?} at {} s, {:?}",
+                sim.secs(),
+                sim.bots[0].mission.stats()
+            );
+            if matches!(sim.bots[0].mission.state(), MissionState::Done(_)) {
+                break;
+            }
+        }
+        let m = &sim.bots[0].mission;
+        assert_eq!(
+            m.state(),
+            MissionState::Done(DoneReason::NothingReachable),
+            "seed {seed} after {} s: {:?}",
+            sim.secs(),
+            m.stats()
+        );
+        assert!(m.stats().escapes >= 1, "seed {seed}: {:?}", m.stats());
+        let known = known_fraction(&sim);
+        assert!(
+            known > 0.97,
+            "seed {seed}: only {known} known, {:?}",
+            m.stats()
+        );
+    }
+}
+
 /// Scans given with [`Mission::on_scan_unmapped`] keep the safety monitor fresh (no stale
 /// fault, the robot keeps driving) and leave the map as it was.
 #[test]
