@@ -17,6 +17,7 @@
 //! meets, and on one seed the draws spread as much as the binary's own runs do.
 //!
 //! `PAPILLON_COMPARE_DECISIONS=1` prints each runner draw's decisions;
+//! `PAPILLON_COMPARE_STATES=1` prints the energy and time each side spent in each mission state;
 //! `PAPILLON_COMPARE_NEAR_POCKETS=1` turns `ExploreConfig::near_pockets_first` on in the runner
 //! (with `PAPILLON_COMPARE_RUNNER_ONLY`: the binary keeps the board's setting, off);
 //! `PAPILLON_COMPARE_LOOK_AROUND=1` turns `MissionConfig::look_around` on in the runner.
