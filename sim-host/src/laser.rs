@@ -471,6 +471,42 @@ mod tests {
         assert!((scan.beams()[90].range_m.unwrap() - 0.2).abs() < 1e-3);
     }
 
+    /// A wall 4.2 m ahead of a 4 m laser at 5 % noise: a laser that reaches only its usable
+    /// range never returns from it; one that reaches 20 m reads it within 4 m now and then
+    /// (about once in six) and reports nothing beyond 4 m.
+    #[test]
+    fn a_longer_reach_shows_a_wall_just_beyond_the_range_through_the_noise() {
+        let w = room();
+        let cfg = LaserConfig {
+            max_range_m: 4.0,
+            ..full_circle(0.05)
+        };
+        let pose = Pose2::new(1.3, 3.0, 0.0);
+        let ahead = |laser: &mut LaserSim| {
+            let scan = laser.scan(&w, pose, &[]);
+            let beam = scan
+                .beams()
+                .iter()
+                .find(|b| b.angle_rad.abs() < 1e-4)
+                .copied()
+                .unwrap();
+            beam.range_m
+        };
+        let mut short = LaserSim::new(cfg, 3);
+        let mut long = LaserSim::new(cfg, 3).with_reach_m(20.0);
+        let (mut within, mut beyond) = (0, 0);
+        for _ in 0..300 {
+            assert_eq!(ahead(&mut short), None);
+            match ahead(&mut long) {
+                Some(r) if r <= 4.0 => within += 1,
+                Some(_) => beyond += 1,
+                None => {}
+            }
+        }
+        assert_eq!(beyond, 0);
+        assert!((20..=90).contains(&within), "{within} of 300");
+    }
+
     #[test]
     fn other_robots_appear_as_discs() {
         let w = room();
