@@ -17,6 +17,7 @@
 //! meets, and on one seed the draws spread as much as the binary's own runs do.
 //!
 //! `PAPILLON_COMPARE_DECISIONS=1` prints each runner draw's decisions;
+//! `PAPILLON_COMPARE_STATES=1` prints the energy and time each side spent in each mission state;
 //! `PAPILLON_COMPARE_NEAR_POCKETS=1` turns `ExploreConfig::near_pockets_first` on in the runner
 //! (with `PAPILLON_COMPARE_RUNNER_ONLY`: the binary keeps the board's setting, off);
 //! `PAPILLON_COMPARE_LOOK_AROUND=1` turns `MissionConfig::look_around` on in the runner.
@@ -54,6 +55,8 @@ struct Outcome {
     coverage: f32,
     time_s: f64,
     steps: f32,
+    /// Distance driven by odometry \[m\]; the rest of the steps is turning.
+    distance_m: f64,
     decisions: u64,
     replans_per_decision: f64,
     end: String,
@@ -120,6 +123,22 @@ fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
         .filter(|r| r["kind"] == "decision")
         .filter_map(|r| r["compute_ms"].as_f64())
         .collect();
+    if std::env::var("PAPILLON_COMPARE_STATES").is_ok() {
+        let battery = f64::from(board(seed).0.mission.battery_steps);
+        let samples: Vec<(f64, String, f32)> = records
+            .iter()
+            .filter(|r| r["kind"] == "mission")
+            .filter_map(|r| {
+                let used = battery - r["battery_steps"].as_f64()?;
+                Some((
+                    r["t_s"].as_f64()?,
+                    r["state"].as_str()?.to_string(),
+                    used as f32,
+                ))
+            })
+            .collect();
+        eprintln!("    {map} seed {seed} binary {}", state_summary(&samples));
+    }
     let done = records.iter().rev().find(|r| r["kind"] == "done");
     let last_mission = records.iter().rev().find(|r| r["kind"] == "mission");
     let replans_per_decision = done
@@ -136,6 +155,7 @@ fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
         coverage: score.coverage,
         time_s: state.mission_time_s,
         steps: state.counters.energy_used_steps,
+        distance_m: f64::from(state.counters.distance_m),
         decisions: state.counters.decisions,
         replans_per_decision,
         end,
@@ -199,10 +219,26 @@ fn runner(map: &str, seed: u64, decision_s: f64, draw: u64) -> Outcome {
     if std::env::var("PAPILLON_COMPARE_LOOK_AROUND").is_ok() {
         config.mission.look_around = true;
     }
+    // PAPILLON_COMPARE_STATES=1: the energy and time spent in each mission state (sampled
+    // every second, as the binary's `mission` telemetry records them), to see where one
+    // pump spends what the other does not.
+    let states = std::env::var("PAPILLON_COMPARE_STATES").is_ok();
+    let mut samples: Vec<(f64, String, f32)> = Vec::new();
     let report = Runner::new(world, Dynamics::new(), config)
         .unwrap_or_else(|e| panic!("runner on {map}: {e}"))
-        .run()
+        .run_with(|runner, progress| {
+            if states && matches!(progress, papillon_sim::runner::Progress::Controlled) {
+                let t = runner.sim_time_s();
+                if samples.last().is_none_or(|s| t - s.0 >= 1.0) {
+                    let m = runner.mission(0);
+                    samples.push((t, format!("{:?}", m.state()), m.stats().steps));
+                }
+            }
+        })
         .unwrap_or_else(|e| panic!("runner on {map}: {e}"));
+    if states {
+        eprintln!("    {}", state_summary(&samples));
+    }
     let r = &report.robots[0];
     // PAPILLON_COMPARE_DECISIONS=1: each decision of each draw (time, targets, planned length,
     // predicted gain, energy), to see which trip one draw makes and another does not.
@@ -235,11 +271,35 @@ fn runner(map: &str, seed: u64, decision_s: f64, draw: u64) -> Outcome {
         coverage: report.coverage,
         time_s: report.sim_time_s,
         steps: r.steps,
+        distance_m: r.distance_m,
         decisions: u64::from(r.decisions),
         replans_per_decision: f64::from(r.replans) / f64::from(r.decisions.max(1)),
         end: format!("{:?}", report.reason),
         decision_s,
     }
+}
+
+/// Energy and time by mission state from (time, state, energy used) samples: each interval
+/// counts for the state at its start.
+fn state_summary(samples: &[(f64, String, f32)]) -> String {
+    let mut by: Vec<(String, f32, f64)> = Vec::new();
+    for w in samples.windows(2) {
+        let (a, b) = (&w[0], &w[1]);
+        let name = a.1.split('(').next().unwrap_or("").to_string();
+        let i = match by.iter().position(|e| e.0 == name) {
+            Some(i) => i,
+            None => {
+                by.push((name, 0.0, 0.0));
+                by.len() - 1
+            }
+        };
+        by[i].1 += b.2 - a.2;
+        by[i].2 += b.0 - a.0;
+    }
+    by.iter()
+        .map(|(n, e, t)| format!("{n} {e:.1} steps in {t:.0} s"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Draws of the world's noise the prediction is the median of (`PAPILLON_COMPARE_DRAWS`).
@@ -280,6 +340,7 @@ fn prediction(map: &str, seed: u64, decision_s: f64, draws: u64) -> Outcome {
     let coverage = median(runs.iter().map(|o| f64::from(o.coverage)).collect()) as f32;
     let steps = median(runs.iter().map(|o| f64::from(o.steps)).collect()) as f32;
     let time_s = median(runs.iter().map(|o| o.time_s).collect());
+    let distance_m = median(runs.iter().map(|o| o.distance_m).collect());
     let decisions = median(runs.iter().map(|o| o.decisions as f64).collect()).round() as u64;
     let replans_per_decision = median(runs.iter().map(|o| o.replans_per_decision).collect());
     let mut ends: Vec<&str> = runs.iter().map(|o| o.end.as_str()).collect();
@@ -289,6 +350,7 @@ fn prediction(map: &str, seed: u64, decision_s: f64, draws: u64) -> Outcome {
         coverage,
         time_s,
         steps,
+        distance_m,
         decisions,
         replans_per_decision,
         end: ends.join("/"),
@@ -298,10 +360,11 @@ fn prediction(map: &str, seed: u64, decision_s: f64, draws: u64) -> Outcome {
 
 fn print(map: &str, seed: u64, pump: &str, o: &Outcome) {
     eprintln!(
-        "{map:6} seed {seed:3} {pump:8} coverage {:6.2} % time {:6.0} s steps {:6.1} decisions {:4} replans/decision {:4.2} decision {:5.3} s end {}",
+        "{map:6} seed {seed:3} {pump:8} coverage {:6.2} % time {:6.0} s steps {:6.1} ({:5.1} m) decisions {:4} replans/decision {:4.2} decision {:5.3} s end {}",
         o.coverage * 100.0,
         o.time_s,
         o.steps,
+        o.distance_m,
         o.decisions,
         o.replans_per_decision,
         o.decision_s,

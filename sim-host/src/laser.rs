@@ -243,6 +243,9 @@ pub struct LaserSim {
     config: LaserConfig,
     rng: ProjectRng,
     noise: bool,
+    /// How far the beams reach \[m\] (at least `config.max_range_m`): see
+    /// [`Self::with_reach_m`].
+    reach_m: f32,
 }
 
 impl LaserSim {
@@ -253,7 +256,19 @@ impl LaserSim {
             config,
             rng: random::seeded(seed),
             noise: config.noise_fraction > 0.0,
+            reach_m: config.max_range_m,
         }
+    }
+
+    /// The laser's beams reach `reach_m` (if more than the configuration's usable range), and
+    /// a reading beyond the usable range is no return, as a consumer of a longer-range laser
+    /// sees it: `papillon run` keeps the readings of `papillon-sim serve`'s 20 m LMS1xx up to
+    /// its board's `max_range_m`. With noise, a surface a little beyond the usable range then
+    /// reads within it, as it does on a real laser (a wall at 4.2 m reads under 4 m once in
+    /// six at 5 % noise); a laser that reaches only its usable range never shows it.
+    pub fn with_reach_m(mut self, reach_m: f32) -> Self {
+        self.reach_m = reach_m.max(self.config.max_range_m);
+        self
     }
 
     /// The configuration.
@@ -293,7 +308,7 @@ impl LaserSim {
         let cfg = self.config;
         let laser = robot_pose.compose(cfg.mount);
         let origin = laser.position();
-        let max = cfg.max_range_m;
+        let max = self.reach_m;
         for i in 0..cfg.beam_count as usize {
             let angle_rad = cfg.beam_angle(i);
             let a = laser.theta + angle_rad;
@@ -307,13 +322,15 @@ impl LaserSim {
                     range = Some(t);
                 }
             }
-            let range_m = range.map(|r| {
-                if self.noise {
-                    (r + cfg.noise_fraction * r * random::gaussian(&mut self.rng)).max(0.0)
-                } else {
-                    r
-                }
-            });
+            let range_m = range
+                .map(|r| {
+                    if self.noise {
+                        (r + cfg.noise_fraction * r * random::gaussian(&mut self.rng)).max(0.0)
+                    } else {
+                        r
+                    }
+                })
+                .filter(|&r| max <= cfg.max_range_m || r <= cfg.max_range_m);
             out.push(Beam { angle_rad, range_m })?;
         }
         Ok(())
@@ -517,6 +534,42 @@ mod tests {
         );
         let scan = laser.scan(&w, Pose2::new(5.3, 3.0, 0.0), &[]);
         assert!((scan.beams()[90].range_m.unwrap() - 0.2).abs() < 1e-3);
+    }
+
+    /// A wall 4.2 m ahead of a 4 m laser at 5 % noise: a laser that reaches only its usable
+    /// range never returns from it; one that reaches 20 m reads it within 4 m now and then
+    /// (about once in six) and reports nothing beyond 4 m.
+    #[test]
+    fn a_longer_reach_shows_a_wall_just_beyond_the_range_through_the_noise() {
+        let w = room();
+        let cfg = LaserConfig {
+            max_range_m: 4.0,
+            ..full_circle(0.05)
+        };
+        let pose = Pose2::new(1.3, 3.0, 0.0);
+        let ahead = |laser: &mut LaserSim| {
+            let scan = laser.scan(&w, pose, &[]);
+            let beam = scan
+                .beams()
+                .iter()
+                .find(|b| b.angle_rad.abs() < 1e-4)
+                .copied()
+                .unwrap();
+            beam.range_m
+        };
+        let mut short = LaserSim::new(cfg, 3);
+        let mut long = LaserSim::new(cfg, 3).with_reach_m(20.0);
+        let (mut within, mut beyond) = (0, 0);
+        for _ in 0..300 {
+            assert_eq!(ahead(&mut short), None);
+            match ahead(&mut long) {
+                Some(r) if r <= 4.0 => within += 1,
+                Some(_) => beyond += 1,
+                None => {}
+            }
+        }
+        assert_eq!(beyond, 0);
+        assert!((20..=90).contains(&within), "{within} of 300");
     }
 
     #[test]

@@ -268,6 +268,45 @@ impl<const N: usize> Mission<N> {
         self.publish(now, map)
     }
 
+    /// A scan read after a later odometry reading than its own time (a real-time pump that
+    /// reads the laser late): integrated at `pose_odom`, the odometry pose of the scan's
+    /// time, mapped with the mission's odometry-to-map transform, while the robot's pose,
+    /// battery and distance stay those of the latest reading. Handing such a scan in through
+    /// [`Self::on_odometry`] and [`Self::on_scan`] would move the robot back to the scan's
+    /// pose and forward again, each time charging the way twice. No localisation correction
+    /// (the matcher corrects the current pose). Before the first odometry reading it is
+    /// [`Self::on_scan`].
+    ///
+    /// Errors: as [`Self::on_scan`].
+    pub fn on_late_scan(
+        &mut self,
+        now: Time,
+        scan: &Scan,
+        pose_odom: Pose2,
+        map: &mut SharedMap<N>,
+    ) -> Result<(), MissionError> {
+        let Some(transform) = self.senses.map_from_odom else {
+            return self.on_scan(now, scan, map);
+        };
+        let pose = transform.map_pose(pose_odom);
+        integrate_scan(
+            &mut map.grid,
+            scan,
+            pose,
+            &self.config.laser,
+            &self.config.sensor,
+            &mut map.trav,
+        )
+        .map_err(MissionError::Sensor)?;
+        if self.config.localize.enabled {
+            map.hits.add_scan(scan, &self.config.laser, pose);
+        }
+        self.clear_own_trail(map);
+        self.senses.on_scan(now, scan, true);
+        self.watch.path_dirty = true;
+        self.publish(now, map)
+    }
+
     /// A scan the caller does not trust for mapping (taken while the robot turned fast, when
     /// a small error in the scan's time puts its walls in the wrong place): it keeps the
     /// safety monitor's view fresh, and nothing else.

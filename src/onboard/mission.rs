@@ -329,6 +329,23 @@ fn start_worker<const N: usize>(
     resume: Option<&(SavedState, Option<MapImage>)>,
     recording: Option<MissionRecording>,
 ) -> Result<Started, String> {
+    let (worker, out) = new_worker::<N>(board, config, geometry, resume, recording)?;
+    let (tx, rx) = mpsc::channel();
+    let worker = std::thread::Builder::new()
+        .name("mission".into())
+        .spawn(move || worker.run(rx))
+        .map_err(|e| format!("cannot start the mission thread: {e}"))?;
+    Ok((tx, out, worker))
+}
+
+/// The mission thread's state on a map of `N` cells, and what it publishes.
+fn new_worker<const N: usize>(
+    board: &BoardConfig,
+    config: MissionConfig,
+    geometry: GridGeometry,
+    resume: Option<&(SavedState, Option<MapImage>)>,
+    recording: Option<MissionRecording>,
+) -> Result<(Worker<N>, Arc<Mutex<Published>>), String> {
     {
         let mut map =
             SharedMap::<N>::new_boxed(geometry, &config).map_err(|e| format!("$.grid: {e}"))?;
@@ -353,7 +370,6 @@ fn start_worker<const N: usize>(
             ..Published::default()
         };
         let out = Arc::new(Mutex::new(published));
-        let (tx, rx) = mpsc::channel();
         let worker = Worker {
             config,
             map,
@@ -380,14 +396,12 @@ fn start_worker<const N: usize>(
             scans_integrated: 0,
             scans_unmapped: 0,
             scans_dropped: 0,
+            scans_late: 0,
+            last_odometry_s: f64::NEG_INFINITY,
             reconnects: 0,
             recording,
         };
-        let worker = std::thread::Builder::new()
-            .name("mission".into())
-            .spawn(move || worker.run(rx))
-            .map_err(|e| format!("cannot start the mission thread: {e}"))?;
-        Ok((tx, out, worker))
+        Ok((worker, out))
     }
 }
 
@@ -512,6 +526,12 @@ struct Worker<const N: usize> {
     /// than the odometry history, or more than [`PENDING_SCANS`] waiting), in this run.
     scans_unmapped: u64,
     scans_dropped: u64,
+    /// Scans read after a later odometry reading than their time (mapped at their own pose
+    /// by [`Mission::on_late_scan`]), in this run.
+    scans_late: u64,
+    /// The time of the latest odometry pose handed to the mission \[s\]: a scan older than it
+    /// is late.
+    last_odometry_s: f64,
     /// Link reconnections in this run.
     reconnects: u64,
     /// The MCAP recording, if any.
@@ -590,6 +610,7 @@ impl<const N: usize> Worker<N> {
                         });
                     }
                     m.on_odometry(time(t_s), pose_odom, flags);
+                    self.last_odometry_s = self.last_odometry_s.max(t_s);
                     if let Some(rec) = &mut self.recording {
                         rec.status(t_s, pose_odom, m.pose_map(), m.path(), &self.map.grid);
                     }
@@ -615,6 +636,7 @@ impl<const N: usize> Worker<N> {
                 self.reconnects += 1;
                 self.history.clear();
                 self.pending.clear();
+                self.last_odometry_s = f64::NEG_INFINITY;
             }
             Input::Step(t_s) => self.step(t_s),
             Input::Close => {}
@@ -654,8 +676,19 @@ impl<const N: usize> Worker<N> {
                 tracing::debug!(t_scan, "robot turning: scan not mapped (safety only)");
                 mission.on_scan_unmapped(time(t_scan), &scan);
                 self.scans_unmapped += 1;
+            } else if t_scan < self.last_odometry_s {
+                // Read after a later status packet was handed in: mapped at its own pose,
+                // the robot left where the packet put it (never moved back and forth, which
+                // charged the way twice: under load the odometry distance exceeded what the
+                // robot could drive at cruise speed).
+                mission
+                    .on_late_scan(time(t_scan), &scan, pose, &mut self.map)
+                    .map_err(|e| format!("scan integration: {e}"))?;
+                self.scans_integrated += 1;
+                self.scans_late += 1;
             } else {
                 mission.on_odometry(time(t_scan), pose, flags);
+                self.last_odometry_s = t_scan;
                 mission
                     .on_scan(time(t_scan), &scan, &mut self.map)
                     .map_err(|e| format!("scan integration: {e}"))?;
@@ -913,6 +946,7 @@ impl<const N: usize> Worker<N> {
                 "scans_mapped": self.scans_integrated,
                 "scans_unmapped": self.scans_unmapped,
                 "scans_dropped": self.scans_dropped,
+                "scans_late": self.scans_late,
                 "known_m2": known as f64 * f64::from(self.map.grid.geometry().resolution_m).powi(2),
                 "escapes": stats.escapes,
                 "faults": stats.faults,
@@ -1102,5 +1136,64 @@ mod tests {
         let e = grid_geometry(&board).unwrap_err();
         assert!(e.starts_with("$.grid"), "{e}");
         assert!(e.contains(&GRID_CELLS.to_string()), "{e}");
+    }
+
+    /// A status packet at `x_mm` east (the robot 50 mm north of the map's x axis, heading
+    /// east, motors on).
+    fn packet_at(x_mm: u16) -> Box<StatusPacket> {
+        Box::new(StatusPacket {
+            x_pos: x_mm,
+            y_pos: 50,
+            flags: 1,
+            battery_dv: 130,
+            ..StatusPacket::default()
+        })
+    }
+
+    /// One beam straight ahead, returning at `range_m`.
+    fn beam_ahead(range_m: f32) -> Box<Scan> {
+        let mut scan = Scan::new();
+        scan.push(crate::sensor::Beam {
+            angle_rad: 0.0,
+            range_m: Some(range_m),
+        })
+        .unwrap();
+        Box::new(scan)
+    }
+
+    /// A scan the mission thread reads after a later status packet than its time (the pump
+    /// read it late) is mapped at the odometry of its own time, and the robot is not moved
+    /// back to it and forward again: the distance counted is the 0.2 m the robot drove
+    /// (handed in as odometry, the scan's pose made it 0.3 m).
+    #[test]
+    fn a_late_scan_is_mapped_at_its_pose_without_charging_the_way_twice() {
+        let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
+        let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
+        let config = mission_config(&board).unwrap();
+        let geometry = grid_geometry(&board).unwrap();
+        let (mut worker, _out) =
+            new_worker::<{ crate::capacity::FIXED_CELLS }>(&board, config, geometry, None, None)
+                .unwrap();
+        worker.handle(Input::Status(1.0, packet_at(0))).unwrap();
+        worker.handle(Input::Status(1.1, packet_at(100))).unwrap();
+        // Taken at 1.05 s (x = 0.05 m), read after the packet of 1.1 s.
+        worker.handle(Input::Scan(1.05, beam_ahead(1.04))).unwrap();
+        worker.handle(Input::Status(1.2, packet_at(200))).unwrap();
+        let mission = worker.mission.as_ref().unwrap();
+        let distance_m = mission.stats().distance_m;
+        assert!((distance_m - 0.2).abs() < 1e-3, "{distance_m}");
+        assert!((mission.pose_map().x - 0.2).abs() < 1e-3);
+        // The return: 0.05 + 0.055 (mount) + 1.04 = 1.145 m, not 1.295 m from the packet's
+        // pose.
+        let grid = &worker.map.grid;
+        let class = |x: f32| {
+            let cell = grid.geometry().cell_at(Point2::new(x, 0.05)).unwrap();
+            grid.class_of(cell).unwrap()
+        };
+        assert_ne!(class(1.15), CellClass::Unknown);
+        assert_ne!(class(1.15), CellClass::Free);
+        assert_eq!(class(1.25), CellClass::Unknown);
+        assert_eq!(class(0.6), CellClass::Free);
+        assert_eq!((worker.scans_integrated, worker.scans_late), (1, 1));
     }
 }

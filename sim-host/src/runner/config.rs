@@ -78,6 +78,14 @@ pub struct PumpModel {
     /// building's) noise; the runner's prediction of it is the median over several draws
     /// (`tests/onboard_compare.rs`), not one arbitrary draw.
     pub noise_draw: u64,
+    /// How far the simulated laser's beams reach \[m\], when more than the mission's usable
+    /// range (`laser.max_range_m`): a reading beyond the usable range is no return, as
+    /// `papillon run` treats the readings of `papillon-sim serve`'s LMS1xx (20 m,
+    /// [`crate::emulator::lms1xx::MAX_RANGE_M`]) or of a real one. With range noise, a
+    /// surface just beyond the usable range then reads within it now and then (occupied
+    /// evidence in front of it), which a laser cast only to the usable range never shows.
+    /// `None`: the beams end at the usable range (the runner's own laser).
+    pub laser_reach_m: Option<f32>,
 }
 
 /// See [`PumpModel::nothing_observable_end`] (the same values as `papillon run`'s).
@@ -99,13 +107,15 @@ impl PumpModel {
             unmapped_turn_deg_s: None,
             board_seeded_decisions: false,
             noise_draw: 0,
+            laser_reach_m: None,
         }
     }
 
     /// `papillon run`'s pump: no coverage from the truth, a decision takes
     /// `decision_latency_s` (what its `decision` telemetry's `compute_ms` says), no scan is
     /// mapped while the robot turns faster than 20 deg/s, the run ends when decisions stop
-    /// adding to the map, and decisions draw from the board's seed.
+    /// adding to the map, decisions draw from the board's seed, and the laser reaches as far
+    /// as `serve`'s LMS1xx (its readings kept up to the usable range).
     pub const fn onboard(decision_latency_s: f64) -> Self {
         Self {
             coverage_known: false,
@@ -114,6 +124,7 @@ impl PumpModel {
             unmapped_turn_deg_s: Some(20.0),
             board_seeded_decisions: true,
             noise_draw: 0,
+            laser_reach_m: Some(crate::emulator::lms1xx::MAX_RANGE_M),
         }
     }
 }

@@ -292,10 +292,16 @@ impl<const N: usize> Runner<N> {
                 derive_seed(world_seed, k, STREAM_BODY),
             ));
             robots.push(Robot {
-                laser: LaserSim::new(
-                    config.mission.laser,
-                    derive_seed(world_seed, k, STREAM_LASER),
-                ),
+                laser: {
+                    let laser = LaserSim::new(
+                        config.mission.laser,
+                        derive_seed(world_seed, k, STREAM_LASER),
+                    );
+                    match config.pump.laser_reach_m {
+                        Some(reach_m) => laser.with_reach_m(reach_m),
+                        None => laser,
+                    }
+                },
                 mission,
                 rng: random::seeded(if config.pump.board_seeded_decisions {
                     config.seed.wrapping_add(k as u64)
