@@ -443,6 +443,9 @@ pub struct MissionStats {
     /// Escapes: slow manoeuvres away from the nearest laser return after repeated obstacle
     /// holds without progress.
     pub escapes: u32,
+    /// Errands to the mouth of a passage shut on the map, to look through it again when no
+    /// frontier was reachable ([`crate::explore::shut_mouth`]).
+    pub mouth_looks: u32,
 }
 
 /// The result of one control period.
