@@ -13,7 +13,7 @@
 //! Usage: `coverage_gaps [mission options...]`, e.g.
 //! `coverage_gaps --map gen-03 --seed 25 --battery 488`. Prints one tab-separated line:
 //! `map method seed coverage reason missing unseen left noise shut spurious_occupied steps
-//! contacts replans_by_cause`. With `GAPS_EVENTS=1` it also prints the last events, the map
+//! contacts replans_by_cause`. With `GAPS_EVENTS=1` it also prints the last 40 events (`GAPS_EVENTS=N`: N), the map
 //! around the robot (or around `GAPS_AT=X,Y`) and the planning layer there; with
 //! `GAPS_GATES=1` the spurious Occupied cells next to where the final map's reach stops; with
 //! `GAPS_FRONTIER=1` the final map's frontier cells in clusters, each with how many of its cells
@@ -22,7 +22,8 @@
 //! the mission's own traversability layer and distance field agree with a rebuild from the
 //! final map (a mission that ended "nothing reachable" with `reached` frontier cells was cut
 //! off by something not in its final map); with `GAPS_LOGODDS=X,Y` the log-odds of the cells
-//! around a point (a door's cells, say).
+//! around a point (a door's cells, say); with `GAPS_SPAN=ROWS,COLS` larger map prints; with `GAPS_TRACK=T0,T1` the robot's true and estimated
+//! pose, the planning layer at its cell and the mission's state every 0.5 s from T0 to T1 \[s\].
 //! Results are in docs/experiments.md ("Generated world set after the obstacle-mark change").
 
 use clap::Parser;
@@ -192,9 +193,21 @@ fn frontier_report(
     );
 }
 
+/// `GAPS_SPAN=ROWS,COLS`: half the height and width of the map prints \[cells\] (default
+/// `None`: 15 x 25 for the map, 6 x 6 for the planning layer).
+fn span() -> Option<(i32, i32)> {
+    let v = std::env::var("GAPS_SPAN").ok()?;
+    let (r, c) = v.split_once(',')?;
+    Some((r.parse().ok()?, c.parse().ok()?))
+}
+
 fn main() {
     let cli = Cli::parse();
-    let setup = setup_from_args(&cli.args).unwrap_or_else(|e| panic!("{e}"));
+    let mut setup = setup_from_args(&cli.args).unwrap_or_else(|e| panic!("{e}"));
+    // `--max-time` as the `mission` command reads it: the map at that moment.
+    if let Some(limit_s) = cli.args.max_time {
+        setup.run.max_sim_time_s = limit_s;
+    }
     let world = setup.world.clone();
     let mut runner = Runner::new(world.clone(), Dynamics::new(), setup.run.clone()).unwrap();
     // GAPS_TRACE=FROM,TO: every control period between those simulated times [s], the true
@@ -204,11 +217,35 @@ fn main() {
         let (a, b) = v.split_once(',')?;
         Some((a.parse::<f64>().ok()?, b.parse::<f64>().ok()?))
     });
+    // GAPS_TRACK=T0,T1: the true and estimated pose, the mission's state and the planning
+    // layer at the estimated cell every 0.5 s of simulated time between T0 and T1.
+    let track = std::env::var("GAPS_TRACK").ok().and_then(|v| {
+        let (a, b) = v.split_once(',')?;
+        Some((a.parse::<f64>().ok()?, b.parse::<f64>().ok()?))
+    });
+    let mut next_track = 0.0;
     let mut logged = 0;
     let report = runner
         .run_with(|r, progress| {
-            let Some((from, to)) = trace else { return };
             let t = r.sim_time_s();
+            if let Some((t0, t1)) = track
+                && t >= t0
+                && t <= t1
+                && t >= next_track
+            {
+                next_track = t + 0.5;
+                let m = r.mission(0);
+                let (p, e) = (r.body(0).true_pose(), m.pose_map());
+                let trav = &r.map().trav;
+                let cell = trav.geometry().cell_at(e.position());
+                let (pass, turn) =
+                    cell.map_or((false, false), |c| (trav.is_passable(c), trav.can_turn(c)));
+                eprintln!(
+                    "{t:8.1} true ({:.2}, {:.2}, {:.2}) est ({:.2}, {:.2}, {:.2}) passable {pass} turn {turn} {:?}",
+                    p.x, p.y, p.theta, e.x, e.y, e.theta, m.state()
+                );
+            }
+            let Some((from, to)) = trace else { return };
             if !matches!(progress, papillon_sim::runner::Progress::Controlled) || t < from || t > to
             {
                 logged = r.events().len();
@@ -239,9 +276,11 @@ fn main() {
             logged = r.events().len();
         })
         .unwrap();
-    if std::env::var_os("GAPS_EVENTS").is_some() {
+    if let Some(v) = std::env::var_os("GAPS_EVENTS") {
+        // GAPS_EVENTS=N prints the last N events (40 for any other value).
+        let n = v.to_str().and_then(|v| v.parse().ok()).unwrap_or(40);
         let ev = runner.events();
-        for e in &ev[ev.len().saturating_sub(40)..] {
+        for e in &ev[ev.len().saturating_sub(n)..] {
             eprintln!("{:8.1} {:?}", e.time_s, e.event);
         }
         eprintln!("stats {:?}", runner.mission(0).stats());
@@ -264,9 +303,10 @@ fn main() {
             Some(Point2::new(x.parse().ok()?, y.parse().ok()?))
         });
         let c = g.cell_at(at.unwrap_or(Point2::new(p.x, p.y))).unwrap();
-        for dr in (-15..=15).rev() {
+        let (hr, hc) = span().unwrap_or((15, 25));
+        for dr in (-hr..=hr).rev() {
             let mut line = String::new();
-            for dc in -25..=25 {
+            for dc in -hc..=hc {
                 let cell = Cell::new(c.col + dc, c.row + dr);
                 let Some(i) = g.index(cell) else {
                     line.push('~');
@@ -370,16 +410,25 @@ fn main() {
                 g.cell_at(Point2::new(x.parse().ok()?, y.parse().ok()?))
             })
             .unwrap_or(end);
-        for dr in (-6..=6).rev() {
-            let line: String = (-6..=6)
+        // 'o' passable and turnable, '-' passable only straight, 'x' blocked, ' ' Unknown;
+        // passable cells the robot does not reach on the final map print 'c' and '='.
+        let (hr, hc) = span().unwrap_or((6, 6));
+        for dr in (-hr..=hr).rev() {
+            let line: String = (-hc..=hc)
                 .map(|dc| {
                     let c = Cell::new(centre.col + dc, centre.row + dr);
+                    let reached = g.index(c).is_some_and(|i| reach_final[i]);
                     if dc == 0 && dr == 0 {
                         'R'
                     } else if map.class_of(c) == Some(CellClass::Unknown) {
                         ' '
                     } else if trav.is_passable(c) {
-                        if trav.can_turn(c) { 'o' } else { '-' }
+                        match (trav.can_turn(c), reached) {
+                            (true, true) => 'o',
+                            (false, true) => '-',
+                            (true, false) => 'c',
+                            (false, false) => '=',
+                        }
                     } else {
                         'x'
                     }

@@ -13,6 +13,8 @@
 //! - [`nearest_frontier`]: Yamauchi (1997): the frontier with the shortest path distance.
 //! - [`frontier_utility`]: explore_lite's rule (frontier size minus a distance cost), with path
 //!   distance and a blacklist of frontiers the robot failed to reach.
+//! - [`shut_mouth`]: where to look again when no frontier is reachable: the mouth of a
+//!   passage open in Free cells but shut in the planning layer.
 //! - [`blacklist`]: places the robot failed to reach, avoided by every selector until the map
 //!   around them changes.
 //! - [`evaluation`]: a candidate's status and score, what the objective computes and the memo
@@ -34,6 +36,7 @@ pub mod nearest_frontier;
 pub mod objective;
 pub mod optimized;
 pub mod reachable;
+pub mod shut_mouth;
 pub mod tour;
 pub mod view_cache;
 
@@ -47,6 +50,7 @@ pub use nearest_frontier::NearestFrontier;
 pub use objective::ExploreObjective;
 pub use optimized::{InitialPopulation, Optimized};
 pub use reachable::ReachableViewpoints;
+pub use shut_mouth::{MAX_MOUTHS, MouthSearch};
 pub use view_cache::{ViewCache, ViewCacheStats};
 
 use crate::control::follower::MAX_WAYPOINTS;

@@ -81,12 +81,14 @@ impl<const N: usize, const C: usize, const F: usize, P: Planner<N>> TargetSelect
     ) -> Result<Outcome, DecideError> {
         // Entries lapse once the map around them changed.
         self.blacklist.forget_changed(req.grid);
-        // The frontier rules plan to the cells they chose: no snapping, no set-back.
+        // The frontier rules plan to the cells they chose: no snapping, no set-back...
         let plan_only = ExploreConfig {
             objective: super::ObjectiveKind::Thesis,
             ..self.config
         };
         self.objective.prepare(req, &plan_only)?;
+        // ... but end where the robot can turn for the next plan's first turn.
+        self.objective.end_where_turnable(true);
         find_frontiers(
             req.grid,
             req.pose.position(),

@@ -124,6 +124,13 @@ pub const EFFICIENCY_LAMBDA_PER_STEP: f32 = 0.5;
 /// How far before the frontier viewpoint the efficient objective ends a plan \[m\]
 /// ([`ExploreConfig::setback_m`]).
 pub const SETBACK_M: f32 = 1.0;
+/// How far back along its path a plan's end may move to a cell where the robot can turn in
+/// place, when its end lies where it cannot (efficient objective and frontier rules) \[m\]:
+/// as far as the set-back ([`SETBACK_M`]), from where the laser still sees what lies ahead.
+pub const TURN_BACK_M: f32 = 1.0;
+/// The shortest last leg that moving a plan's end back to a turnable cell leaves \[m\]: two
+/// and a half 10 cm cells.
+pub const MIN_TURN_BACK_LEG_M: f32 = 0.25;
 /// Factor on the efficient objective's score of a candidate that clears a small unknown
 /// pocket ([`super::reachable::Viewpoint::pocket`]), so that it is not left behind for a long
 /// trip back.
@@ -166,6 +173,9 @@ pub struct ExploreObjective<'m, const N: usize, P: Planner<N> = AStar<N>> {
     /// Plans of this decision end [`ExploreConfig::setback_m`] short (efficient objective,
     /// not a re-plan).
     set_back_plans: bool,
+    /// Plans of this decision end where the robot can turn in place
+    /// ([`TURN_BACK_M`]; efficient objective and the frontier rules, not a re-plan).
+    turnable_ends: bool,
 }
 
 impl<const N: usize, P: Planner<N>> core::fmt::Debug for ExploreObjective<'_, N, P> {
@@ -230,6 +240,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             tour: FrontierTour::new(),
             tour_extra_m: 0.0,
             set_back_plans: false,
+            turnable_ends: false,
         }
     }
 
@@ -286,6 +297,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         self.legs.clear();
         let efficient = predict && config.objective == ObjectiveKind::Efficient;
         self.set_back_plans = efficient && config.setback_m > 0.0;
+        self.turnable_ends = efficient;
         if efficient {
             self.reachable.near_m = req.laser.max_range_m * NEAR_FRONTIER_SHARE_OF_RANGE;
             self.reachable.collect(req.grid, req.trav, self.field);
@@ -410,6 +422,14 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
     /// (`false`) go all the way, until the next [`Self::prepare`].
     pub(crate) fn set_back(&mut self, on: bool) -> bool {
         core::mem::replace(&mut self.set_back_plans, on)
+    }
+
+    /// Plans of this decision end where the robot can turn in place ([`TURN_BACK_M`]) or
+    /// (`false`) where they lead, until the next [`Self::prepare`]. The efficient objective
+    /// turns it on; the frontier rules, which plan with the thesis's objective, turn it on
+    /// after [`Self::prepare`].
+    pub(crate) fn end_where_turnable(&mut self, on: bool) -> bool {
+        core::mem::replace(&mut self.turnable_ends, on)
     }
 
     /// The frontier tour of the current decision (built by [`Self::prepare`] for the
@@ -577,6 +597,9 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         if self.set_back_plans {
             self.trim_last_leg(last_leg, &geom);
         }
+        if self.turnable_ends {
+            self.end_where_turnable_on(req.trav, last_leg);
+        }
         let mut heading = self.start.theta;
         let mut length = 0.0f32;
         let mut rotation = 0.0f32;
@@ -619,6 +642,63 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             }
             left -= d;
             end -= 1;
+        }
+    }
+
+    /// Moves the end of the last leg (from waypoint `from` on) back along the path, at most
+    /// [`TURN_BACK_M`], to the first cell where the robot can turn in place
+    /// ([`crate::planner::Traversability::can_turn`]), which becomes the last target. The
+    /// follower turns in place at the start of the next plan, so a plan ending in the no-turn
+    /// band (beside a wall, in a door) leaves the robot where the next one's first turn does
+    /// not fit, and the safety monitor refuses it again and again (nearest-frontier, house,
+    /// seed 32: driven up to the frontier 0.3 m from a wall, heading towards it). The end stays
+    /// where it is if no such cell lies within reach, or if the new end would leave less than
+    /// [`MIN_TURN_BACK_LEG_M`] of the leg: a plan that hardly moves the robot makes no
+    /// progress, so the robot then drives the whole way (a narrow corridor, a door it must
+    /// pass).
+    fn end_where_turnable_on(&mut self, trav: &crate::planner::Traversability<N>, from: usize) {
+        let end = self.waypoint_len;
+        if end < 2 || end - 1 <= from {
+            return;
+        }
+        let geom = *trav.geometry();
+        let last = self.waypoints[end - 1];
+        if geom.cell_at(last).is_none_or(|c| trav.can_turn(c)) {
+            return;
+        }
+        // The leg's length from its first waypoint, for the shortest leg kept.
+        let leg_m: f32 = (from + 1..end)
+            .map(|j| self.waypoints[j - 1].distance(self.waypoints[j]))
+            .sum();
+        let step = 0.5 * geom.resolution_m;
+        let mut back = 0.0f32;
+        let mut seg = end - 1;
+        while seg > from {
+            let (a, b) = (self.waypoints[seg - 1], self.waypoints[seg]);
+            let d = a.distance(b);
+            // Points on the segment from b back to a, every half cell.
+            let mut t = if seg == end - 1 { step } else { 0.0 };
+            while t <= d {
+                if back + t > TURN_BACK_M || leg_m - (back + t) < MIN_TURN_BACK_LEG_M {
+                    return;
+                }
+                let f = if d > 0.0 { (d - t) / d } else { 0.0 };
+                let p = Point2::new(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f);
+                if let Some(c) = geom.cell_at(p)
+                    && trav.can_turn(c)
+                {
+                    let centre = geom.cell_center(c);
+                    self.waypoints[seg] = centre;
+                    self.waypoint_len = seg + 1;
+                    if self.target_len > 0 {
+                        self.targets[self.target_len - 1] = centre;
+                    }
+                    return;
+                }
+                t += step;
+            }
+            back += d;
+            seg -= 1;
         }
     }
 

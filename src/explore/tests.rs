@@ -1293,3 +1293,104 @@ fn the_efficient_objective_discounts_a_target_by_its_detour_in_the_frontier_tour
     }
     assert!(detours > 0, "no target costs a detour");
 }
+
+// Plans that end where the robot can turn (issue 17, nearest-frontier on the house, seed 32).
+
+/// The mission's planning layer (footprint, clearance, wall bands) over `grid`.
+fn mission_trav_of(grid: &Grid) -> Trav {
+    let config = crate::mission::MissionConfig::default().traversability;
+    let mut t = Trav::new(*grid.geometry(), config).unwrap();
+    t.rebuild_from(grid).unwrap();
+    t
+}
+
+#[test]
+fn a_frontier_rule_plan_ending_beside_a_wall_ends_where_the_robot_can_turn() {
+    let grid = fixture_grid();
+    let trav = mission_trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let g = *grid.geometry();
+    // 0.3 m from the south wall: passable, but the swing circle does not fit.
+    let beside_wall = Point2::new(1.55, 0.35);
+    let cell = g.cell_at(beside_wall).unwrap();
+    assert!(trav.is_passable(cell) && !trav.can_turn(cell));
+    let mut mem = Memory::<CELLS>::new();
+    let mut obj = mem.objective();
+    let plan_only = ExploreConfig {
+        objective: ObjectiveKind::Thesis,
+        ..ExploreConfig::default()
+    };
+    for turnable in [false, true] {
+        obj.prepare(&req, &plan_only).unwrap();
+        obj.end_where_turnable(turnable);
+        let eval = obj.evaluate_targets(&req, &[beside_wall]);
+        assert_eq!(eval.status, CandidateStatus::Feasible);
+        let end = *obj.waypoints().last().unwrap();
+        assert_eq!(obj.targets(), &[end]);
+        let end_cell = g.cell_at(end).unwrap();
+        if turnable {
+            assert!(trav.can_turn(end_cell), "ends at {end:?}");
+            let back = end.distance(g.cell_center(cell));
+            assert!(
+                back > 0.0 && back <= objective::TURN_BACK_M,
+                "{back} m back"
+            );
+        } else {
+            assert_eq!(end_cell, cell);
+        }
+    }
+}
+
+// Passages shut on the map (issue 17, the cut clusters).
+
+/// Two rooms split by a wall at column 30 with a 0.6 m door (rows 18..=23); the west room and
+/// the door Free, the east room Free up to column 45 and Unknown beyond; `spurious` marks the
+/// door's middle cell Occupied (a return's evidence, free in truth).
+fn door_grid(spurious: bool, door: bool) -> Grid {
+    let g = geometry();
+    let mut grid = Grid::new(g, LogOddsBounds::default()).unwrap();
+    for i in 0..g.cell_count() {
+        let c = g.cell(i);
+        let border = c.col == 0 || c.row == 0 || c.col == W as i32 - 1 || c.row == H as i32 - 1;
+        let in_door = door && (18..=23).contains(&c.row);
+        if border || (c.col == 30 && !in_door) || (spurious && c.col == 30 && c.row == 20) {
+            grid.set_class(i, CellClass::Occupied, &mut ());
+        } else if c.col <= 45 {
+            grid.set_class(i, CellClass::Free, &mut ());
+        }
+    }
+    grid
+}
+
+fn shut_mouth_of(grid: &Grid, looked: &[Point2]) -> Option<Cell> {
+    let trav = mission_trav_of(grid);
+    let mut field = DistanceField::<CELLS>::new_boxed();
+    field
+        .start(
+            &trav,
+            grid.geometry().cell_at(Point2::new(1.0, 2.0)).unwrap(),
+        )
+        .unwrap();
+    let mut search = Box::new(MouthSearch::<CELLS>::new());
+    search.find(grid, &trav, &field, looked)
+}
+
+#[test]
+fn a_door_shut_on_the_map_is_looked_at_from_its_mouth_once() {
+    let door_centre = Point2::new(3.05, 2.1);
+    // Open on the map: the frontier is reachable, nothing to look at.
+    assert_eq!(shut_mouth_of(&door_grid(false, true), &[]), None);
+    // One spurious Occupied cell shuts it in the planning layer, not in Free cells.
+    let grid = door_grid(true, true);
+    let trav = mission_trav_of(&grid);
+    let mouth = shut_mouth_of(&grid, &[]).expect("a mouth at the shut door");
+    let p = grid.geometry().cell_center(mouth);
+    assert!(p.x < 3.0, "on the robot's side: {p:?}");
+    assert!(p.distance(door_centre) < 1.0, "at the door: {p:?}");
+    assert!(trav.can_turn(mouth));
+    // Looked from: not again.
+    assert_eq!(shut_mouth_of(&grid, &[p]), None);
+    // A wall without a door: no Free passage, nothing to look at.
+    assert_eq!(shut_mouth_of(&door_grid(false, false), &[]), None);
+}

@@ -17,7 +17,7 @@ use crate::control::Time;
 use crate::control::command::MotionCommand;
 use crate::control::follower::{Controller, WaypointFollower};
 use crate::control::safety::{RobotFlags, SafetyInputs, SafetyMonitor, SafetyState};
-use crate::explore::{Blacklist, Decision, MAX_DECISION_HISTORY, MAX_TARGETS};
+use crate::explore::{Blacklist, Decision, MAX_DECISION_HISTORY, MAX_MOUTHS, MAX_TARGETS};
 use crate::geometry::{Point2, Pose2};
 use crate::planner::Planner;
 use crate::sensor::{Scan, integrate_scan};
@@ -121,6 +121,9 @@ pub struct Mission<const N: usize> {
     abandoned_in_row: (u32, Point2),
     /// Places this robot failed to reach.
     blacklist: Blacklist,
+    /// Mouths of passages shut on the map that this robot went to look through
+    /// ([`crate::explore::shut_mouth`]).
+    mouths_looked: heapless::Vec<Point2, MAX_MOUTHS>,
     /// A decision computed ahead, from the end of the current path.
     ahead: Option<Decision>,
     /// Best fitness per generation of the last decision adopted.
@@ -192,6 +195,7 @@ impl<const N: usize> Mission<N> {
             decide_at: Time::ZERO,
             abandoned_in_row: (0, start_map.position()),
             blacklist: Blacklist::default(),
+            mouths_looked: heapless::Vec::new(),
             ahead: None,
             last_history: heapless::Vec::new(),
             watch: PathWatch::new(),

@@ -25,7 +25,9 @@
 //!   default): before the first decision, a turn in place at 15 deg/s by the laser's blind
 //!   sector plus 10°, ended early when the safety monitor refuses it.
 //! - **Deciding**: a decision by the configured selector ([`SelectorKind`]), computed inside
-//!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` (no frontier reachable) counts
+//!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` (no frontier reachable) first
+//!   sends the robot to look from the mouth of a passage open in Free cells but shut in the
+//!   planning layer, once per passage ([`crate::explore::shut_mouth`]); with none left it counts
 //!   as a failed decision: [`MissionConfig::max_failed_decisions`] of them in a row end the
 //!   mission with [`DoneReason::NothingReachable`] (one look can be cut off for a moment by a
 //!   return the monitor just stopped for, which fresh scans clear). A failed decision is
@@ -447,6 +449,9 @@ pub struct MissionStats {
     /// Escapes: slow manoeuvres out of a place where the plans' first commands keep being
     /// refused (repeated obstacle holds without progress).
     pub escapes: u32,
+    /// Errands to the mouth of a passage shut on the map, to look through it again when no
+    /// frontier was reachable ([`crate::explore::shut_mouth`]).
+    pub mouth_looks: u32,
 }
 
 /// The result of one control period.

@@ -8,7 +8,7 @@
 //! step out of the path of a robot it yields to.
 
 use crate::control::Time;
-use crate::explore::{ExploreObjective, ViewCache};
+use crate::explore::{ExploreObjective, MouthSearch, ViewCache};
 use crate::frontier::FrontierWorkspace;
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{GridGeometry, OccupancyGrid};
@@ -178,7 +178,8 @@ impl<const N: usize> SharedMap<N> {
 }
 
 /// Decision working memory: distance field, path planner, visited-cell stamps, the visibility
-/// cache of the exploration objective (16.0 MB, whatever `N`) and frontier search memory. One
+/// cache of the exploration objective (16.0 MB, whatever `N`), frontier search memory and the
+/// memory of the search for passages shut on the map ([`MouthSearch`]). One
 /// per process is enough, as robots decide one after the other.
 ///
 /// The planner that joins the targets of a decision (the legs after the first, which the
@@ -191,6 +192,7 @@ pub struct Workspace<const N: usize, P = AStar<N>> {
     stamps: [u32; N],
     views: ViewCache,
     frontier: FrontierWorkspace<N, MAX_FRONTIERS>,
+    mouths: MouthSearch<N>,
 }
 
 impl<const N: usize, P: Planner<N>> core::fmt::Debug for Workspace<N, P> {
@@ -224,6 +226,7 @@ impl<const N: usize, P: Planner<N>> Workspace<N, P> {
             stamps: [0; N],
             views: ViewCache::new(),
             frontier: FrontierWorkspace::new(),
+            mouths: MouthSearch::new(),
         }
     }
 
@@ -243,6 +246,12 @@ impl<const N: usize, P: Planner<N>> Workspace<N, P> {
     /// The path planner.
     pub fn planner(&self) -> &P {
         &self.planner
+    }
+
+    /// The distance field of the last decision or plan, and the memory of the search for
+    /// passages shut on the map.
+    pub(crate) fn mouth_parts(&mut self) -> (&DistanceField<N>, &mut MouthSearch<N>) {
+        (&self.field, &mut self.mouths)
     }
 
     /// The exploration objective over this memory, and the frontier search memory.

@@ -140,6 +140,11 @@ impl<const N: usize> Mission<N> {
                 // can cut it off for a moment, and fresh scans clear that. Ended only after
                 // `max_failed_decisions` such looks in a row (as `failed` counts them).
                 self.forget_contacts();
+                // A passage the robot looked through may be shut on the map only: look
+                // through it again from close by, once per passage.
+                if let Some(decided) = self.look_at_shut_mouth(now, map, ws, events) {
+                    return decided;
+                }
                 self.failed(now, events)
             }
             Err(DecideError::NoFeasibleTarget { .. }) if self.battery_low() => {
@@ -209,6 +214,46 @@ impl<const N: usize> Mission<N> {
                 false
             }
         }
+    }
+
+    /// When no frontier is reachable: an errand to the mouth of the nearest passage open in
+    /// Free cells but shut in the planning layer that the robot has not looked from yet
+    /// ([`crate::explore::shut_mouth`]), with the distance field the selector just swept from
+    /// the robot. `None`: no such mouth (or no path to it); else what adopting the errand
+    /// returned (`false`: the failure is counted already).
+    fn look_at_shut_mouth<P: Planner<N>>(
+        &mut self,
+        now: Time,
+        map: &mut SharedMap<N>,
+        ws: &mut Workspace<N, P>,
+        events: &mut Events<'_>,
+    ) -> Option<bool> {
+        if self.mouths_looked.is_full() || self.battery_low() {
+            return None;
+        }
+        let (field, search) = ws.mouth_parts();
+        let cell = search.find(&map.grid, &map.trav, field, &self.mouths_looked)?;
+        let mouth = map.grid.geometry().cell_center(cell);
+        // Remembered whether or not the robot gets there: it is not chosen again.
+        let _ = self.mouths_looked.push(mouth);
+        let waypoints = self.plan_to(self.senses.pose_map, &[mouth], map, ws).ok()?;
+        let length = polyline_length(self.senses.pose_map.position(), &waypoints);
+        let mut targets = heapless::Vec::new();
+        let _ = targets.push(mouth);
+        let decision = Decision {
+            targets,
+            waypoints,
+            path_length_m: length,
+            predicted_gain_cells: 0,
+            energy_steps: units::steps(length, 0.0),
+            evaluations: 0,
+            history: heapless::Vec::new(),
+        };
+        let adopted = self.adopt(now, &decision, events);
+        if adopted {
+            events.stats.mouth_looks += 1;
+        }
+        Some(adopted)
     }
 
     /// Too little energy above the reserve to insist on a decision.
