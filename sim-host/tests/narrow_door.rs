@@ -79,8 +79,28 @@ fn a_forty_centimetre_door_is_never_planned_through_with_a_precise_laser() {
         assert_eq!(r.collisions(), 0);
         let crossed = r.robots[0].trajectory.iter().any(|p| p.x > 6.5);
         assert!(!crossed, "seed {seed}: went through a 0.4 m door");
-        assert!(r.coverage < 0.6, "seed {seed}: coverage {}", r.coverage);
+        // The body never enters the doorway. (This replaced `coverage < 0.6`: a mission that
+        // finds nothing reachable now looks through a passage shut on its map from the
+        // passage's mouth, as a 0.5 m door narrowed by drift needs, and from there sees part of
+        // the room behind a truly narrow door too: 64 % with seed 25. Not driving into the
+        // door is what the test is about, and this checks it at every sample.)
+        let front_m = max_x(&r) + BODY_FRONT_M;
+        assert!(front_m < WALL_X_M, "seed {seed}: front at x = {front_m} m");
     }
+}
+
+/// The body's front ahead of the wheel axle \[m\] (P3-DX: 210 mm).
+const BODY_FRONT_M: f32 = 0.21;
+/// The west face of the wall with the door \[m\].
+const WALL_X_M: f32 = 6.4;
+
+/// The easternmost true position of the robot's axle centre \[m\].
+fn max_x(r: &RunReport) -> f32 {
+    r.robots[0]
+        .trajectory
+        .iter()
+        .map(|p| p.x)
+        .fold(f32::MIN, f32::max)
 }
 
 #[test]
@@ -117,5 +137,7 @@ fn a_forty_centimetre_door_is_never_planned_through() {
     assert_eq!(r.collisions(), 0);
     let crossed = r.robots[0].trajectory.iter().any(|p| p.x > 6.5);
     assert!(!crossed, "went through a 0.4 m door");
+    let front_m = max_x(&r) + BODY_FRONT_M;
+    assert!(front_m < WALL_X_M, "front at x = {front_m} m");
     assert!(r.coverage < 0.6, "coverage {}", r.coverage);
 }
