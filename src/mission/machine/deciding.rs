@@ -179,16 +179,7 @@ impl<const N: usize> Mission<N> {
         }
         match self.plan_to(self.senses.pose_map, &goal, map, ws) {
             Ok(waypoints) => {
-                let length = polyline_length(self.senses.pose_map.position(), &waypoints);
-                let decision = Decision {
-                    targets: goal,
-                    waypoints,
-                    path_length_m: length,
-                    predicted_gain_cells: 0,
-                    energy_steps: units::steps(length, 0.0),
-                    evaluations: 0,
-                    history: heapless::Vec::new(),
-                };
+                let decision = self.errand_decision(goal, waypoints);
                 let ok = self.adopt(now, &decision, events);
                 self.errand.from_goal = true;
                 ok
@@ -237,10 +228,25 @@ impl<const N: usize> Mission<N> {
         // Remembered whether or not the robot gets there: it is not chosen again.
         let _ = self.mouths_looked.push(mouth);
         let waypoints = self.plan_to(self.senses.pose_map, &[mouth], map, ws).ok()?;
-        let length = polyline_length(self.senses.pose_map.position(), &waypoints);
         let mut targets = heapless::Vec::new();
         let _ = targets.push(mouth);
-        let decision = Decision {
+        let decision = self.errand_decision(targets, waypoints);
+        let adopted = self.adopt(now, &decision, events);
+        if adopted {
+            events.stats.mouth_looks += 1;
+        }
+        Some(adopted)
+    }
+
+    /// An errand the optimizer did not choose (a go-to goal, a look from a passage's mouth):
+    /// its route from where the robot is, priced in energy steps, with no predicted gain.
+    fn errand_decision(
+        &self,
+        targets: heapless::Vec<Point2, MAX_TARGETS>,
+        waypoints: heapless::Vec<Point2, MAX_WAYPOINTS>,
+    ) -> Decision {
+        let length = polyline_length(self.senses.pose_map.position(), &waypoints);
+        Decision {
             targets,
             waypoints,
             path_length_m: length,
@@ -248,12 +254,7 @@ impl<const N: usize> Mission<N> {
             energy_steps: units::steps(length, 0.0),
             evaluations: 0,
             history: heapless::Vec::new(),
-        };
-        let adopted = self.adopt(now, &decision, events);
-        if adopted {
-            events.stats.mouth_looks += 1;
         }
-        Some(adopted)
     }
 
     /// Too little energy above the reserve to insist on a decision.
