@@ -14,6 +14,7 @@ use crate::geometry::{Point2, Pose2};
 use crate::grid::{GridGeometry, OccupancyGrid};
 use crate::planner::{AStar, DistanceField, Planner, Traversability};
 
+use super::window::{STAMP_WINDOW_CELLS, StampWindow};
 use super::{MissionConfig, MissionError};
 
 /// Most robots sharing one map: a hundred, as the thesis's simulator (issue 24). A mark is
@@ -191,6 +192,8 @@ pub struct Workspace<const N: usize, P = AStar<N>> {
     stamps: [u32; N],
     views: ViewCache,
     frontier: FrontierWorkspace<N, MAX_FRONTIERS>,
+    /// The map window saved while a robot's body is lifted and the others stamped.
+    stamp: StampWindow<STAMP_WINDOW_CELLS>,
 }
 
 impl<const N: usize, P: Planner<N>> core::fmt::Debug for Workspace<N, P> {
@@ -224,6 +227,7 @@ impl<const N: usize, P: Planner<N>> Workspace<N, P> {
             stamps: [0; N],
             views: ViewCache::new(),
             frontier: FrontierWorkspace::new(),
+            stamp: StampWindow::new(),
         }
     }
 
@@ -238,6 +242,11 @@ impl<const N: usize, P: Planner<N>> Workspace<N, P> {
         ws.views
             .set_entry_limit(crate::explore::view_cache::MAX_VIEWS);
         ws
+    }
+
+    /// The saved map window (`super::window`).
+    pub(crate) fn stamp_window(&mut self) -> &mut StampWindow<STAMP_WINDOW_CELLS> {
+        &mut self.stamp
     }
 
     /// The path planner.

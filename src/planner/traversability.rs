@@ -805,6 +805,67 @@ impl<const N: usize> Traversability<N> {
         Ok((s, t))
     }
 
+    /// How far \[cells\] a change of one cell's class reaches in this layer: the widest
+    /// band's disc, plus one for the move masks around the cells whose code changes.
+    pub(crate) fn change_reach_cells(&self) -> usize {
+        let mut reach = 0usize;
+        for &[dc, dr] in &self.stencil[..self.stencil_near_len] {
+            reach = reach
+                .max(dc.unsigned_abs() as usize)
+                .max(dr.unsigned_abs() as usize);
+        }
+        reach + 1
+    }
+
+    /// Copies the per-cell state of the cells in `area` into `out`. `false` (nothing
+    /// copied) when the area leaves the layer or does not fit in `out`.
+    pub(crate) fn save_window<const C: usize>(
+        &self,
+        area: CellBox,
+        out: &mut TravWindow<C>,
+    ) -> bool {
+        let w = self.geometry.width;
+        let (Some(cols), Some(rows)) = (
+            area.col_end.checked_sub(area.col_min),
+            area.row_end.checked_sub(area.row_min),
+        ) else {
+            return false;
+        };
+        if area.col_end > w || area.row_end > self.geometry.height || cols * rows > C {
+            return false;
+        }
+        for (k, row) in (area.row_min..area.row_end).enumerate() {
+            let (from, to) = (row * w + area.col_min, k * cols);
+            let (src, dst) = (from..from + cols, to..to + cols);
+            out.class[dst.clone()].copy_from_slice(&self.class[src.clone()]);
+            out.near[dst.clone()].copy_from_slice(&self.near[src.clone()]);
+            out.near_turn[dst.clone()].copy_from_slice(&self.near_turn[src.clone()]);
+            out.near_band[dst.clone()].copy_from_slice(&self.near_band[src.clone()]);
+            out.code[dst.clone()].copy_from_slice(&self.code[src.clone()]);
+            out.moves[dst].copy_from_slice(&self.moves[src]);
+        }
+        true
+    }
+
+    /// Puts back the cells of `area` saved by [`Self::save_window`]: the state undoing every
+    /// class change since, cell by cell, would leave, provided every cell changed since lies
+    /// in `area` shrunk by [`Self::change_reach_cells`]. The box of marked cells keeps what it
+    /// grew by meanwhile (undoing cell by cell never shrinks it either).
+    pub(crate) fn restore_window<const C: usize>(&mut self, area: CellBox, saved: &TravWindow<C>) {
+        let w = self.geometry.width;
+        let cols = area.col_end - area.col_min;
+        for (k, row) in (area.row_min..area.row_end).enumerate() {
+            let (to, from) = (row * w + area.col_min, k * cols);
+            let (dst, src) = (to..to + cols, from..from + cols);
+            self.class[dst.clone()].copy_from_slice(&saved.class[src.clone()]);
+            self.near[dst.clone()].copy_from_slice(&saved.near[src.clone()]);
+            self.near_turn[dst.clone()].copy_from_slice(&saved.near_turn[src.clone()]);
+            self.near_band[dst.clone()].copy_from_slice(&saved.near_band[src.clone()]);
+            self.code[dst.clone()].copy_from_slice(&saved.code[src.clone()]);
+            self.moves[dst].copy_from_slice(&saved.moves[src]);
+        }
+    }
+
     /// Whether this layer's per-cell state equals `other`'s (same geometry, configuration and
     /// cells). Lets tests compare an incrementally updated layer with a rebuilt one.
     pub fn same_state(&self, other: &Self) -> bool {
@@ -817,6 +878,32 @@ impl<const N: usize> Traversability<N> {
             && self.near_band[..n] == other.near_band[..n]
             && self.code[..n] == other.code[..n]
             && self.moves[..n] == other.moves[..n]
+    }
+}
+
+/// A saved rectangle of a [`Traversability`] layer's per-cell state, up to `C` cells
+/// ([`Traversability::save_window`]).
+#[derive(Clone, bytemuck::Zeroable)]
+pub(crate) struct TravWindow<const C: usize> {
+    class: [u8; C],
+    near: [u16; C],
+    near_turn: [u16; C],
+    near_band: [u16; C],
+    code: [u8; C],
+    moves: [u8; C],
+}
+
+impl<const C: usize> TravWindow<C> {
+    /// All zero, built on the stack (or in a `static`).
+    pub(crate) const fn new() -> Self {
+        Self {
+            class: [0; C],
+            near: [0; C],
+            near_turn: [0; C],
+            near_band: [0; C],
+            code: [0; C],
+            moves: [0; C],
+        }
     }
 }
 
