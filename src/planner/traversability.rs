@@ -619,6 +619,47 @@ impl<const N: usize> Traversability<N> {
         }
     }
 
+    /// Adds `delta` (+1 or -1) to the counts under the discs centred on cell `i`, leaving the
+    /// step codes to [`Deferred::finish`].
+    fn bump_disc_deferred(&mut self, i: usize, delta: i32) {
+        let w = self.geometry.width as i32;
+        let h = self.geometry.height as i32;
+        let col = (i % self.geometry.width) as i32;
+        let row = (i / self.geometry.width) as i32;
+        let bump = |count: &mut u16| {
+            *count = if delta > 0 {
+                count.saturating_add(1)
+            } else {
+                count.saturating_sub(1)
+            };
+        };
+        for k in 0..self.stencil_near_len {
+            let [dc, dr] = self.stencil[k];
+            let c = col + dc as i32;
+            let r = row + dr as i32;
+            if c < 0 || r < 0 || c >= w || r >= h {
+                continue;
+            }
+            let j = (r * w + c) as usize;
+            bump(&mut self.near_band[j]);
+            if k < self.stencil_turn_len {
+                bump(&mut self.near_turn[j]);
+            }
+            if k < self.stencil_len {
+                bump(&mut self.near[j]);
+            }
+        }
+    }
+
+    /// Class changes to apply as one batch: pass the returned observer to the grid's updates,
+    /// then call [`Deferred::finish`].
+    pub(crate) fn deferred(&mut self) -> Deferred<'_, N> {
+        Deferred {
+            layer: self,
+            changed: CellBox::EMPTY,
+        }
+    }
+
     /// Sets the step code of cell `i`; if the cell changes between blocked and passable,
     /// refreshes the move masks of its 3 x 3 neighbourhood.
     #[inline]
@@ -878,6 +919,63 @@ impl<const N: usize> Traversability<N> {
             && self.near_band[..n] == other.near_band[..n]
             && self.code[..n] == other.code[..n]
             && self.moves[..n] == other.moves[..n]
+    }
+}
+
+/// A batch of class changes to a [`Traversability`] layer ([`Traversability::deferred`]):
+/// classes and obstacle counts are updated as the grid reports the changes, the step codes
+/// and move masks once per cell at [`Self::finish`], where updating cell by cell refreshes a
+/// cell's code each time one of its counts changes between zero and non-zero. The cells end
+/// as cell-by-cell updates leave them (codes and move masks are functions of the classes and
+/// counts). The box of marked cells grows by the cells whose final code differs from the
+/// Unknown cells'; cell by cell, it also grows by the cells whose code differs only in
+/// between. The two agree when the batch only adds Occupied cells or only removes them (the
+/// counts then move one way: a code away from the Unknown one in between is so at the start,
+/// and the cell already marked, or at the end), which is how the missions use it.
+pub(crate) struct Deferred<'a, const N: usize> {
+    layer: &'a mut Traversability<N>,
+    /// The cells whose class changed.
+    changed: CellBox,
+}
+
+impl<const N: usize> Deferred<'_, N> {
+    /// Refreshes the step codes (and, where a cell changes between blocked and passable, the
+    /// move masks around it) of the cells the batch can have changed.
+    pub(crate) fn finish(self) {
+        let layer = self.layer;
+        let c = self.changed;
+        if c.is_empty() {
+            return;
+        }
+        let reach = layer.change_reach_cells() - 1;
+        let (w, h) = (layer.geometry.width, layer.geometry.height);
+        for row in c.row_min.saturating_sub(reach)..(c.row_end + reach).min(h) {
+            for col in c.col_min.saturating_sub(reach)..(c.col_end + reach).min(w) {
+                let j = row * w + col;
+                let code = layer.code_of(j);
+                if code != layer.code[j] {
+                    layer.set_code(j, code);
+                }
+            }
+        }
+    }
+}
+
+impl<const N: usize> CellObserver for Deferred<'_, N> {
+    fn class_changed(&mut self, index: usize, old: CellClass, new: CellClass) {
+        let layer = &mut *self.layer;
+        if index >= layer.geometry.cell_count() {
+            return;
+        }
+        let _ = old;
+        let was_occupied = layer.class[index] == CLASS_OCCUPIED;
+        layer.class[index] = class_code(new);
+        let is_occupied = new == CellClass::Occupied;
+        if was_occupied != is_occupied {
+            layer.bump_disc_deferred(index, if is_occupied { 1 } else { -1 });
+        }
+        let w = layer.geometry.width;
+        self.changed.include(index % w, index / w);
     }
 }
 

@@ -217,7 +217,9 @@ impl<const N: usize> Mission<N> {
         let here = self.senses.pose_map.position();
         let c = geom.cell_at_unchecked(here);
         let weak_free = self.config.sensor.free_log_odds;
-        for row in c.row - span..=c.row + span {
+        // One batch: the layer's codes refreshed once per cell (it only removes Occupied).
+        let mut batch = map.trav.deferred();
+        'rows: for row in c.row - span..=c.row + span {
             for col in c.col - span..=c.col + span {
                 let cell = Cell::new(col, row);
                 let Some(i) = geom.index(cell) else { continue };
@@ -227,11 +229,12 @@ impl<const N: usize> Mission<N> {
                     continue;
                 }
                 if lifted.push((i, map.grid.log_odds_at(i))).is_err() {
-                    return lifted;
+                    break 'rows;
                 }
-                map.grid.set_log_odds(i, weak_free, &mut map.trav);
+                map.grid.set_log_odds(i, weak_free, &mut batch);
             }
         }
+        batch.finish();
         lifted
     }
 
@@ -249,7 +252,9 @@ impl<const N: usize> Mission<N> {
         let span = math::ceil(r / geom.resolution_m) as i32;
         let here = self.senses.pose_map.position();
         let occupied = map.grid.bounds().max;
-        // What the bumpers found lately, across the bumper's width.
+        // What the bumpers found lately, across the bumper's width. Each batch only adds
+        // Occupied cells: the layer's codes refreshed once per cell.
+        let mut batch = map.trav.deferred();
         for &(a, b, until) in &self.contacts {
             if now > until {
                 continue;
@@ -265,11 +270,13 @@ impl<const N: usize> Mission<N> {
                     continue;
                 }
                 if saved.push((i, map.grid.log_odds_at(i))).is_err() {
+                    batch.finish();
                     return;
                 }
-                map.grid.set_log_odds(i, occupied, &mut map.trav);
+                map.grid.set_log_odds(i, occupied, &mut batch);
             }
         }
+        batch.finish();
         for k in 0..map.robots().len() {
             let m = &map.robots()[k];
             let p = m.pose.position();
@@ -280,6 +287,7 @@ impl<const N: usize> Mission<N> {
                 continue;
             }
             let c = geom.cell_at_unchecked(p);
+            let mut batch = map.trav.deferred();
             for row in c.row - span..=c.row + span {
                 for col in c.col - span..=c.col + span {
                     let cell = Cell::new(col, row);
@@ -290,11 +298,13 @@ impl<const N: usize> Mission<N> {
                         continue;
                     }
                     if saved.push((i, map.grid.log_odds_at(i))).is_err() {
+                        batch.finish();
                         return;
                     }
-                    map.grid.set_log_odds(i, occupied, &mut map.trav);
+                    map.grid.set_log_odds(i, occupied, &mut batch);
                 }
             }
+            batch.finish();
         }
     }
 
