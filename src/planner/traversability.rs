@@ -1120,6 +1120,142 @@ mod tests {
         );
     }
 
+    /// Cells within `r` cells of (`col`, `row`) inside the grid, and the box holding them.
+    fn disc(g: &GridGeometry, col: i32, row: i32, r: i32) -> (heapless::Vec<usize, 256>, CellBox) {
+        let mut cells = heapless::Vec::new();
+        let mut area = CellBox::EMPTY;
+        for dr in -r..=r {
+            for dc in -r..=r {
+                if dc * dc + dr * dr > r * r {
+                    continue;
+                }
+                if let Some(i) = g.index(Cell::new(col + dc, row + dr)) {
+                    cells.push(i).unwrap();
+                    area.include(i % g.width, i / g.width);
+                }
+            }
+        }
+        (cells, area)
+    }
+
+    /// The mission's lift-and-stamp (`mission/machine/robots.rs`): Occupied cells of one disc
+    /// set to weak Free in one batch, then non-Occupied cells of two discs set Occupied, one
+    /// batch per disc; then everything put back by copying a saved window. Cells, class
+    /// counts and the known and marked boxes equal those of the same changes made and undone
+    /// cell by cell, on random maps, with wall bands, under both Unknown policies.
+    #[test]
+    fn batches_and_window_restore_equal_cell_by_cell() {
+        let g = geometry();
+        let mut rng = random::seeded(24);
+        let bands = WallBands {
+            no_turn_radius_m: 0.35,
+            no_turn_cost_factor: 2.0,
+            near_radius_m: 0.55,
+            near_cost_factor: 1.5,
+        };
+        for policy in [
+            UnknownPolicy::Traversable { cost_factor: 1.5 },
+            UnknownPolicy::Blocked,
+        ] {
+            let config = TraversabilityConfig {
+                robot_radius_m: 0.25,
+                unknown_policy: policy,
+                bands,
+            };
+            for trial in 0..40 {
+                let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
+                let mut t = Traversability::<CAP>::new(g, config).unwrap();
+                // A random map, sparse or dense, some of it still Unknown.
+                let fills = 50 + random::below(&mut rng, 1500);
+                for _ in 0..fills {
+                    let i = random::below(&mut rng, g.cell_count());
+                    let l = random::range_f32(&mut rng, -2.0, 2.0);
+                    grid.set_log_odds(i, l, &mut t);
+                }
+                let (w, h) = (g.width as i32, g.height as i32);
+                let at = |rng: &mut _| {
+                    (
+                        random::below(rng, w as usize + 4) as i32 - 2,
+                        random::below(rng, h as usize + 4) as i32 - 2,
+                    )
+                };
+                let (body, mut area) = {
+                    let (c, r) = at(&mut rng);
+                    disc(&g, c, r, 4)
+                };
+                let others = [at(&mut rng), at(&mut rng)].map(|(c, r)| disc(&g, c, r, 3));
+                for (_, b) in &others {
+                    if !b.is_empty() {
+                        area.include(b.col_min, b.row_min);
+                        area.include(b.col_end - 1, b.row_end - 1);
+                    }
+                }
+                let grow = t.change_reach_cells();
+                let area = CellBox {
+                    col_min: area.col_min.saturating_sub(grow),
+                    col_end: (area.col_end + grow).min(g.width),
+                    row_min: area.row_min.saturating_sub(grow),
+                    row_end: (area.row_end + grow).min(g.height),
+                };
+                let (mut grid_b, mut t_b) = (grid.clone(), t.clone());
+                let mut saved_log_odds = [0.0f32; CAP];
+                let mut saved_cells = TravWindow::<CAP>::new();
+                let counts = grid_b.save_window(area, &mut saved_log_odds).unwrap();
+                assert!(t_b.save_window(area, &mut saved_cells));
+
+                // Cell by cell.
+                let mut undo: heapless::Vec<(usize, f32), 512> = heapless::Vec::new();
+                for &i in &body {
+                    if grid.class(i) == CellClass::Occupied {
+                        undo.push((i, grid.log_odds_at(i))).unwrap();
+                        grid.set_log_odds(i, -0.4, &mut t);
+                    }
+                }
+                for (cells, _) in &others {
+                    for &i in cells {
+                        if grid.class(i) != CellClass::Occupied {
+                            undo.push((i, grid.log_odds_at(i))).unwrap();
+                            grid.set_log_odds(i, 3.5, &mut t);
+                        }
+                    }
+                }
+                // In batches.
+                let mut batch = t_b.deferred();
+                for &i in &body {
+                    if grid_b.class(i) == CellClass::Occupied {
+                        grid_b.set_log_odds(i, -0.4, &mut batch);
+                    }
+                }
+                batch.finish();
+                for (cells, _) in &others {
+                    let mut batch = t_b.deferred();
+                    for &i in cells {
+                        if grid_b.class(i) != CellClass::Occupied {
+                            grid_b.set_log_odds(i, 3.5, &mut batch);
+                        }
+                    }
+                    batch.finish();
+                }
+                let why = format!("{policy:?}, trial {trial}");
+                assert!(t_b.same_state(&t), "after the batches: {why}");
+                assert_eq!(t_b.marked_box(), t.marked_box(), "{why}");
+                assert_eq!(grid_b.log_odds(), grid.log_odds(), "{why}");
+                assert_eq!(grid_b.counts(), grid.counts(), "{why}");
+
+                for &(i, l) in undo.iter().rev() {
+                    grid.set_log_odds(i, l, &mut t);
+                }
+                grid_b.restore_window(area, &saved_log_odds, counts);
+                t_b.restore_window(area, &saved_cells);
+                assert!(t_b.same_state(&t), "after the restore: {why}");
+                assert_eq!(t_b.marked_box(), t.marked_box(), "{why}");
+                assert_eq!(grid_b.log_odds(), grid.log_odds(), "{why}");
+                assert_eq!(grid_b.counts(), grid.counts(), "{why}");
+                assert_eq!(grid_b.known_box(), grid.known_box(), "{why}");
+            }
+        }
+    }
+
     #[test]
     fn incremental_updates_equal_a_rebuild() {
         let g = geometry();
