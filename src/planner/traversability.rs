@@ -932,6 +932,9 @@ impl<const N: usize> Traversability<N> {
 /// between. The two agree when the batch only adds Occupied cells or only removes them (the
 /// counts then move one way: a code away from the Unknown one in between is so at the start,
 /// and the cell already marked, or at the end), which is how the missions use it.
+/// Side of the largest region whose move masks [`Deferred::finish`] refreshes in one pass.
+const DIRTY_SIDE: usize = 64;
+
 pub(crate) struct Deferred<'a, const N: usize> {
     layer: &'a mut Traversability<N>,
     /// The cells whose class changed.
@@ -949,13 +952,54 @@ impl<const N: usize> Deferred<'_, N> {
         }
         let reach = layer.change_reach_cells() - 1;
         let (w, h) = (layer.geometry.width, layer.geometry.height);
-        for row in c.row_min.saturating_sub(reach)..(c.row_end + reach).min(h) {
-            for col in c.col_min.saturating_sub(reach)..(c.col_end + reach).min(w) {
+        let (r0, r1) = (c.row_min.saturating_sub(reach), (c.row_end + reach).min(h));
+        let (c0, c1) = (c.col_min.saturating_sub(reach), (c.col_end + reach).min(w));
+        // The move masks to refresh, one bit a cell of the region grown by one; a larger
+        // region refreshes them cell by cell.
+        let (g_r0, g_c0) = (r0.saturating_sub(1), c0.saturating_sub(1));
+        let (g_r1, g_c1) = ((r1 + 1).min(h), (c1 + 1).min(w));
+        if g_r1 - g_r0 > DIRTY_SIDE || g_c1 - g_c0 > DIRTY_SIDE {
+            for row in r0..r1 {
+                for col in c0..c1 {
+                    let j = row * w + col;
+                    let code = layer.code_of(j);
+                    if code != layer.code[j] {
+                        layer.set_code(j, code);
+                    }
+                }
+            }
+            return;
+        }
+        let mut dirty = [0u64; DIRTY_SIDE];
+        let plain = layer.unknown_code();
+        for row in r0..r1 {
+            for col in c0..c1 {
                 let j = row * w + col;
                 let code = layer.code_of(j);
-                if code != layer.code[j] {
-                    layer.set_code(j, code);
+                let old = layer.code[j];
+                if code == old {
+                    continue;
                 }
+                layer.code[j] = code;
+                if code != plain {
+                    layer.marked.include(col, row);
+                }
+                if (old == CODE_BLOCKED) != (code == CODE_BLOCKED) {
+                    let (lo, hi) = (col.saturating_sub(1).max(g_c0), (col + 2).min(g_c1));
+                    let bits = ((1u64 << (hi - lo)) - 1) << (lo - g_c0);
+                    for r in row.saturating_sub(1).max(g_r0)..(row + 2).min(g_r1) {
+                        dirty[r - g_r0] |= bits;
+                    }
+                }
+            }
+        }
+        for (k, &bits) in dirty.iter().enumerate().take(g_r1 - g_r0) {
+            let mut bits = bits;
+            while bits != 0 {
+                let col = g_c0 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let row = g_r0 + k;
+                layer.moves[row * w + col] = layer.moves_of(col, row);
             }
         }
     }
