@@ -232,6 +232,8 @@ pub struct Traversability<const N: usize> {
     stencil_turn_len: usize,
     /// Offsets within the near radius (or either smaller one, if larger).
     stencil_near_len: usize,
+    /// No offset of the stencil is farther than this in a row or a column \[cells\].
+    stencil_reach: usize,
     /// Cell classes (CLASS_*).
     class: [u8; N],
     /// Occupied cells within the inflation radius (the cell itself included).
@@ -278,6 +280,7 @@ impl<const N: usize> Traversability<N> {
             stencil_len: 0,
             stencil_turn_len: 0,
             stencil_near_len: 0,
+            stencil_reach: 0,
             class: [CLASS_UNKNOWN; N],
             near: [0; N],
             near_turn: [0; N],
@@ -533,6 +536,7 @@ impl<const N: usize> Traversability<N> {
         self.stencil_len = lens[0];
         self.stencil_turn_len = lens[1];
         self.stencil_near_len = lens[2];
+        self.stencil_reach = reach as usize;
         Ok(())
     }
 
@@ -622,6 +626,37 @@ impl<const N: usize> Traversability<N> {
     /// Adds `delta` (+1 or -1) to the counts under the discs centred on cell `i`, leaving the
     /// step codes to [`Deferred::finish`].
     fn bump_disc_deferred(&mut self, i: usize, delta: i32) {
+        let (width, reach) = (self.geometry.width, self.stencil_reach);
+        let (col, row) = (i % width, i / width);
+        if col >= reach && row >= reach && col + reach < width && row + reach < self.geometry.height
+        {
+            // The whole disc on the grid: no bounds to test, one loop per band.
+            let bump = |count: &mut u16| {
+                *count = if delta > 0 {
+                    count.saturating_add(1)
+                } else {
+                    count.saturating_sub(1)
+                };
+            };
+            let w = width as isize;
+            let at = |[dc, dr]: [i16; 2]| (i as isize + dr as isize * w + dc as isize) as usize;
+            for k in 0..self.stencil_len {
+                let j = at(self.stencil[k]);
+                bump(&mut self.near_band[j]);
+                bump(&mut self.near_turn[j]);
+                bump(&mut self.near[j]);
+            }
+            for k in self.stencil_len..self.stencil_turn_len {
+                let j = at(self.stencil[k]);
+                bump(&mut self.near_band[j]);
+                bump(&mut self.near_turn[j]);
+            }
+            for k in self.stencil_turn_len..self.stencil_near_len {
+                let j = at(self.stencil[k]);
+                bump(&mut self.near_band[j]);
+            }
+            return;
+        }
         let w = self.geometry.width as i32;
         let h = self.geometry.height as i32;
         let col = (i % self.geometry.width) as i32;
