@@ -179,7 +179,8 @@ impl<const N: usize> SharedMap<N> {
 }
 
 /// Decision working memory: distance field, path planner, visited-cell stamps, the visibility
-/// cache of the exploration objective (16.0 MB, whatever `N`) and frontier search memory. One
+/// cache of the exploration objective (16.0 MB, whatever `N`), frontier search memory and the
+/// map window saved while a robot's body is lifted and the others stamped (213 KB). One
 /// per process is enough, as robots decide one after the other.
 ///
 /// The planner that joins the targets of a decision (the legs after the first, which the
