@@ -606,6 +606,37 @@ impl<const N: usize> OccupancyGrid<N> {
         (old, new)
     }
 
+    /// Copies the log-odds of the cells in `area` (row by row) into `out`; returns the class
+    /// counters, for [`Self::restore_window`]. `None` (nothing copied) when the area leaves
+    /// the grid or does not fit in `out`.
+    pub(crate) fn save_window(&self, area: CellBox, out: &mut [f32]) -> Option<CellCounts> {
+        let w = self.geometry.width;
+        let cols = area.col_end.checked_sub(area.col_min)?;
+        let rows = area.row_end.checked_sub(area.row_min)?;
+        if area.col_end > w || area.row_end > self.geometry.height || cols * rows > out.len() {
+            return None;
+        }
+        for (k, row) in (area.row_min..area.row_end).enumerate() {
+            let from = row * w + area.col_min;
+            out[k * cols..(k + 1) * cols].copy_from_slice(&self.log_odds[from..from + cols]);
+        }
+        Some(self.counts)
+    }
+
+    /// Puts back the log-odds and class counters saved by [`Self::save_window`] for `area`,
+    /// as if every cell changed since had been set back one by one with
+    /// [`Self::set_log_odds`]: the box of known cells keeps what it grew by meanwhile.
+    /// The caller must not have changed any cell outside `area` since the save.
+    pub(crate) fn restore_window(&mut self, area: CellBox, saved: &[f32], counts: CellCounts) {
+        let w = self.geometry.width;
+        let cols = area.col_end - area.col_min;
+        for (k, row) in (area.row_min..area.row_end).enumerate() {
+            let to = row * w + area.col_min;
+            self.log_odds[to..to + cols].copy_from_slice(&saved[k * cols..(k + 1) * cols]);
+        }
+        self.counts = counts;
+    }
+
     /// Sets a cell to a class with the bounds' certainty (Occupied: max, Free: min, Unknown: 0).
     pub fn set_class(
         &mut self,

@@ -457,6 +457,8 @@ impl<const N: usize> Mission<N> {
         // The robot's own body, as other robots' scans put it on the map, must not block its
         // own plans, and the robots near it block them wherever the scans have got to: both
         // for the decisions of this period, then the cells are put back.
+        let area = self.stamp_area(map, now);
+        let saved = ws.stamp_window().save(map, area);
         let mut lifted = self.lift_own_body(map);
         self.stamp_others(map, now, &mut lifted);
         let mut proposed = self.run(now, map, ws, rng, &mut events);
@@ -478,8 +480,12 @@ impl<const N: usize> Mission<N> {
             );
         }
         let remembered = self.remembered_around(map);
-        for &(i, value) in lifted.iter().rev() {
-            map.grid.set_log_odds(i, value, &mut map.trav);
+        if saved {
+            ws.stamp_window().restore(map);
+        } else {
+            for &(i, value) in lifted.iter().rev() {
+                map.grid.set_log_odds(i, value, &mut map.trav);
+            }
         }
 
         let s = &self.senses;

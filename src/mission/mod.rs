@@ -118,6 +118,7 @@ pub mod footprint;
 mod machine;
 mod shared;
 pub mod voltage;
+mod window;
 
 #[cfg(all(test, feature = "std"))]
 mod tests;

@@ -25,6 +25,7 @@ pub mod waypoints;
 pub use astar::AStar;
 pub use blocked_boxes::BlockedBoxes;
 pub use distance_field::DistanceField;
+pub(crate) use traversability::TravWindow;
 pub use traversability::{
     Traversability, TraversabilityConfig, TraversabilityError, UnknownPolicy, WallBands,
 };

@@ -232,6 +232,8 @@ pub struct Traversability<const N: usize> {
     stencil_turn_len: usize,
     /// Offsets within the near radius (or either smaller one, if larger).
     stencil_near_len: usize,
+    /// No offset of the stencil is farther than this in a row or a column \[cells\].
+    stencil_reach: usize,
     /// Cell classes (CLASS_*).
     class: [u8; N],
     /// Occupied cells within the inflation radius (the cell itself included).
@@ -278,6 +280,7 @@ impl<const N: usize> Traversability<N> {
             stencil_len: 0,
             stencil_turn_len: 0,
             stencil_near_len: 0,
+            stencil_reach: 0,
             class: [CLASS_UNKNOWN; N],
             near: [0; N],
             near_turn: [0; N],
@@ -533,6 +536,7 @@ impl<const N: usize> Traversability<N> {
         self.stencil_len = lens[0];
         self.stencil_turn_len = lens[1];
         self.stencil_near_len = lens[2];
+        self.stencil_reach = reach as usize;
         Ok(())
     }
 
@@ -616,6 +620,78 @@ impl<const N: usize> Traversability<N> {
             if changed {
                 self.set_code(j, self.code_of(j));
             }
+        }
+    }
+
+    /// Adds `delta` (+1 or -1) to the counts under the discs centred on cell `i`, leaving the
+    /// step codes to [`Deferred::finish`].
+    fn bump_disc_deferred(&mut self, i: usize, delta: i32) {
+        let (width, reach) = (self.geometry.width, self.stencil_reach);
+        let (col, row) = (i % width, i / width);
+        if col >= reach && row >= reach && col + reach < width && row + reach < self.geometry.height
+        {
+            // The whole disc on the grid: no bounds to test, one loop per band.
+            let bump = |count: &mut u16| {
+                *count = if delta > 0 {
+                    count.saturating_add(1)
+                } else {
+                    count.saturating_sub(1)
+                };
+            };
+            let w = width as isize;
+            let at = |[dc, dr]: [i16; 2]| (i as isize + dr as isize * w + dc as isize) as usize;
+            for k in 0..self.stencil_len {
+                let j = at(self.stencil[k]);
+                bump(&mut self.near_band[j]);
+                bump(&mut self.near_turn[j]);
+                bump(&mut self.near[j]);
+            }
+            for k in self.stencil_len..self.stencil_turn_len {
+                let j = at(self.stencil[k]);
+                bump(&mut self.near_band[j]);
+                bump(&mut self.near_turn[j]);
+            }
+            for k in self.stencil_turn_len..self.stencil_near_len {
+                let j = at(self.stencil[k]);
+                bump(&mut self.near_band[j]);
+            }
+            return;
+        }
+        let w = self.geometry.width as i32;
+        let h = self.geometry.height as i32;
+        let col = (i % self.geometry.width) as i32;
+        let row = (i / self.geometry.width) as i32;
+        let bump = |count: &mut u16| {
+            *count = if delta > 0 {
+                count.saturating_add(1)
+            } else {
+                count.saturating_sub(1)
+            };
+        };
+        for k in 0..self.stencil_near_len {
+            let [dc, dr] = self.stencil[k];
+            let c = col + dc as i32;
+            let r = row + dr as i32;
+            if c < 0 || r < 0 || c >= w || r >= h {
+                continue;
+            }
+            let j = (r * w + c) as usize;
+            bump(&mut self.near_band[j]);
+            if k < self.stencil_turn_len {
+                bump(&mut self.near_turn[j]);
+            }
+            if k < self.stencil_len {
+                bump(&mut self.near[j]);
+            }
+        }
+    }
+
+    /// Class changes to apply as one batch: pass the returned observer to the grid's updates,
+    /// then call [`Deferred::finish`].
+    pub(crate) fn deferred(&mut self) -> Deferred<'_, N> {
+        Deferred {
+            layer: self,
+            changed: CellBox::EMPTY,
         }
     }
 
@@ -805,6 +881,67 @@ impl<const N: usize> Traversability<N> {
         Ok((s, t))
     }
 
+    /// How far \[cells\] a change of one cell's class reaches in this layer: the widest
+    /// band's disc, plus one for the move masks around the cells whose code changes.
+    pub(crate) fn change_reach_cells(&self) -> usize {
+        let mut reach = 0usize;
+        for &[dc, dr] in &self.stencil[..self.stencil_near_len] {
+            reach = reach
+                .max(dc.unsigned_abs() as usize)
+                .max(dr.unsigned_abs() as usize);
+        }
+        reach + 1
+    }
+
+    /// Copies the per-cell state of the cells in `area` into `out`. `false` (nothing
+    /// copied) when the area leaves the layer or does not fit in `out`.
+    pub(crate) fn save_window<const C: usize>(
+        &self,
+        area: CellBox,
+        out: &mut TravWindow<C>,
+    ) -> bool {
+        let w = self.geometry.width;
+        let (Some(cols), Some(rows)) = (
+            area.col_end.checked_sub(area.col_min),
+            area.row_end.checked_sub(area.row_min),
+        ) else {
+            return false;
+        };
+        if area.col_end > w || area.row_end > self.geometry.height || cols * rows > C {
+            return false;
+        }
+        for (k, row) in (area.row_min..area.row_end).enumerate() {
+            let (from, to) = (row * w + area.col_min, k * cols);
+            let (src, dst) = (from..from + cols, to..to + cols);
+            out.class[dst.clone()].copy_from_slice(&self.class[src.clone()]);
+            out.near[dst.clone()].copy_from_slice(&self.near[src.clone()]);
+            out.near_turn[dst.clone()].copy_from_slice(&self.near_turn[src.clone()]);
+            out.near_band[dst.clone()].copy_from_slice(&self.near_band[src.clone()]);
+            out.code[dst.clone()].copy_from_slice(&self.code[src.clone()]);
+            out.moves[dst].copy_from_slice(&self.moves[src]);
+        }
+        true
+    }
+
+    /// Puts back the cells of `area` saved by [`Self::save_window`]: the state undoing every
+    /// class change since, cell by cell, would leave, provided every cell changed since lies
+    /// in `area` shrunk by [`Self::change_reach_cells`]. The box of marked cells keeps what it
+    /// grew by meanwhile (undoing cell by cell never shrinks it either).
+    pub(crate) fn restore_window<const C: usize>(&mut self, area: CellBox, saved: &TravWindow<C>) {
+        let w = self.geometry.width;
+        let cols = area.col_end - area.col_min;
+        for (k, row) in (area.row_min..area.row_end).enumerate() {
+            let (to, from) = (row * w + area.col_min, k * cols);
+            let (dst, src) = (to..to + cols, from..from + cols);
+            self.class[dst.clone()].copy_from_slice(&saved.class[src.clone()]);
+            self.near[dst.clone()].copy_from_slice(&saved.near[src.clone()]);
+            self.near_turn[dst.clone()].copy_from_slice(&saved.near_turn[src.clone()]);
+            self.near_band[dst.clone()].copy_from_slice(&saved.near_band[src.clone()]);
+            self.code[dst.clone()].copy_from_slice(&saved.code[src.clone()]);
+            self.moves[dst].copy_from_slice(&saved.moves[src]);
+        }
+    }
+
     /// Whether this layer's per-cell state equals `other`'s (same geometry, configuration and
     /// cells). Lets tests compare an incrementally updated layer with a rebuilt one.
     pub fn same_state(&self, other: &Self) -> bool {
@@ -817,6 +954,133 @@ impl<const N: usize> Traversability<N> {
             && self.near_band[..n] == other.near_band[..n]
             && self.code[..n] == other.code[..n]
             && self.moves[..n] == other.moves[..n]
+    }
+}
+
+/// A batch of class changes to a [`Traversability`] layer ([`Traversability::deferred`]):
+/// classes and obstacle counts are updated as the grid reports the changes, the step codes
+/// and move masks once per cell at [`Self::finish`], where updating cell by cell refreshes a
+/// cell's code each time one of its counts changes between zero and non-zero. The cells end
+/// as cell-by-cell updates leave them (codes and move masks are functions of the classes and
+/// counts). The box of marked cells grows by the cells whose final code differs from the
+/// Unknown cells'; cell by cell, it also grows by the cells whose code differs only in
+/// between. The two agree when the batch only adds Occupied cells or only removes them (the
+/// counts then move one way: a code away from the Unknown one in between is so at the start,
+/// and the cell already marked, or at the end), which is how the missions use it.
+/// Side of the largest region whose move masks [`Deferred::finish`] refreshes in one pass.
+const DIRTY_SIDE: usize = 64;
+
+pub(crate) struct Deferred<'a, const N: usize> {
+    layer: &'a mut Traversability<N>,
+    /// The cells whose class changed.
+    changed: CellBox,
+}
+
+impl<const N: usize> Deferred<'_, N> {
+    /// Refreshes the step codes (and, where a cell changes between blocked and passable, the
+    /// move masks around it) of the cells the batch can have changed.
+    pub(crate) fn finish(self) {
+        let layer = self.layer;
+        let c = self.changed;
+        if c.is_empty() {
+            return;
+        }
+        let reach = layer.change_reach_cells() - 1;
+        let (w, h) = (layer.geometry.width, layer.geometry.height);
+        let (r0, r1) = (c.row_min.saturating_sub(reach), (c.row_end + reach).min(h));
+        let (c0, c1) = (c.col_min.saturating_sub(reach), (c.col_end + reach).min(w));
+        // The move masks to refresh, one bit a cell of the region grown by one; a larger
+        // region refreshes them cell by cell.
+        let (g_r0, g_c0) = (r0.saturating_sub(1), c0.saturating_sub(1));
+        let (g_r1, g_c1) = ((r1 + 1).min(h), (c1 + 1).min(w));
+        if g_r1 - g_r0 > DIRTY_SIDE || g_c1 - g_c0 > DIRTY_SIDE {
+            for row in r0..r1 {
+                for col in c0..c1 {
+                    let j = row * w + col;
+                    let code = layer.code_of(j);
+                    if code != layer.code[j] {
+                        layer.set_code(j, code);
+                    }
+                }
+            }
+            return;
+        }
+        let mut dirty = [0u64; DIRTY_SIDE];
+        let plain = layer.unknown_code();
+        for row in r0..r1 {
+            for col in c0..c1 {
+                let j = row * w + col;
+                let code = layer.code_of(j);
+                let old = layer.code[j];
+                if code == old {
+                    continue;
+                }
+                layer.code[j] = code;
+                if code != plain {
+                    layer.marked.include(col, row);
+                }
+                if (old == CODE_BLOCKED) != (code == CODE_BLOCKED) {
+                    let (lo, hi) = (col.saturating_sub(1).max(g_c0), (col + 2).min(g_c1));
+                    let bits = ((1u64 << (hi - lo)) - 1) << (lo - g_c0);
+                    for r in row.saturating_sub(1).max(g_r0)..(row + 2).min(g_r1) {
+                        dirty[r - g_r0] |= bits;
+                    }
+                }
+            }
+        }
+        for (k, &bits) in dirty.iter().enumerate().take(g_r1 - g_r0) {
+            let mut bits = bits;
+            while bits != 0 {
+                let col = g_c0 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let row = g_r0 + k;
+                layer.moves[row * w + col] = layer.moves_of(col, row);
+            }
+        }
+    }
+}
+
+impl<const N: usize> CellObserver for Deferred<'_, N> {
+    fn class_changed(&mut self, index: usize, old: CellClass, new: CellClass) {
+        let layer = &mut *self.layer;
+        if index >= layer.geometry.cell_count() {
+            return;
+        }
+        let _ = old;
+        let was_occupied = layer.class[index] == CLASS_OCCUPIED;
+        layer.class[index] = class_code(new);
+        let is_occupied = new == CellClass::Occupied;
+        if was_occupied != is_occupied {
+            layer.bump_disc_deferred(index, if is_occupied { 1 } else { -1 });
+        }
+        let w = layer.geometry.width;
+        self.changed.include(index % w, index / w);
+    }
+}
+
+/// A saved rectangle of a [`Traversability`] layer's per-cell state, up to `C` cells
+/// ([`Traversability::save_window`]).
+#[derive(Clone, bytemuck::Zeroable)]
+pub(crate) struct TravWindow<const C: usize> {
+    class: [u8; C],
+    near: [u16; C],
+    near_turn: [u16; C],
+    near_band: [u16; C],
+    code: [u8; C],
+    moves: [u8; C],
+}
+
+impl<const C: usize> TravWindow<C> {
+    /// All zero, built on the stack (or in a `static`).
+    pub(crate) const fn new() -> Self {
+        Self {
+            class: [0; C],
+            near: [0; C],
+            near_turn: [0; C],
+            near_band: [0; C],
+            code: [0; C],
+            moves: [0; C],
+        }
     }
 }
 
@@ -933,6 +1197,142 @@ mod tests {
                 capacity: 100
             }
         );
+    }
+
+    /// Cells within `r` cells of (`col`, `row`) inside the grid, and the box holding them.
+    fn disc(g: &GridGeometry, col: i32, row: i32, r: i32) -> (heapless::Vec<usize, 256>, CellBox) {
+        let mut cells = heapless::Vec::new();
+        let mut area = CellBox::EMPTY;
+        for dr in -r..=r {
+            for dc in -r..=r {
+                if dc * dc + dr * dr > r * r {
+                    continue;
+                }
+                if let Some(i) = g.index(Cell::new(col + dc, row + dr)) {
+                    cells.push(i).unwrap();
+                    area.include(i % g.width, i / g.width);
+                }
+            }
+        }
+        (cells, area)
+    }
+
+    /// The mission's lift-and-stamp (`mission/machine/robots.rs`): Occupied cells of one disc
+    /// set to weak Free in one batch, then non-Occupied cells of two discs set Occupied, one
+    /// batch per disc; then everything put back by copying a saved window. Cells, class
+    /// counts and the known and marked boxes equal those of the same changes made and undone
+    /// cell by cell, on random maps, with wall bands, under both Unknown policies.
+    #[test]
+    fn batches_and_window_restore_equal_cell_by_cell() {
+        let g = geometry();
+        let mut rng = random::seeded(24);
+        let bands = WallBands {
+            no_turn_radius_m: 0.35,
+            no_turn_cost_factor: 2.0,
+            near_radius_m: 0.55,
+            near_cost_factor: 1.5,
+        };
+        for policy in [
+            UnknownPolicy::Traversable { cost_factor: 1.5 },
+            UnknownPolicy::Blocked,
+        ] {
+            let config = TraversabilityConfig {
+                robot_radius_m: 0.25,
+                unknown_policy: policy,
+                bands,
+            };
+            for trial in 0..40 {
+                let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
+                let mut t = Traversability::<CAP>::new(g, config).unwrap();
+                // A random map, sparse or dense, some of it still Unknown.
+                let fills = 50 + random::below(&mut rng, 1500);
+                for _ in 0..fills {
+                    let i = random::below(&mut rng, g.cell_count());
+                    let l = random::range_f32(&mut rng, -2.0, 2.0);
+                    grid.set_log_odds(i, l, &mut t);
+                }
+                let (w, h) = (g.width as i32, g.height as i32);
+                let at = |rng: &mut _| {
+                    (
+                        random::below(rng, w as usize + 4) as i32 - 2,
+                        random::below(rng, h as usize + 4) as i32 - 2,
+                    )
+                };
+                let (body, mut area) = {
+                    let (c, r) = at(&mut rng);
+                    disc(&g, c, r, 4)
+                };
+                let others = [at(&mut rng), at(&mut rng)].map(|(c, r)| disc(&g, c, r, 3));
+                for (_, b) in &others {
+                    if !b.is_empty() {
+                        area.include(b.col_min, b.row_min);
+                        area.include(b.col_end - 1, b.row_end - 1);
+                    }
+                }
+                let grow = t.change_reach_cells();
+                let area = CellBox {
+                    col_min: area.col_min.saturating_sub(grow),
+                    col_end: (area.col_end + grow).min(g.width),
+                    row_min: area.row_min.saturating_sub(grow),
+                    row_end: (area.row_end + grow).min(g.height),
+                };
+                let (mut grid_b, mut t_b) = (grid.clone(), t.clone());
+                let mut saved_log_odds = [0.0f32; CAP];
+                let mut saved_cells = TravWindow::<CAP>::new();
+                let counts = grid_b.save_window(area, &mut saved_log_odds).unwrap();
+                assert!(t_b.save_window(area, &mut saved_cells));
+
+                // Cell by cell.
+                let mut undo: heapless::Vec<(usize, f32), 512> = heapless::Vec::new();
+                for &i in &body {
+                    if grid.class(i) == CellClass::Occupied {
+                        undo.push((i, grid.log_odds_at(i))).unwrap();
+                        grid.set_log_odds(i, -0.4, &mut t);
+                    }
+                }
+                for (cells, _) in &others {
+                    for &i in cells {
+                        if grid.class(i) != CellClass::Occupied {
+                            undo.push((i, grid.log_odds_at(i))).unwrap();
+                            grid.set_log_odds(i, 3.5, &mut t);
+                        }
+                    }
+                }
+                // In batches.
+                let mut batch = t_b.deferred();
+                for &i in &body {
+                    if grid_b.class(i) == CellClass::Occupied {
+                        grid_b.set_log_odds(i, -0.4, &mut batch);
+                    }
+                }
+                batch.finish();
+                for (cells, _) in &others {
+                    let mut batch = t_b.deferred();
+                    for &i in cells {
+                        if grid_b.class(i) != CellClass::Occupied {
+                            grid_b.set_log_odds(i, 3.5, &mut batch);
+                        }
+                    }
+                    batch.finish();
+                }
+                let why = format!("{policy:?}, trial {trial}");
+                assert!(t_b.same_state(&t), "after the batches: {why}");
+                assert_eq!(t_b.marked_box(), t.marked_box(), "{why}");
+                assert_eq!(grid_b.log_odds(), grid.log_odds(), "{why}");
+                assert_eq!(grid_b.counts(), grid.counts(), "{why}");
+
+                for &(i, l) in undo.iter().rev() {
+                    grid.set_log_odds(i, l, &mut t);
+                }
+                grid_b.restore_window(area, &saved_log_odds, counts);
+                t_b.restore_window(area, &saved_cells);
+                assert!(t_b.same_state(&t), "after the restore: {why}");
+                assert_eq!(t_b.marked_box(), t.marked_box(), "{why}");
+                assert_eq!(grid_b.log_odds(), grid.log_odds(), "{why}");
+                assert_eq!(grid_b.counts(), grid.counts(), "{why}");
+                assert_eq!(grid_b.known_box(), grid.known_box(), "{why}");
+            }
+        }
     }
 
     #[test]

@@ -11,7 +11,7 @@ use crate::control::command::MotionCommand;
 use crate::control::follower::{Controller, FollowStatus, MAX_WAYPOINTS};
 use crate::explore::{CandidateStatus, ExploreConfig};
 use crate::geometry::Point2;
-use crate::grid::{Cell, CellClass};
+use crate::grid::{Cell, CellBox, CellClass};
 use crate::math;
 use crate::planner::Planner;
 
@@ -158,6 +158,52 @@ impl<const N: usize> Mission<N> {
         }
     }
 
+    /// A box holding every cell [`Self::lift_own_body`] and [`Self::stamp_others`] may change
+    /// at `now`, grown by the traversability layer's reach (and one cell for rounding) and
+    /// clipped to the grid: the window to save before them and put back after.
+    pub(super) fn stamp_area(&self, map: &SharedMap<N>, now: Time) -> CellBox {
+        let geom = *map.grid.geometry();
+        let mut lo = (i32::MAX, i32::MAX);
+        let mut hi = (i32::MIN, i32::MIN);
+        let mut add = |c: Cell, span: i32| {
+            lo = (lo.0.min(c.col - span), lo.1.min(c.row - span));
+            hi = (hi.0.max(c.col + span), hi.1.max(c.row + span));
+        };
+        let here = self.senses.pose_map.position();
+        let r_body = self.config.safety.footprint.radius_m + BODY_MARGIN_M;
+        add(
+            geom.cell_at_unchecked(here),
+            math::ceil(r_body / geom.resolution_m) as i32,
+        );
+        for &(a, b, until) in &self.contacts {
+            if now <= until {
+                add(geom.cell_at_unchecked(a), 0);
+                add(geom.cell_at_unchecked(b), 0);
+            }
+        }
+        let r = self.config.safety.footprint.radius_m;
+        let span = math::ceil(r / geom.resolution_m) as i32;
+        for m in map.robots() {
+            let p = m.pose.position();
+            if m.id == self.id
+                || now.saturating_since(m.time) > MARK_MAX_AGE
+                || p.distance(here) > STAMP_RANGE_M
+            {
+                continue;
+            }
+            add(geom.cell_at_unchecked(p), span);
+        }
+        let grow = map.trav.change_reach_cells() as i32 + 1;
+        let clip = |v: i32, end: usize| v.clamp(0, end as i32) as usize;
+        let (w, h) = (geom.width, geom.height);
+        CellBox {
+            col_min: clip(lo.0.saturating_sub(grow), w),
+            col_end: clip(hi.0.saturating_add(grow + 1), w),
+            row_min: clip(lo.1.saturating_sub(grow), h),
+            row_end: clip(hi.1.saturating_add(grow + 1), h),
+        }
+    }
+
     /// Sets every Occupied cell under the robot's body to weak Free evidence; returns the
     /// cells and their values, for putting them back.
     pub(super) fn lift_own_body(
@@ -171,7 +217,9 @@ impl<const N: usize> Mission<N> {
         let here = self.senses.pose_map.position();
         let c = geom.cell_at_unchecked(here);
         let weak_free = self.config.sensor.free_log_odds;
-        for row in c.row - span..=c.row + span {
+        // One batch: the layer's codes refreshed once per cell (it only removes Occupied).
+        let mut batch = map.trav.deferred();
+        'rows: for row in c.row - span..=c.row + span {
             for col in c.col - span..=c.col + span {
                 let cell = Cell::new(col, row);
                 let Some(i) = geom.index(cell) else { continue };
@@ -181,11 +229,12 @@ impl<const N: usize> Mission<N> {
                     continue;
                 }
                 if lifted.push((i, map.grid.log_odds_at(i))).is_err() {
-                    return lifted;
+                    break 'rows;
                 }
-                map.grid.set_log_odds(i, weak_free, &mut map.trav);
+                map.grid.set_log_odds(i, weak_free, &mut batch);
             }
         }
+        batch.finish();
         lifted
     }
 
@@ -203,7 +252,9 @@ impl<const N: usize> Mission<N> {
         let span = math::ceil(r / geom.resolution_m) as i32;
         let here = self.senses.pose_map.position();
         let occupied = map.grid.bounds().max;
-        // What the bumpers found lately, across the bumper's width.
+        // What the bumpers found lately, across the bumper's width. Each batch only adds
+        // Occupied cells: the layer's codes refreshed once per cell.
+        let mut batch = map.trav.deferred();
         for &(a, b, until) in &self.contacts {
             if now > until {
                 continue;
@@ -219,11 +270,13 @@ impl<const N: usize> Mission<N> {
                     continue;
                 }
                 if saved.push((i, map.grid.log_odds_at(i))).is_err() {
+                    batch.finish();
                     return;
                 }
-                map.grid.set_log_odds(i, occupied, &mut map.trav);
+                map.grid.set_log_odds(i, occupied, &mut batch);
             }
         }
+        batch.finish();
         for k in 0..map.robots().len() {
             let m = &map.robots()[k];
             let p = m.pose.position();
@@ -234,6 +287,7 @@ impl<const N: usize> Mission<N> {
                 continue;
             }
             let c = geom.cell_at_unchecked(p);
+            let mut batch = map.trav.deferred();
             for row in c.row - span..=c.row + span {
                 for col in c.col - span..=c.col + span {
                     let cell = Cell::new(col, row);
@@ -244,11 +298,13 @@ impl<const N: usize> Mission<N> {
                         continue;
                     }
                     if saved.push((i, map.grid.log_odds_at(i))).is_err() {
+                        batch.finish();
                         return;
                     }
-                    map.grid.set_log_odds(i, occupied, &mut map.trav);
+                    map.grid.set_log_odds(i, occupied, &mut batch);
                 }
             }
+            batch.finish();
         }
     }
 
