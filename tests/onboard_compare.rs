@@ -84,14 +84,13 @@ fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
     let sim = Sim::start(map, None, &["--seed", &seed_text, "--laser-noise", &noise]);
     let log = dir.join("log");
     let began = Instant::now();
-    let child = run_on_board(
+    let mut child = run_on_board(
         board_path.to_str().unwrap(),
         &sim.arcos_tcp(),
         &sim.laser(),
         &log,
         &[],
     );
-    let mut child = child;
     let mut end = None;
     while child.try_wait().unwrap().is_none() {
         if began.elapsed() > limit {
