@@ -133,7 +133,7 @@ pub fn grid_geometry(board: &BoardConfig) -> Result<GridGeometry, String> {
 
 /// The core mission configuration of a board: [`MissionConfig::default`] (the runner's set-up)
 /// with what the board says (selector, battery, laser, optimizer budget, limits, PID gains,
-/// safety distances); `boards/sim.json` says what the runner's defaults say, so that
+/// safety distances, scan matching); `boards/sim.json` says what the runner's defaults say, so that
 /// `papillon-sim mission` predicts `papillon run` on the simulator.
 pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     let m = &board.mission;
@@ -192,6 +192,7 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     v.low_v = m.low_voltage_v.unwrap_or(v.low_v);
     v.hold_s = m.low_voltage_hold_s.unwrap_or(v.hold_s);
     config.return_to_start = m.return_to_start.unwrap_or(false);
+    config.localize = board.localize_config();
     config.validate().map_err(|e| format!("$.mission: {e}"))?;
     Ok(config)
 }
