@@ -172,7 +172,8 @@ impl From<Args> for ServeConfig {
     fn from(a: Args) -> Self {
         ServeConfig {
             // Checked by clap's value parser (the names of `Slip::from_name`).
-            slip: crate::scenario::Slip::from_name(&a.slip).unwrap_or(crate::scenario::Slip::Thesis),
+            slip: crate::scenario::Slip::from_name(&a.slip)
+                .unwrap_or(crate::scenario::Slip::Thesis),
             map: a.map,
             pty: a.pty,
             tcp: a.tcp,
