@@ -8,11 +8,17 @@
 //! world's start in the world. Each observable world cell's centre `p` is looked up in the
 //! robot map at `robot_start ⊕ world_start⁻¹ ⊕ p`; cells outside the robot map count as
 //! unknown.
+//!
+//! Beside coverage, the map's accuracy against the truth ([`crate::map_accuracy`]'s
+//! measures, on the aligned maps): of the known observable cells, the fraction whose class
+//! matches the truth (and of the truly free and truly blocked ones apart), and the mean
+//! distance from a cell the robot map calls Occupied to the nearest true wall.
 
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::CellClass;
 use papillon::mapfile::MapImage;
 
+use crate::map_accuracy::WALL_SEARCH_CELLS;
 use crate::world::World;
 
 /// The score of a robot map.
@@ -24,6 +30,18 @@ pub struct Score {
     pub observable_cells: usize,
     /// Observable cells the robot map knows \[cells\].
     pub known_cells: usize,
+    /// Known observable cells whose class (Free or Occupied) matches the truth, over known
+    /// observable cells (0..1; 0 when none is known).
+    pub accuracy: f32,
+    /// Known truly free observable cells the map calls Free, over known truly free ones.
+    pub free_agreement: f32,
+    /// Known truly blocked observable cells the map calls Occupied, over known blocked ones.
+    pub occupied_agreement: f32,
+    /// Mean distance from a cell the robot map calls Occupied to the nearest true wall \[m\]
+    /// (capped at [`crate::map_accuracy::WALL_SEARCH_CELLS`] cells).
+    pub wall_error_m: f32,
+    /// Cells the robot map calls Occupied.
+    pub occupied_cells: usize,
 }
 
 /// The pose `(x, y, theta)` from 2 or 3 numbers (theta 0 when absent).
@@ -70,23 +88,68 @@ pub fn score(world: &World, map: &MapImage, robot_start: Pose2) -> Score {
     let identity = robot_from_world.x.abs() < 1e-6
         && robot_from_world.y.abs() < 1e-6
         && robot_from_world.theta.abs() < 1e-6;
-    let known_cells = if identity && map.geometry == g {
-        truth.known_cells_by(|i| map.cells[i].is_known())
-    } else {
-        truth.known_cells_by(|i| {
-            let p = robot_from_world.transform_point(g.cell_center(g.cell(i)));
-            class_at(map, p).is_known()
-        })
+    let aligned = identity && map.geometry == g;
+    let class_of = |i: usize| {
+        if aligned {
+            map.cells[i]
+        } else {
+            class_at(
+                map,
+                robot_from_world.transform_point(g.cell_center(g.cell(i))),
+            )
+        }
     };
+    let (mut known_cells, mut right) = (0usize, 0usize);
+    let (mut free_known, mut free_right) = (0usize, 0usize);
+    let (mut wall_known, mut wall_right) = (0usize, 0usize);
+    for (i, _) in truth.mask().iter().enumerate().filter(|(_, m)| **m) {
+        let class = class_of(i);
+        if !class.is_known() {
+            continue;
+        }
+        known_cells += 1;
+        let says_blocked = class == CellClass::Occupied;
+        let blocked = world.is_blocked_index(i);
+        right += usize::from(says_blocked == blocked);
+        if blocked {
+            wall_known += 1;
+            wall_right += usize::from(says_blocked);
+        } else {
+            free_known += 1;
+            free_right += usize::from(!says_blocked);
+        }
+    }
+    // Every cell the robot map calls Occupied, wherever it is, against the nearest true wall.
+    let world_from_robot = inverse(robot_from_world);
+    let (mut occupied_cells, mut distance_cells) = (0usize, 0.0f64);
+    for (i, _) in map
+        .cells
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| **c == CellClass::Occupied)
+    {
+        occupied_cells += 1;
+        let p = world_from_robot.transform_point(map.geometry.cell_center(map.geometry.cell(i)));
+        let d = g.cell_at(p).map_or(WALL_SEARCH_CELLS as f32, |c| {
+            crate::map_accuracy::nearest_wall_cells(world, c)
+        });
+        distance_cells += f64::from(d);
+    }
+    let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f32 / b as f32 };
     let observable_cells = truth.len();
     Score {
-        coverage: if observable_cells == 0 {
-            0.0
-        } else {
-            known_cells as f32 / observable_cells as f32
-        },
+        coverage: ratio(known_cells, observable_cells),
         observable_cells,
         known_cells,
+        accuracy: ratio(right, known_cells),
+        free_agreement: ratio(free_right, free_known),
+        occupied_agreement: ratio(wall_right, wall_known),
+        wall_error_m: if occupied_cells == 0 {
+            0.0
+        } else {
+            (distance_cells / occupied_cells as f64) as f32 * g.resolution_m
+        },
+        occupied_cells,
     }
 }
 
@@ -110,6 +173,22 @@ mod tests {
         assert_eq!(s.coverage, 1.0);
         assert_eq!(s.known_cells, s.observable_cells);
         assert_eq!(s.observable_cells, w.truth().len());
+        assert_eq!(
+            (s.accuracy, s.free_agreement, s.occupied_agreement),
+            (1.0, 1.0, 1.0)
+        );
+        assert_eq!(s.wall_error_m, 0.0);
+        assert!(s.occupied_cells > 0);
+        // An all-occupied map knows everything (coverage 1) but is wrong on the free space.
+        let all = MapImage {
+            geometry: *w.geometry(),
+            cells: vec![CellClass::Occupied; w.geometry().cell_count()],
+        };
+        let s = score(&w, &all, w.start());
+        assert_eq!(s.coverage, 1.0);
+        assert!(s.accuracy < 0.5, "{s:?}");
+        assert_eq!(s.free_agreement, 0.0);
+        assert!(s.wall_error_m > 0.1, "{s:?}");
         let empty = MapImage {
             geometry: *w.geometry(),
             cells: vec![CellClass::Unknown; w.geometry().cell_count()],
@@ -147,6 +226,9 @@ mod tests {
         };
         let s = score(&w, &map, robot_start);
         assert!(s.coverage > 0.99, "{s:?}");
+        // Aligned, the rotated map is as true as the world (up to the resampling at cell
+        // edges).
+        assert!(s.accuracy > 0.97 && s.wall_error_m < 0.05, "{s:?}");
         // Without alignment (start taken as the world's), the rotated map mostly misses.
         let s = score(&w, &map, w.start());
         assert!(s.coverage < 0.5, "{s:?}");
