@@ -18,7 +18,6 @@ use papillon::geometry::{Point2, Pose2};
 use papillon::grid::CellClass;
 use papillon::mapfile::MapImage;
 
-use crate::map_accuracy::WALL_SEARCH_CELLS;
 use crate::world::World;
 
 /// The score of a robot map.
@@ -38,7 +37,8 @@ pub struct Score {
     /// Known truly blocked observable cells the map calls Occupied, over known blocked ones.
     pub occupied_agreement: f32,
     /// Mean distance from a cell the robot map calls Occupied to the nearest true wall \[m\]
-    /// (capped at [`crate::map_accuracy::WALL_SEARCH_CELLS`] cells).
+    /// (capped at [`crate::map_accuracy::WALL_SEARCH_CELLS`] cells; a cell beyond the world's
+    /// edge is measured to the nearest wall inside it).
     pub wall_error_m: f32,
     /// Cells the robot map calls Occupied.
     pub occupied_cells: usize,
@@ -130,10 +130,12 @@ pub fn score(world: &World, map: &MapImage, robot_start: Pose2) -> Score {
     {
         occupied_cells += 1;
         let p = world_from_robot.transform_point(map.geometry.cell_center(map.geometry.cell(i)));
-        let d = g.cell_at(p).map_or(WALL_SEARCH_CELLS as f32, |c| {
-            crate::map_accuracy::nearest_wall_cells(world, c)
-        });
-        distance_cells += f64::from(d);
+        // A cell beyond the world's edge (a wall on the edge drawn a cell too far) is measured
+        // to the nearest wall inside it all the same.
+        distance_cells += f64::from(crate::map_accuracy::nearest_wall_cells(
+            world,
+            g.cell_at_unchecked(p),
+        ));
     }
     let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f32 / b as f32 };
     let observable_cells = truth.len();
@@ -195,6 +197,52 @@ mod tests {
         };
         let s = score(&w, &empty, w.start());
         assert_eq!((s.coverage, s.known_cells), (0.0, 0));
+    }
+
+    /// A robot map larger than the world, its walls on the world's edge drawn one cell
+    /// beyond it: those cells are a cell from the wall, not the search's cap.
+    #[test]
+    fn occupied_cells_beyond_the_worlds_edge_are_measured_to_the_nearest_wall() {
+        let w = builtin::lab(0.1).unwrap();
+        let g = *w.geometry();
+        let pad = 10;
+        let big = papillon::grid::GridGeometry::new(
+            g.width + 2 * pad,
+            g.height + 2 * pad,
+            g.resolution_m,
+            Point2::new(g.origin.x - 1.0, g.origin.y - 1.0),
+        )
+        .unwrap();
+        let mut cells = vec![CellClass::Unknown; big.cell_count()];
+        let perfect = w.perfect_map();
+        for (i, c) in perfect.cells.iter().enumerate() {
+            let p = g.cell_center(g.cell(i));
+            let j = big.index(big.cell_at(p).unwrap()).unwrap();
+            cells[j] = *c;
+        }
+        // The row just south of the world, under its southern edge.
+        let mut beyond = 0;
+        for col in pad..pad + g.width {
+            let j = big
+                .index(papillon::grid::Cell::new(col as i32, pad as i32 - 1))
+                .unwrap();
+            cells[j] = CellClass::Occupied;
+            beyond += 1;
+        }
+        let map = MapImage {
+            geometry: big,
+            cells,
+        };
+        let s = score(&w, &map, w.start());
+        assert_eq!(s.coverage, 1.0);
+        let share = beyond as f32 / s.occupied_cells as f32;
+        // Each of them one cell (0.1 m) from the edge wall: the mean grows by about
+        // 0.1 m times their share, far below the 2 m cap times it.
+        assert!(
+            s.wall_error_m <= 0.1 * share + 1e-3,
+            "{s:?}, {beyond} cells beyond"
+        );
+        assert!(s.wall_error_m > 0.0, "{s:?}");
     }
 
     #[test]
