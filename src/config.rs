@@ -360,6 +360,34 @@ pub struct PersistenceConfig {
     pub save_every_s: f32,
 }
 
+/// Scan matching (`$.localize`, an optional section): each scan aligned to the map before it
+/// is integrated, so the map stays true while the odometry drifts ([`crate::localize`]).
+/// Every key is optional; an absent one takes the core's default
+/// ([`crate::localize::LocalizeConfig::default`], [`crate::localize::MatchConfig::default`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LocalizeBoardConfig {
+    /// Match scans at all; absent: false (the map is drawn at the odometry pose).
+    #[serde(default)]
+    pub enabled: Option<bool>,
+    /// Match every this many scans (1: every scan that passes the travel test); absent: 1.
+    #[serde(default)]
+    pub every_n_scans: Option<u16>,
+    /// A scan is matched only once the odometry has moved this far since the last match
+    /// \[m\]...; absent: 0.5.
+    #[serde(default)]
+    pub min_travel_m: Option<f32>,
+    /// ...or turned this much \[deg\]; absent: 28.6 (0.5 rad).
+    #[serde(default)]
+    pub min_turn_deg: Option<f32>,
+    /// Translation searched around the odometry prediction, each way \[m\]; absent: 0.3.
+    #[serde(default)]
+    pub search_xy_m: Option<f32>,
+    /// Rotation searched around the prediction, each way \[deg\]; absent: 5.7 (0.1 rad).
+    #[serde(default)]
+    pub search_theta_deg: Option<f32>,
+}
+
 /// A whole board file.
 #[derive(Clone, Debug, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -380,6 +408,9 @@ pub struct BoardConfig {
     pub safety: SafetyConfig,
     /// The persistence settings.
     pub persistence: PersistenceConfig,
+    /// Scan matching (optional; absent: off).
+    #[serde(default)]
+    pub localize: LocalizeBoardConfig,
 }
 
 fn name(s: &str) -> Name {
@@ -469,6 +500,7 @@ impl Default for BoardConfig {
                 back_off_m: 0.2,
             },
             persistence: PersistenceConfig { save_every_s: 5.0 },
+            localize: LocalizeBoardConfig::default(),
         }
     }
 }
@@ -635,6 +667,22 @@ impl BoardConfig {
             Some(name) => name.parse().ok(),
             None => Some(crate::explore::DEFAULT_PRESET),
         }
+    }
+
+    /// The scan matching the board asks for: the core's defaults
+    /// ([`crate::localize::LocalizeConfig::default`]) with what `$.localize` gives.
+    pub fn localize_config(&self) -> crate::localize::LocalizeConfig {
+        let l = &self.localize;
+        let mut c = crate::localize::LocalizeConfig::default();
+        c.enabled = l.enabled.unwrap_or(c.enabled);
+        c.every_n_scans = l.every_n_scans.map_or(c.every_n_scans, u32::from);
+        c.min_travel_m = l.min_travel_m.unwrap_or(c.min_travel_m);
+        c.min_turn_rad = l.min_turn_deg.map_or(c.min_turn_rad, deg_to_rad);
+        c.matcher.search_xy_m = l.search_xy_m.unwrap_or(c.matcher.search_xy_m);
+        c.matcher.search_theta_rad = l
+            .search_theta_deg
+            .map_or(c.matcher.search_theta_rad, deg_to_rad);
+        c
     }
 
     /// The target-selection strategy, `None` if the board names an unknown one.

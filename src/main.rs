@@ -142,6 +142,9 @@ struct RunArgs {
     /// the start position first (the board's $.mission.return_to_start).
     #[arg(long)]
     return_to_start: bool,
+    /// Scan matching (overrides the board's $.localize.enabled): on or off.
+    #[arg(long, value_parser = ["on", "off"])]
+    localize: Option<String>,
 }
 
 /// Exit code for a missing or unreadable file.
@@ -407,6 +410,9 @@ fn run(args: RunArgs) -> ExitCode {
     if args.return_to_start {
         board.mission.return_to_start = Some(true);
     }
+    if let Some(on) = &args.localize {
+        board.localize.enabled = Some(on == "on");
+    }
     if let Some(laser) = &args.laser {
         match Address::new(laser) {
             Some(a) if board.laser_model() == Some(papillon::config::LaserModel::Lms200) => {
@@ -422,6 +428,7 @@ fn run(args: RunArgs) -> ExitCode {
         "$.link.port" => args.port.as_ref().map(|v| format!("--port '{v}'")),
         "$.link.tcp" => args.tcp.as_ref().map(|v| format!("--tcp '{v}'")),
         "$.laser.address" | "$.laser.port" => args.laser.as_ref().map(|v| format!("--laser '{v}'")),
+        "$.localize.enabled" => args.localize.as_ref().map(|v| format!("--localize {v}")),
         _ => None,
     };
     let mut first = None;

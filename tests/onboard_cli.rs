@@ -545,3 +545,61 @@ fn live_address_rust_log_and_log_format_are_checked_first() {
     assert!(!line.contains('\u{1b}'), "no escape codes: {line}");
     let _ = std::fs::remove_dir_all(&log);
 }
+
+/// Issue 18: `run --localize` takes `on` or `off` (one line naming the flag otherwise), and
+/// switching the matcher on for a grid too fine for its window is refused before anything
+/// is connected, naming the flag and the board's field; `check` names the field.
+#[test]
+fn localize_is_checked_on_the_command_line_and_in_the_board() {
+    let sim = board("sim.json");
+    let out = Command::new(BIN)
+        .args(["run", "--board", &sim, "--localize", "maybe"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("--localize"), "{stderr}");
+
+    let text = std::fs::read_to_string(&sim).unwrap();
+    let fine = text.replacen("\"resolution_m\": 0.1", "\"resolution_m\": 0.05", 1);
+    assert_ne!(fine, text);
+    let p = temp_file("fine-grid.json", &fine);
+    let file = p.to_str().unwrap();
+    // Off (the board's default): a valid board.
+    let out = Command::new(BIN)
+        .args(["check", "--board", file])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{out:?}");
+    let log = temp_dir("fine-grid-log");
+    let out = bounded(
+        &[
+            "run",
+            "--board",
+            file,
+            "--localize",
+            "on",
+            "--log-dir",
+            log.to_str().unwrap(),
+        ],
+        std::time::Duration::from_secs(10),
+    );
+    assert_last_line_names(&out, &["--localize on", "$.localize.enabled"]);
+    let on = temp_file(
+        "fine-grid-on.json",
+        &fine.replacen(
+            "\"persistence\"",
+            "\"localize\": {\"enabled\": true}, \"persistence\"",
+            1,
+        ),
+    );
+    let out = Command::new(BIN)
+        .args(["check", "--board", on.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_last_line_names(&out, &[on.to_str().unwrap(), "$.localize.enabled"]);
+    std::fs::remove_file(p).unwrap();
+    std::fs::remove_file(on).unwrap();
+    std::fs::remove_dir_all(log).unwrap();
+}

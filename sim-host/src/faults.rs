@@ -11,7 +11,7 @@
 //! | `jitter=MS` | plus a uniform extra delay of up to MS milliseconds (order is kept) |
 //! | `cut=T+D` | the ARCOS link is cut from T s after start for D s: no byte passes either way, and a TCP client is disconnected (repeatable) |
 //! | `laser-drop=T+D` | the laser sends no scan from T s for D s (repeatable) |
-//! | `slip=F` | wheel slip multiplied by F (1 = `serve`'s default, the thesis's slip; 0 = none) |
+//! | `slip=F` | the random part of `serve --slip`'s model multiplied by F (1 = as is, the default `thesis`'s slide; 0 = none; `realistic`'s wheel errors are not scaled) |
 //! | `estop=T+D` | the e-stop is pressed from T s for D s (repeatable) |
 //! | `drain=V` | the battery drains V volts per minute while powered |
 //!

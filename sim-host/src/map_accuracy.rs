@@ -87,7 +87,7 @@ pub fn measure<const N: usize>(
 /// Distance \[cells\] from `cell` to the nearest blocked cell of `world`, searched in growing
 /// square rings (a ring at Chebyshev radius `r` cannot hold anything nearer than `r`), capped
 /// at [`WALL_SEARCH_CELLS`].
-fn nearest_wall_cells(world: &World, cell: Cell) -> f32 {
+pub(crate) fn nearest_wall_cells(world: &World, cell: Cell) -> f32 {
     let mut best = WALL_SEARCH_CELLS as f32;
     for r in 0..=WALL_SEARCH_CELLS {
         if r as f32 >= best {

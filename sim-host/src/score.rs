@@ -8,6 +8,11 @@
 //! world's start in the world. Each observable world cell's centre `p` is looked up in the
 //! robot map at `robot_start ⊕ world_start⁻¹ ⊕ p`; cells outside the robot map count as
 //! unknown.
+//!
+//! Beside coverage, the map's accuracy against the truth ([`crate::map_accuracy`]'s
+//! measures, on the aligned maps): of the known observable cells, the fraction whose class
+//! matches the truth (and of the truly free and truly blocked ones apart), and the mean
+//! distance from a cell the robot map calls Occupied to the nearest true wall.
 
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::CellClass;
@@ -24,6 +29,19 @@ pub struct Score {
     pub observable_cells: usize,
     /// Observable cells the robot map knows \[cells\].
     pub known_cells: usize,
+    /// Known observable cells whose class (Free or Occupied) matches the truth, over known
+    /// observable cells (0..1; 0 when none is known).
+    pub accuracy: f32,
+    /// Known truly free observable cells the map calls Free, over known truly free ones.
+    pub free_agreement: f32,
+    /// Known truly blocked observable cells the map calls Occupied, over known blocked ones.
+    pub occupied_agreement: f32,
+    /// Mean distance from a cell the robot map calls Occupied to the nearest true wall \[m\]
+    /// (capped at [`crate::map_accuracy::WALL_SEARCH_CELLS`] cells; a cell beyond the world's
+    /// edge is measured to the nearest wall inside it).
+    pub wall_error_m: f32,
+    /// Cells the robot map calls Occupied.
+    pub occupied_cells: usize,
 }
 
 /// The pose `(x, y, theta)` from 2 or 3 numbers (theta 0 when absent).
@@ -70,23 +88,70 @@ pub fn score(world: &World, map: &MapImage, robot_start: Pose2) -> Score {
     let identity = robot_from_world.x.abs() < 1e-6
         && robot_from_world.y.abs() < 1e-6
         && robot_from_world.theta.abs() < 1e-6;
-    let known_cells = if identity && map.geometry == g {
-        truth.known_cells_by(|i| map.cells[i].is_known())
-    } else {
-        truth.known_cells_by(|i| {
-            let p = robot_from_world.transform_point(g.cell_center(g.cell(i)));
-            class_at(map, p).is_known()
-        })
+    let aligned = identity && map.geometry == g;
+    let class_of = |i: usize| {
+        if aligned {
+            map.cells[i]
+        } else {
+            class_at(
+                map,
+                robot_from_world.transform_point(g.cell_center(g.cell(i))),
+            )
+        }
     };
+    let (mut known_cells, mut right) = (0usize, 0usize);
+    let (mut free_known, mut free_right) = (0usize, 0usize);
+    let (mut wall_known, mut wall_right) = (0usize, 0usize);
+    for (i, _) in truth.mask().iter().enumerate().filter(|(_, m)| **m) {
+        let class = class_of(i);
+        if !class.is_known() {
+            continue;
+        }
+        known_cells += 1;
+        let says_blocked = class == CellClass::Occupied;
+        let blocked = world.is_blocked_index(i);
+        right += usize::from(says_blocked == blocked);
+        if blocked {
+            wall_known += 1;
+            wall_right += usize::from(says_blocked);
+        } else {
+            free_known += 1;
+            free_right += usize::from(!says_blocked);
+        }
+    }
+    // Every cell the robot map calls Occupied, wherever it is, against the nearest true wall.
+    let world_from_robot = inverse(robot_from_world);
+    let (mut occupied_cells, mut distance_cells) = (0usize, 0.0f64);
+    for (i, _) in map
+        .cells
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| **c == CellClass::Occupied)
+    {
+        occupied_cells += 1;
+        let p = world_from_robot.transform_point(map.geometry.cell_center(map.geometry.cell(i)));
+        // A cell beyond the world's edge (a wall on the edge drawn a cell too far) is measured
+        // to the nearest wall inside it all the same.
+        distance_cells += f64::from(crate::map_accuracy::nearest_wall_cells(
+            world,
+            g.cell_at_unchecked(p),
+        ));
+    }
+    let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f32 / b as f32 };
     let observable_cells = truth.len();
     Score {
-        coverage: if observable_cells == 0 {
-            0.0
-        } else {
-            known_cells as f32 / observable_cells as f32
-        },
+        coverage: ratio(known_cells, observable_cells),
         observable_cells,
         known_cells,
+        accuracy: ratio(right, known_cells),
+        free_agreement: ratio(free_right, free_known),
+        occupied_agreement: ratio(wall_right, wall_known),
+        wall_error_m: if occupied_cells == 0 {
+            0.0
+        } else {
+            (distance_cells / occupied_cells as f64) as f32 * g.resolution_m
+        },
+        occupied_cells,
     }
 }
 
@@ -110,12 +175,74 @@ mod tests {
         assert_eq!(s.coverage, 1.0);
         assert_eq!(s.known_cells, s.observable_cells);
         assert_eq!(s.observable_cells, w.truth().len());
+        assert_eq!(
+            (s.accuracy, s.free_agreement, s.occupied_agreement),
+            (1.0, 1.0, 1.0)
+        );
+        assert_eq!(s.wall_error_m, 0.0);
+        assert!(s.occupied_cells > 0);
+        // An all-occupied map knows everything (coverage 1) but is wrong on the free space.
+        let all = MapImage {
+            geometry: *w.geometry(),
+            cells: vec![CellClass::Occupied; w.geometry().cell_count()],
+        };
+        let s = score(&w, &all, w.start());
+        assert_eq!(s.coverage, 1.0);
+        assert!(s.accuracy < 0.5, "{s:?}");
+        assert_eq!(s.free_agreement, 0.0);
+        assert!(s.wall_error_m > 0.1, "{s:?}");
         let empty = MapImage {
             geometry: *w.geometry(),
             cells: vec![CellClass::Unknown; w.geometry().cell_count()],
         };
         let s = score(&w, &empty, w.start());
         assert_eq!((s.coverage, s.known_cells), (0.0, 0));
+    }
+
+    /// A robot map larger than the world, its walls on the world's edge drawn one cell
+    /// beyond it: those cells are a cell from the wall, not the search's cap.
+    #[test]
+    fn occupied_cells_beyond_the_worlds_edge_are_measured_to_the_nearest_wall() {
+        let w = builtin::lab(0.1).unwrap();
+        let g = *w.geometry();
+        let pad = 10;
+        let big = papillon::grid::GridGeometry::new(
+            g.width + 2 * pad,
+            g.height + 2 * pad,
+            g.resolution_m,
+            Point2::new(g.origin.x - 1.0, g.origin.y - 1.0),
+        )
+        .unwrap();
+        let mut cells = vec![CellClass::Unknown; big.cell_count()];
+        let perfect = w.perfect_map();
+        for (i, c) in perfect.cells.iter().enumerate() {
+            let p = g.cell_center(g.cell(i));
+            let j = big.index(big.cell_at(p).unwrap()).unwrap();
+            cells[j] = *c;
+        }
+        // The row just south of the world, under its southern edge.
+        let mut beyond = 0;
+        for col in pad..pad + g.width {
+            let j = big
+                .index(papillon::grid::Cell::new(col as i32, pad as i32 - 1))
+                .unwrap();
+            cells[j] = CellClass::Occupied;
+            beyond += 1;
+        }
+        let map = MapImage {
+            geometry: big,
+            cells,
+        };
+        let s = score(&w, &map, w.start());
+        assert_eq!(s.coverage, 1.0);
+        let share = beyond as f32 / s.occupied_cells as f32;
+        // Each of them one cell (0.1 m) from the edge wall: the mean grows by about
+        // 0.1 m times their share, far below the 2 m cap times it.
+        assert!(
+            s.wall_error_m <= 0.1 * share + 1e-3,
+            "{s:?}, {beyond} cells beyond"
+        );
+        assert!(s.wall_error_m > 0.0, "{s:?}");
     }
 
     #[test]
@@ -147,6 +274,9 @@ mod tests {
         };
         let s = score(&w, &map, robot_start);
         assert!(s.coverage > 0.99, "{s:?}");
+        // Aligned, the rotated map is as true as the world (up to the resampling at cell
+        // edges).
+        assert!(s.accuracy > 0.97 && s.wall_error_m < 0.05, "{s:?}");
         // Without alignment (start taken as the world's), the rotated map mostly misses.
         let s = score(&w, &map, w.start());
         assert!(s.coverage < 0.5, "{s:?}");

@@ -118,6 +118,33 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
     ("$.safety.back_off_m", true, Kind::Number),
     ("$.persistence", true, Kind::Object),
     ("$.persistence.save_every_s", true, Kind::Number),
+    ("$.localize", false, Kind::Object),
+    ("$.localize.enabled", false, Kind::Optional(&Kind::Bool)),
+    (
+        "$.localize.every_n_scans",
+        false,
+        Kind::Optional(&Kind::Whole(u16::MAX as u64)),
+    ),
+    (
+        "$.localize.min_travel_m",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.localize.min_turn_deg",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.localize.search_xy_m",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.localize.search_theta_deg",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
 ];
 
 // The seen-set is a `u128`.

@@ -482,3 +482,115 @@ fn a_lone_surrogate_escape_is_refused_and_a_pair_read() {
     let pair = SIM.replacen("\"sim-p3dx\"", "\"\\ud83d\\ude00\"", 1);
     assert!(BoardConfig::from_json(pair.as_bytes()).is_ok());
 }
+
+/// `$.localize` is optional: absent, the matcher is off with the core's defaults; present,
+/// its keys set the matcher's user-facing knobs (angles in degrees).
+#[test]
+fn the_localize_section_is_optional_and_sets_the_matcher() {
+    use crate::localize::LocalizeConfig;
+    let c = BoardConfig::from_json(SIM.as_bytes()).unwrap();
+    assert_eq!(c.localize, LocalizeBoardConfig::default());
+    assert_eq!(c.localize_config(), LocalizeConfig::default());
+    assert!(!c.localize_config().enabled);
+    let json = SIM.replacen(
+        "\"persistence\"",
+        "\"localize\": {\"enabled\": true, \"every_n_scans\": 2, \"min_travel_m\": 0.25, \
+         \"min_turn_deg\": 10, \"search_xy_m\": 0.4, \"search_theta_deg\": 8}, \"persistence\"",
+        1,
+    );
+    let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+    assert_eq!(paths(&c), Vec::<String>::new());
+    let l = c.localize_config();
+    assert!(l.enabled);
+    assert_eq!(l.every_n_scans, 2);
+    assert_eq!(l.min_travel_m, 0.25);
+    assert!((l.min_turn_rad - 10f32.to_radians()).abs() < 1e-6);
+    assert_eq!(l.matcher.search_xy_m, 0.4);
+    assert!((l.matcher.search_theta_rad - 8f32.to_radians()).abs() < 1e-6);
+    // What the board does not give stays the core's.
+    let d = LocalizeConfig::default();
+    assert_eq!(l.match_sigma_m, d.match_sigma_m);
+    assert_eq!(l.matcher.sigma_m, d.matcher.sigma_m);
+    // Only `enabled`: the defaults, switched on.
+    let json = SIM.replacen(
+        "\"persistence\"",
+        "\"localize\": {\"enabled\": true}, \"persistence\"",
+        1,
+    );
+    let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+    assert_eq!(
+        c.localize_config(),
+        LocalizeConfig {
+            enabled: true,
+            ..LocalizeConfig::default()
+        }
+    );
+}
+
+/// Each bad `$.localize` value is one problem naming its key; a misspelt key and a wrong type
+/// are named by their path too.
+#[test]
+fn bad_localize_values_name_their_field() {
+    let on = |c: &mut BoardConfig| c.localize.enabled = Some(true);
+    only_problem_at("$.localize.every_n_scans", |c| {
+        on(c);
+        c.localize.every_n_scans = Some(0);
+    });
+    only_problem_at("$.localize.min_travel_m", |c| {
+        c.localize.min_travel_m = Some(-0.1)
+    });
+    only_problem_at("$.localize.min_travel_m", |c| {
+        c.localize.min_travel_m = Some(f32::NAN)
+    });
+    only_problem_at("$.localize.min_turn_deg", |c| {
+        c.localize.min_turn_deg = Some(200.0)
+    });
+    only_problem_at("$.localize.search_xy_m", |c| {
+        c.localize.search_xy_m = Some(0.0)
+    });
+    only_problem_at("$.localize.search_theta_deg", |c| {
+        c.localize.search_theta_deg = Some(90.0)
+    });
+    let typo = SIM.replacen(
+        "\"persistence\"",
+        "\"localize\": {\"enable\": true}, \"persistence\"",
+        1,
+    );
+    match BoardConfig::from_json(typo.as_bytes()) {
+        Err(ConfigError::UnknownKey { path, .. }) => assert_eq!(path.as_str(), "$.localize.enable"),
+        other => panic!("{other:?}"),
+    }
+    let wrong = SIM.replacen(
+        "\"persistence\"",
+        "\"localize\": {\"enabled\": \"yes\"}, \"persistence\"",
+        1,
+    );
+    match BoardConfig::from_json(wrong.as_bytes()) {
+        Err(ConfigError::Value { path, .. }) => assert_eq!(path, "$.localize.enabled"),
+        other => panic!("{other:?}"),
+    }
+}
+
+/// A grid so fine that a whole scan and the search no longer fit the matcher's window would
+/// have every match refused: the board check names `$.localize.enabled` (only when on).
+#[test]
+fn a_matcher_window_too_small_for_the_grid_is_refused_when_matching_is_on() {
+    let fine = |c: &mut BoardConfig| c.grid.resolution_m = 0.05;
+    let mut c = BoardConfig::default();
+    fine(&mut c);
+    assert_eq!(paths(&c), Vec::<String>::new());
+    only_problem_at("$.localize.enabled", |c| {
+        fine(c);
+        c.localize.enabled = Some(true);
+    });
+    let mut c = BoardConfig::default();
+    c.localize.enabled = Some(true);
+    assert_eq!(paths(&c), Vec::<String>::new());
+    let problem = {
+        let mut c = BoardConfig::default();
+        fine(&mut c);
+        c.localize.enabled = Some(true);
+        problems(&c).remove(0).1
+    };
+    assert!(problem.contains("resolution_m"), "{problem}");
+}

@@ -21,6 +21,7 @@ impl BoardConfig {
         self.validate_mission(&mut r);
         self.validate_pid(&mut r);
         self.validate_safety(&mut r);
+        self.validate_localize(&mut r);
         if !positive(self.persistence.save_every_s) {
             r(
                 "$.persistence.save_every_s",
@@ -309,6 +310,56 @@ impl BoardConfig {
             && !(s.is_finite() && (0.0..=MAX_LOW_VOLTAGE_HOLD_S).contains(&s))
         {
             r("$.mission.low_voltage_hold_s", "must be from 0 to 600 [s]");
+        }
+    }
+
+    fn validate_localize(&self, r: &mut impl FnMut(&str, &str)) {
+        let l = &self.localize;
+        if let Some(n) = l.every_n_scans
+            && !(1..=1000).contains(&n)
+        {
+            r("$.localize.every_n_scans", "must be from 1 to 1000 scans");
+        }
+        if let Some(v) = l.min_travel_m
+            && !(v.is_finite() && (0.0..=10.0).contains(&v))
+        {
+            r("$.localize.min_travel_m", "must be from 0 to 10 [m]");
+        }
+        if let Some(v) = l.min_turn_deg
+            && !(v.is_finite() && (0.0..=180.0).contains(&v))
+        {
+            r("$.localize.min_turn_deg", "must be from 0 to 180 [deg]");
+        }
+        if let Some(v) = l.search_xy_m
+            && !(positive(v) && v <= 1.0)
+        {
+            r("$.localize.search_xy_m", "must be in (0, 1] m");
+        }
+        if let Some(v) = l.search_theta_deg
+            && !(positive(v) && v <= 45.0)
+        {
+            r("$.localize.search_theta_deg", "must be in (0, 45] deg");
+        }
+        // The matcher's window must hold a whole scan with the search around it, or every
+        // match would be refused and the map drawn at the odometry pose without a word.
+        let laser = &self.laser;
+        let reach_m = laser.max_range_m + math::hypot(laser.mount.x_m, laser.mount.y_m);
+        if l.enabled == Some(true) && positive(reach_m) && positive(self.grid.resolution_m) {
+            let config = self.localize_config();
+            let side = crate::localize::window_side_cells(
+                reach_m,
+                self.grid.resolution_m,
+                &config.matcher,
+            );
+            if side.saturating_mul(side) > crate::localize::WINDOW_CELLS {
+                let mut problem = heapless::String::<200>::new();
+                let _ = write!(
+                    problem,
+                    "the matcher needs a {side} x {side}-cell window for laser.max_range_m at grid.resolution_m with this search, more than the {} cells it holds; use a coarser $.grid.resolution_m or a smaller search",
+                    crate::localize::WINDOW_CELLS
+                );
+                r("$.localize.enabled", &problem);
+            }
         }
     }
 

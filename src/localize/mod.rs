@@ -55,6 +55,20 @@ pub use tracker::{LocalizeConfig, Tracker};
 /// on a 10 cm grid with the search margins (57.6 KB).
 pub const WINDOW_CELLS: usize = 120 * 120;
 
+/// Side of the square likelihood window a match may need \[cells\]: a scan reaching
+/// `reach_m` from the robot's centre on every side, grown by the search and the blur as
+/// [`ScanMatcher::match_scan`] grows it, on a grid of `resolution_m` cells (one cell more each
+/// way for the cell boundaries). A board whose window exceeds [`WINDOW_CELLS`] would have every
+/// match refused ([`Distrust::WindowTooLarge`]); the board check refuses it instead.
+pub fn window_side_cells(reach_m: f32, resolution_m: f32, config: &MatchConfig) -> usize {
+    let res = resolution_m.max(1e-3);
+    let margin = math::ceil(config.search_xy_m / res).max(0.0) * res
+        + reach_m * math::sin(config.search_theta_rad.min(1.5))
+        + 2.0 * config.sigma_m
+        + 2.0 * res;
+    math::ceil((2.0 * reach_m + 2.0 * margin) / res) as usize + 2
+}
+
 /// Settings of a match.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MatchConfig {

@@ -277,9 +277,12 @@ impl<const N: usize> Mission<N> {
     /// time, mapped with the mission's odometry-to-map transform, while the robot's pose,
     /// battery and distance stay those of the latest reading. Handing such a scan in through
     /// [`Self::on_odometry`] and [`Self::on_scan`] would move the robot back to the scan's
-    /// pose and forward again, each time charging the way twice. No localisation correction
-    /// (the matcher corrects the current pose). Before the first odometry reading it is
-    /// [`Self::on_scan`].
+    /// pose and forward again, each time charging the way twice. With
+    /// [`MissionConfig::localize`] on, the scan is matched at `pose_odom` (its own time's
+    /// odometry, not the latest): a trusted match corrects the map-from-odometry transform,
+    /// which is rigid, so the correction found at the scan's pose carries to the latest one
+    /// (the robot's pose is recomputed from the latest odometry with it). Before the first
+    /// odometry reading it is [`Self::on_scan`].
     ///
     /// Errors: as [`Self::on_scan`].
     pub fn on_late_scan(
@@ -289,9 +292,26 @@ impl<const N: usize> Mission<N> {
         pose_odom: Pose2,
         map: &mut SharedMap<N>,
     ) -> Result<(), MissionError> {
-        let Some(transform) = self.senses.map_from_odom else {
+        let Some(mut transform) = self.senses.map_from_odom else {
             return self.on_scan(now, scan, map);
         };
+        if self
+            .localizer
+            .on_scan(
+                &self.config.localize,
+                &map.grid,
+                &map.hits,
+                &mut map.matcher,
+                scan,
+                &self.config.laser,
+                pose_odom,
+                &mut transform,
+            )
+            .is_some()
+        {
+            self.senses.map_from_odom = Some(transform);
+            self.senses.pose_map = transform.map_pose(self.senses.pose_odom);
+        }
         let pose = transform.map_pose(pose_odom);
         integrate_scan(
             &mut map.grid,

@@ -66,18 +66,18 @@ pub fn run(args: Args) -> ExitCode {
     match execute(&args) {
         Ok(s) => {
             let text = if args.json {
-                serde_json::json!({
-                    "coverage": s.coverage,
-                    "observable_cells": s.observable_cells,
-                    "known_cells": s.known_cells,
-                })
-                .to_string()
+                serde_json::to_string(&s).unwrap_or_default()
             } else {
                 format!(
-                    "coverage {:.2} % ({} of {} observable cells known)",
+                    "coverage {:.2} % ({} of {} observable cells known), map accuracy {:.2} % (free {:.2} %, occupied {:.2} %), wall error {:.3} m over {} occupied cells",
                     100.0 * s.coverage,
                     s.known_cells,
-                    s.observable_cells
+                    s.observable_cells,
+                    100.0 * s.accuracy,
+                    100.0 * s.free_agreement,
+                    100.0 * s.occupied_agreement,
+                    s.wall_error_m,
+                    s.occupied_cells
                 )
             };
             // A closed standard output (`| head`) is not an error.
@@ -113,6 +113,7 @@ mod tests {
             json: true,
         };
         assert_eq!(execute(&args).unwrap().coverage, 1.0);
+        assert_eq!(execute(&args).unwrap().accuracy, 1.0);
         // The default robot start, the origin, is 1 m off: the map no longer lines up.
         let shifted = Args {
             robot_start: None,

@@ -34,6 +34,13 @@ pub struct Args {
     /// Seed of the simulation's random choices (wheel slip, faults).
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
+    /// Odometry slip of the simulated robots, as `papillon-sim mission --slip`: thesis (a
+    /// 1.5 cm slide at the end of each move, what the thesis saw), full (also heading and
+    /// distance random walks), realistic (also per-robot wheel-diameter and wheelbase errors
+    /// drawn from the seed, and fast-turn slip; sim-host/src/odometry_error.rs) or none.
+    /// `--wheel-errors` then sets the systematic errors instead of the drawn ones.
+    #[arg(long, default_value = "thesis", value_parser = ["thesis", "full", "realistic", "none"])]
+    pub slip: String,
     /// Faults to inject, e.g. `corrupt=0.01,cut=10+3,laser-drop=20+2` (see the user guide:
     /// corrupt, drop, latency, jitter, cut, laser-drop, slip, estop, drain).
     #[arg(long, default_value = "")]
@@ -164,6 +171,9 @@ impl From<LaserModel> for serve::LaserModel {
 impl From<Args> for ServeConfig {
     fn from(a: Args) -> Self {
         ServeConfig {
+            // Checked by clap's value parser (the names of `Slip::from_name`).
+            slip: crate::scenario::Slip::from_name(&a.slip)
+                .unwrap_or(crate::scenario::Slip::Thesis),
             map: a.map,
             pty: a.pty,
             tcp: a.tcp,
@@ -224,5 +234,38 @@ pub fn run(args: Args) -> ExitCode {
             eprintln!("papillon-sim serve: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Slip;
+    use clap::Parser;
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn parse(extra: &[&str]) -> Result<ServeConfig, clap::Error> {
+        let argv = ["serve"].iter().chain(extra);
+        Cli::try_parse_from(argv).map(|c| ServeConfig::from(c.args))
+    }
+
+    #[test]
+    fn the_slip_is_named_as_for_mission_and_defaults_to_the_thesis() {
+        assert_eq!(parse(&[]).unwrap().slip, Slip::Thesis);
+        for slip in [Slip::Thesis, Slip::Full, Slip::Realistic, Slip::None] {
+            assert_eq!(parse(&["--slip", slip.name()]).unwrap().slip, slip);
+        }
+        let both = parse(&["--slip", "realistic", "--wheel-errors", "1.02,0.97"]).unwrap();
+        assert_eq!(
+            (both.slip, both.wheel_errors),
+            (Slip::Realistic, Some((1.02, 0.97)))
+        );
+        let e = parse(&["--slip", "lots"]).unwrap_err().to_string();
+        assert!(e.contains("--slip") && e.contains("realistic"), "{e}");
     }
 }

@@ -40,7 +40,7 @@ use papillon::sensor::{LaserConfig, Scan};
 use crate::emulator::arcos::{Identity, Subclass};
 use crate::faults::Faults;
 use crate::laser::LaserSim;
-use crate::physics::{BodyConfig, Disc, RobotBody, SlipConfig, advance_all};
+use crate::physics::{BodyConfig, Disc, RobotBody, advance_all};
 use crate::placement::start_poses;
 use crate::world::World;
 
@@ -81,6 +81,11 @@ pub struct ServeConfig {
     pub laser_model: LaserModel,
     /// Seed of the simulation's random choices (wheel slip, faults).
     pub seed: u64,
+    /// The robots' odometry slip ([`crate::scenario::Slip`], as `papillon-sim mission
+    /// --slip`): the thesis's end-of-move slide by default; `realistic` adds per-robot
+    /// wheel-diameter and wheelbase errors, random walks and fast-turn slip
+    /// ([`crate::odometry_error`]), for a core that matches its scans.
+    pub slip: crate::scenario::Slip,
     /// Faults to inject.
     pub faults: Faults,
     /// Robots sharing the world.
@@ -252,10 +257,11 @@ impl Server {
             }
         }
         let n = config.robots;
-        // The thesis's slip (a slide of about 1.5 cm at the end of each move), as the mission
-        // runner uses: the core has no scan matching, so the full default slip smears its map.
+        // The thesis's slip by default (a slide of about 1.5 cm at the end of each move), as
+        // the mission runner's default: without scan matching (`papillon run`'s default) the
+        // realistic slip smears the map. `--slip realistic` for a binary that matches.
         let mut body = BodyConfig {
-            slip: SlipConfig::thesis(),
+            slip: config.slip.config(),
             ..BodyConfig::default()
         };
         config.faults.apply_to_body(&mut body);
