@@ -566,8 +566,8 @@ mod tests {
     /// odometry's drift): steered by the centring law (unicycle, 0.1 s periods, the mission's
     /// bound on the rate), its heading stays within 6° of the passage's axis and ends within
     /// 2°, and its flanks keep clear of the walls. Steered on the offset alone (the law
-    /// before: 10 deg/s per 5 cm, no heading term), the heading swings by 16°, a flank
-    /// reaches the wall and the body ends 16° askew (issue 17:
+    /// before: 10 deg/s per 5 cm, no heading term, swapped in), a flank reaches the wall
+    /// with the body 17° askew (issue 17:
     /// gen-15 and gen-06, seed 25, wedged 19° askew after such an escape).
     #[test]
     fn a_centring_escape_ends_aligned_with_the_passage_even_with_the_middle_misjudged() {
