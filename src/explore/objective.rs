@@ -306,10 +306,10 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                     .build(self.reachable.as_slice(), req.grid.geometry().resolution_m);
                 self.refine_tour(req.trav);
             } else {
-                self.tour.clear();
+                self.tour = FrontierTour::new();
             }
         } else {
-            self.tour.clear();
+            self.tour = FrontierTour::new();
         }
         self.cached = match self.views.as_deref_mut() {
             Some(v) => {
@@ -749,47 +749,38 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         self.generation
     }
 
-    /// Gives the tour the ways between its stops as the robot would drive them (item 5 of
-    /// [Objectives](self#objectives)): the straight line where the robot can drive it (the
-    /// lower bound is then right), else the way through the robot's shortest-path tree,
-    /// `d_a + d_b - 2 · d_fork`, where `d_fork` is the path distance of the cell where the two
-    /// stops' paths from the robot part. The tree's way is an upper bound of the path between
-    /// them, and exact when that path runs by the fork (two rooms off a corridor or a hall,
-    /// the common case on building plans): a stop in the next room through a wall is then as
-    /// far as the way round through the doors, where the straight line made it look next
-    /// door. Then the tour is solved again. Per stop, its path back to the robot is stamped
-    /// once and each later stop walks back until it meets it: one path walk per pair of stops
-    /// whose straight line is blocked.
+    /// Gives the tour the way back from each stop to its first stop as the robot would drive
+    /// it (item 5 of [Objectives](self#objectives)): the straight line where the robot can
+    /// drive it (the lower bound is then right), else the way through the robot's
+    /// shortest-path tree, `d_s + d_first - 2 · d_fork`, where `d_fork` is the path distance
+    /// of the cell where the two stops' paths from the robot part. The tree's way is an
+    /// upper bound of the path between them, and exact when that path runs by the fork (two
+    /// rooms off a corridor or a hall, the common case on building plans); a stop in the next
+    /// room through a wall is then as far as the way round through the doors, where the
+    /// straight line made it look next door. The first stop's path is stamped once; each other
+    /// stop walks back until it meets it, so the cost is one path walk per stop.
     fn refine_tour(&mut self, trav: &crate::planner::Traversability<N>) {
-        let n = self.tour.len();
-        if n < 2 {
+        let Some(first) = self.tour.first_cell() else {
             return;
-        }
-        for a in 0..n - 1 {
-            let (cell_a, d_a) = self.tour.stop(a);
-            let stamp = self.next_generation();
-            let stamps = &mut *self.stamps;
-            let field = &*self.field;
-            // Marks every cell of stop a's path; never stops.
-            let _ = field.find_on_path_back(cell_a, |i| {
-                if let Some(s) = stamps.get_mut(i) {
-                    *s = stamp;
-                }
-                false
-            });
-            for b in a + 1..n {
-                let (cell_b, d_b) = self.tour.stop(b);
-                if crate::planner::has_line_of_sight(trav, cell_a, cell_b) {
-                    continue;
-                }
-                if let Some((_, fork_m)) =
-                    field.find_on_path_back(cell_b, |i| stamps.get(i).is_some_and(|&s| s == stamp))
-                {
-                    self.tour.set_between(a, b, d_a + d_b - 2.0 * fork_m);
-                }
+        };
+        let stamp = self.next_generation();
+        let stamps = &mut *self.stamps;
+        let field = &*self.field;
+        // Marks every cell of the first stop's path; never stops.
+        let _ = field.find_on_path_back(first, |i| {
+            if let Some(s) = stamps.get_mut(i) {
+                *s = stamp;
             }
-        }
-        self.tour.resolve();
+            false
+        });
+        self.tour.refine_to_first(|cell, d_m, first_m| {
+            if crate::planner::has_line_of_sight(trav, cell, first) {
+                return None;
+            }
+            let (_, fork_m) =
+                field.find_on_path_back(cell, |i| stamps.get(i).is_some_and(|&s| s == stamp))?;
+            Some(d_m + first_m - 2.0 * fork_m)
+        });
     }
 
     /// Unknown cells seen from the viewpoints, each counted once.

@@ -59,9 +59,9 @@ pub struct FrontierTour {
     order: [u8; MAX_STOPS],
     /// Extra tour length of each stop taken first, by stop index \[m\].
     extra: [f32; MAX_STOPS],
-    /// Distance between two stops, by stop indices \[m\]: the lower bound of the module
-    /// documentation, or a longer path estimate ([`Self::set_between`]).
-    apart: [[f32; MAX_STOPS]; MAX_STOPS],
+    /// Distance from each stop back to the tour's first stop, by stop index \[m\]: the
+    /// lower bound of [`Self::between`], or a path estimate ([`Self::refine_to_first`]).
+    to_first: [f32; MAX_STOPS],
     side: i32,
     resolution_m: f32,
     length_m: f32,
@@ -81,7 +81,7 @@ impl FrontierTour {
             len: 0,
             order: [0; MAX_STOPS],
             extra: [0.0; MAX_STOPS],
-            apart: [[0.0; MAX_STOPS]; MAX_STOPS],
+            to_first: [0.0; MAX_STOPS],
             side: CLUSTER_CELLS,
             resolution_m: 0.1,
             length_m: 0.0,
@@ -108,30 +108,26 @@ impl FrontierTour {
         (self.len > 0).then(|| self.stops[self.order[0] as usize].cell)
     }
 
-    /// Forgets every stop (an empty tour, as [`Self::new`], without building one).
-    pub fn clear(&mut self) {
-        self.len = 0;
-        self.side = CLUSTER_CELLS;
-        self.length_m = 0.0;
-    }
-
-    /// Stop `i` (by stop index, `i < len()`): its cell and path distance from the robot \[m\].
-    pub fn stop(&self, i: usize) -> (Cell, f32) {
-        let s = &self.stops[i];
-        (s.cell, s.distance_m)
-    }
-
-    /// Sets the distance between stops `a` and `b` to a path estimate `distance_m` (never
-    /// below the lower bound). Takes effect at the next [`Self::resolve`].
-    pub fn set_between(&mut self, a: usize, b: usize, distance_m: f32) {
-        let d = distance_m.max(self.lower_bound(a, b));
-        self.apart[a][b] = d;
-        self.apart[b][a] = d;
-    }
-
-    /// Solves the tour again over the current distances (after [`Self::set_between`]).
-    pub fn resolve(&mut self) {
-        self.solve();
+    /// Replaces the distance from every other stop back to the tour's first stop with
+    /// `estimate(stop cell, its path distance from the robot, the first stop's)` where it
+    /// gives one (never below the lower bound of the module documentation), and recomputes
+    /// each stop's extra length. The tour's order stays.
+    pub fn refine_to_first(&mut self, mut estimate: impl FnMut(Cell, f32, f32) -> Option<f32>) {
+        let Some(&first) = self.order[..self.len].first() else {
+            return;
+        };
+        let first = first as usize;
+        let first_d = self.stops[first].distance_m;
+        for s in 0..self.len {
+            if s == first {
+                continue;
+            }
+            let stop = self.stops[s];
+            if let Some(d) = estimate(stop.cell, stop.distance_m, first_d) {
+                self.to_first[s] = d.max(self.between(s, first));
+            }
+        }
+        self.compute_extras();
     }
 
     /// The stops' cells in tour order.
@@ -161,11 +157,6 @@ impl FrontierTour {
             side *= 2;
         }
         self.side = side;
-        for a in 0..self.len {
-            for b in 0..self.len {
-                self.apart[a][b] = self.lower_bound(a, b);
-            }
-        }
         self.solve();
     }
 
@@ -197,16 +188,9 @@ impl FrontierTour {
         true
     }
 
-    /// Distance between stops `a` and `b` \[m\]: the lower bound, or the path estimate
-    /// given.
-    #[inline]
-    fn between(&self, a: usize, b: usize) -> f32 {
-        self.apart[a][b]
-    }
-
-    /// A lower bound of the path between stops `a` and `b` \[m\] (see the module
+    /// Distance between stops `a` and `b` \[m\] (a lower bound of the path, see the module
     /// documentation).
-    fn lower_bound(&self, a: usize, b: usize) -> f32 {
+    fn between(&self, a: usize, b: usize) -> f32 {
         let (p, q) = (&self.stops[a], &self.stops[b]);
         let (dc, dr) = (
             (p.cell.col - q.cell.col) as f32,
@@ -273,7 +257,18 @@ impl FrontierTour {
             length += self.leg_to(pos, self.order[pos] as usize);
         }
         self.length_m = length;
-        // Moving the stop at position p to the front.
+        if n > 0 {
+            let first = self.order[0] as usize;
+            for s in 0..n {
+                self.to_first[s] = self.between(s, first);
+            }
+        }
+        self.compute_extras();
+    }
+
+    /// Each stop's extra length: moving the stop at position p to the front.
+    fn compute_extras(&mut self) {
+        let n = self.len;
         for p in 0..n {
             let s = self.order[p] as usize;
             if p == 0 {
@@ -282,7 +277,7 @@ impl FrontierTour {
             }
             let first = self.order[0] as usize;
             let prev = self.order[p - 1] as usize;
-            let mut delta = self.stops[s].distance_m + self.between(s, first)
+            let mut delta = self.stops[s].distance_m + self.to_first[s]
                 - self.stops[first].distance_m
                 - self.between(prev, s);
             if p + 1 < n {
@@ -350,11 +345,12 @@ mod tests {
         assert!((far - 21.0).abs() < 1e-3, "{far}");
     }
 
-    /// The corridor of the test above: a longer way between two stops (a wall the straight
-    /// line crosses) enters the tour's length and order; an estimate below the lower bound
-    /// is kept at the bound.
+    /// The corridor of the test above with a wall between the robot's near side and the
+    /// first stop beyond it: the way back from a far stop to the first one, given longer than
+    /// the lower bound, raises that stop's extra length by the difference; a stop given no
+    /// estimate keeps its own, and no estimate goes below the lower bound.
     #[test]
-    fn a_longer_way_between_stops_raises_the_extra_length() {
+    fn a_longer_way_back_to_the_first_stop_raises_the_extra_length() {
         let mut list = vec![vp(80, 0, 2.0)];
         for k in 0..4 {
             let col = 130 + 30 * k;
@@ -362,23 +358,26 @@ mod tests {
         }
         let mut tour = FrontierTour::new();
         tour.build_from(list.iter().copied(), 0.1);
-        assert_eq!(tour.stop(0), (Cell::new(80, 0), 2.0));
-        assert_eq!(tour.stop(1).0, Cell::new(130, 0));
+        assert_eq!(tour.first_cell(), Some(Cell::new(80, 0)));
         let before = [130, 160, 190, 220].map(|c| tour.extra_m(Cell::new(c, 0)));
-        // The way from 3 m ahead back to the near side: 4 m more than the straight 5 m.
-        tour.set_between(0, 1, 9.0);
-        // Below the lower bound (14 m between the near side and the far end): no change.
-        tour.set_between(0, 4, 1.0);
-        tour.resolve();
-        assert_eq!(tour.cells().next(), Some(Cell::new(80, 0)));
+        tour.refine_to_first(|cell, d_m, first_m| match cell.col {
+            // 4 m more than the straight 5 m back.
+            130 => Some(9.0),
+            // Below the lower bound (14 m): kept at the bound.
+            220 => Some(1.0),
+            _ => {
+                assert_eq!(first_m, 2.0);
+                assert!(d_m > 3.0);
+                None
+            }
+        });
         let after = [130, 160, 190, 220].map(|c| tour.extra_m(Cell::new(c, 0)));
-        // 3 m ahead first: 3 + 9 back + 8 + 6 = 26 against the tour's 2 + 9 + 9 = 20 (the
-        // first leg back to the near side now costs 9).
-        assert!((after[0] - 6.0).abs() < 1e-3, "{after:?} {before:?}");
-        assert!((tour.length_m() - 20.0).abs() < 1e-3, "{}", tour.length_m());
-        // The far end first keeps its 21 m: its way back to the near side stays at the bound.
-        assert_eq!(after[3], before[3]);
-        assert!((after[3] - 21.0).abs() < 1e-3, "{after:?}");
+        assert!(
+            (after[0] - (before[0] + 4.0)).abs() < 1e-3,
+            "{after:?} {before:?}"
+        );
+        assert_eq!(after[1..], before[1..]);
+        assert_eq!(tour.extra_m(Cell::new(80, 0)), 0.0);
     }
 
     #[test]
