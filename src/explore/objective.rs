@@ -304,7 +304,6 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             if config.tour_weight > 0.0 {
                 self.tour
                     .build(self.reachable.as_slice(), req.grid.geometry().resolution_m);
-                self.refine_tour(req.trav);
             } else {
                 self.tour = FrontierTour::new();
             }
@@ -739,53 +738,14 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         Ok(())
     }
 
-    /// A fresh stamp for [`Self::stamps`].
-    fn next_generation(&mut self) -> u32 {
+    /// Unknown cells seen from the viewpoints, each counted once.
+    fn predict_gain(&mut self, grid: &OccupancyGrid<N>, laser: &LaserConfig) -> u32 {
         self.generation = self.generation.wrapping_add(1);
         if self.generation == 0 {
             self.stamps.fill(0);
             self.generation = 1;
         }
-        self.generation
-    }
-
-    /// Gives the tour the way back from each stop to its first stop as the robot would drive
-    /// it (item 5 of [Objectives](self#objectives)): the straight line where the robot can
-    /// drive it (the lower bound is then right), else the way through the robot's
-    /// shortest-path tree, `d_s + d_first - 2 · d_fork`, where `d_fork` is the path distance
-    /// of the cell where the two stops' paths from the robot part. The tree's way is an
-    /// upper bound of the path between them, and exact when that path runs by the fork (two
-    /// rooms off a corridor or a hall, the common case on building plans); a stop in the next
-    /// room through a wall is then as far as the way round through the doors, where the
-    /// straight line made it look next door. The first stop's path is stamped once; each other
-    /// stop walks back until it meets it, so the cost is one path walk per stop.
-    fn refine_tour(&mut self, trav: &crate::planner::Traversability<N>) {
-        let Some(first) = self.tour.first_cell() else {
-            return;
-        };
-        let stamp = self.next_generation();
-        let stamps = &mut *self.stamps;
-        let field = &*self.field;
-        // Marks every cell of the first stop's path; never stops.
-        let _ = field.find_on_path_back(first, |i| {
-            if let Some(s) = stamps.get_mut(i) {
-                *s = stamp;
-            }
-            false
-        });
-        self.tour.refine_to_first(|cell, d_m, first_m| {
-            if crate::planner::has_line_of_sight(trav, cell, first) {
-                return None;
-            }
-            let (_, fork_m) =
-                field.find_on_path_back(cell, |i| stamps.get(i).is_some_and(|&s| s == stamp))?;
-            Some(d_m + first_m - 2.0 * fork_m)
-        });
-    }
-
-    /// Unknown cells seen from the viewpoints, each counted once.
-    fn predict_gain(&mut self, grid: &OccupancyGrid<N>, laser: &LaserConfig) -> u32 {
-        let stamp = self.next_generation();
+        let stamp = self.generation;
         let geom = *grid.geometry();
         let stamps = &mut *self.stamps;
         let mut gain = 0u32;

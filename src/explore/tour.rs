@@ -59,9 +59,6 @@ pub struct FrontierTour {
     order: [u8; MAX_STOPS],
     /// Extra tour length of each stop taken first, by stop index \[m\].
     extra: [f32; MAX_STOPS],
-    /// Distance from each stop back to the tour's first stop, by stop index \[m\]: the
-    /// lower bound of [`Self::between`], or a path estimate ([`Self::refine_to_first`]).
-    to_first: [f32; MAX_STOPS],
     side: i32,
     resolution_m: f32,
     length_m: f32,
@@ -81,7 +78,6 @@ impl FrontierTour {
             len: 0,
             order: [0; MAX_STOPS],
             extra: [0.0; MAX_STOPS],
-            to_first: [0.0; MAX_STOPS],
             side: CLUSTER_CELLS,
             resolution_m: 0.1,
             length_m: 0.0,
@@ -101,33 +97,6 @@ impl FrontierTour {
     /// Length of the tour from the robot through every stop \[m\].
     pub fn length_m(&self) -> f32 {
         self.length_m
-    }
-
-    /// The cell of the tour's first stop; `None` for an empty tour.
-    pub fn first_cell(&self) -> Option<Cell> {
-        (self.len > 0).then(|| self.stops[self.order[0] as usize].cell)
-    }
-
-    /// Replaces the distance from every other stop back to the tour's first stop with
-    /// `estimate(stop cell, its path distance from the robot, the first stop's)` where it
-    /// gives one (never below the lower bound of the module documentation), and recomputes
-    /// each stop's extra length. The tour's order stays.
-    pub fn refine_to_first(&mut self, mut estimate: impl FnMut(Cell, f32, f32) -> Option<f32>) {
-        let Some(&first) = self.order[..self.len].first() else {
-            return;
-        };
-        let first = first as usize;
-        let first_d = self.stops[first].distance_m;
-        for s in 0..self.len {
-            if s == first {
-                continue;
-            }
-            let stop = self.stops[s];
-            if let Some(d) = estimate(stop.cell, stop.distance_m, first_d) {
-                self.to_first[s] = d.max(self.between(s, first));
-            }
-        }
-        self.compute_extras();
     }
 
     /// The stops' cells in tour order.
@@ -257,18 +226,7 @@ impl FrontierTour {
             length += self.leg_to(pos, self.order[pos] as usize);
         }
         self.length_m = length;
-        if n > 0 {
-            let first = self.order[0] as usize;
-            for s in 0..n {
-                self.to_first[s] = self.between(s, first);
-            }
-        }
-        self.compute_extras();
-    }
-
-    /// Each stop's extra length: moving the stop at position p to the front.
-    fn compute_extras(&mut self) {
-        let n = self.len;
+        // Moving the stop at position p to the front.
         for p in 0..n {
             let s = self.order[p] as usize;
             if p == 0 {
@@ -277,7 +235,7 @@ impl FrontierTour {
             }
             let first = self.order[0] as usize;
             let prev = self.order[p - 1] as usize;
-            let mut delta = self.stops[s].distance_m + self.to_first[s]
+            let mut delta = self.stops[s].distance_m + self.between(s, first)
                 - self.stops[first].distance_m
                 - self.between(prev, s);
             if p + 1 < n {
@@ -343,41 +301,6 @@ mod tests {
         // The far end first: 12 + 14 back + 5 + 3 + 3 = 37, against 16.
         let far = tour.extra_m(Cell::new(220, 0));
         assert!((far - 21.0).abs() < 1e-3, "{far}");
-    }
-
-    /// The corridor of the test above with a wall between the robot's near side and the
-    /// first stop beyond it: the way back from a far stop to the first one, given longer than
-    /// the lower bound, raises that stop's extra length by the difference; a stop given no
-    /// estimate keeps its own, and no estimate goes below the lower bound.
-    #[test]
-    fn a_longer_way_back_to_the_first_stop_raises_the_extra_length() {
-        let mut list = vec![vp(80, 0, 2.0)];
-        for k in 0..4 {
-            let col = 130 + 30 * k;
-            list.push(vp(col, 0, (col - 100) as f32 * 0.1));
-        }
-        let mut tour = FrontierTour::new();
-        tour.build_from(list.iter().copied(), 0.1);
-        assert_eq!(tour.first_cell(), Some(Cell::new(80, 0)));
-        let before = [130, 160, 190, 220].map(|c| tour.extra_m(Cell::new(c, 0)));
-        tour.refine_to_first(|cell, d_m, first_m| match cell.col {
-            // 4 m more than the straight 5 m back.
-            130 => Some(9.0),
-            // Below the lower bound (14 m): kept at the bound.
-            220 => Some(1.0),
-            _ => {
-                assert_eq!(first_m, 2.0);
-                assert!(d_m > 3.0);
-                None
-            }
-        });
-        let after = [130, 160, 190, 220].map(|c| tour.extra_m(Cell::new(c, 0)));
-        assert!(
-            (after[0] - (before[0] + 4.0)).abs() < 1e-3,
-            "{after:?} {before:?}"
-        );
-        assert_eq!(after[1..], before[1..]);
-        assert_eq!(tour.extra_m(Cell::new(80, 0)), 0.0);
     }
 
     #[test]

@@ -276,30 +276,6 @@ impl<const N: usize> DistanceField<N> {
         Some(g.cell(prev))
     }
 
-    /// Walks the shortest path from `cell` back to the source (`cell` first, the source
-    /// last) and returns the first cell on it, as a flat index with its cost from the source
-    /// \[m\], for which `stop` holds; `None` if none does, or if `cell` is unreachable,
-    /// outside the grid, or no sweep was made. O(path length); settles nothing beyond `cell`.
-    ///
-    /// Two such walks find where the paths of two cells from the source part (the first
-    /// walk marks its cells and never stops, the second stops at a marked one): the
-    /// [frontier tour](crate::explore) estimates path distances between frontier stops so.
-    pub fn find_on_path_back(
-        &self,
-        cell: Cell,
-        mut stop: impl FnMut(usize) -> bool,
-    ) -> Option<(usize, f32)> {
-        let resolution_m = self.swept()?.resolution_m;
-        let mut i = self.index(cell)?;
-        let memory = &self.state().memory;
-        loop {
-            if stop(i) {
-                return Some((i, memory.g(i) * resolution_m));
-            }
-            i = memory.parent(i)?;
-        }
-    }
-
     /// Writes the shortest path from the source to `cell` into `path` (source first).
     ///
     /// Errors: [`PlanError::OutOfBounds`] outside the grid, [`PlanError::NoPath`] if
@@ -441,52 +417,6 @@ mod tests {
             }
             assert_eq!(lazy.reached(), total);
         }
-    }
-
-    /// A wall with one door: two cells on either side of the wall near its far end are
-    /// 0.2 m apart in a straight line, but the way between them runs through the door. With
-    /// the source in the door, their paths part at once, and `d_a + d_b - 2 · d_fork` found by
-    /// two walks back is the path between them; with the source elsewhere it is still at least
-    /// that path.
-    #[test]
-    fn two_walks_back_find_where_paths_part_and_the_way_round_a_wall() {
-        let door_rows = 2..3;
-        let trav = Traversability::<CAP>::from_blocked(W, H, |c| {
-            c.col == 15 && !door_rows.contains(&c.row)
-        })
-        .unwrap();
-        let (a, b) = (Cell::new(14, 17), Cell::new(16, 17));
-        let mut from_a = DistanceField::<CAP>::new();
-        from_a.compute(&trav, a).unwrap();
-        let a_to_b = from_a.distance_to(b).unwrap();
-        assert!(a_to_b > 2.5, "{a_to_b}");
-        let mut marks = [false; CAP];
-        for (source, exact) in [(Cell::new(15, 2), true), (Cell::new(2, 10), false)] {
-            let mut field = DistanceField::<CAP>::new();
-            field.start(&trav, source).unwrap();
-            marks.fill(false);
-            assert_eq!(
-                field.find_on_path_back(a, |i| {
-                    marks[i] = true;
-                    false
-                }),
-                None
-            );
-            let (fork, fork_m) = field.find_on_path_back(b, |i| marks[i]).unwrap();
-            let (d_a, d_b) = (field.distance_to(a).unwrap(), field.distance_to(b).unwrap());
-            let tree = d_a + d_b - 2.0 * fork_m;
-            if exact {
-                assert_eq!(trav.geometry().cell(fork), source);
-                assert!((tree - a_to_b).abs() < 1e-4, "{tree} against {a_to_b}");
-            } else {
-                assert!(tree >= a_to_b - 1e-4, "{tree} against {a_to_b}");
-            }
-        }
-        // Unreachable or outside: no answer.
-        let mut field = DistanceField::<CAP>::new();
-        field.start(&trav, Cell::new(2, 2)).unwrap();
-        assert_eq!(field.find_on_path_back(Cell::new(15, 10), |_| true), None);
-        assert_eq!(field.find_on_path_back(Cell::new(-1, 0), |_| true), None);
     }
 
     #[test]
