@@ -280,9 +280,12 @@ fn beams_toward(
     let (ox, oy) = (disc.center.x - origin.x, disc.center.y - origin.y);
     let dist = (ox * ox + oy * oy).sqrt();
     let sin_half = disc.radius_m / dist;
-    if !(sin_half.is_finite() && sin_half < core::f32::consts::FRAC_1_SQRT_2)
-        || !(step_rad.is_finite() && step_rad > 0.0 && first_rad.abs() <= 64.0)
-    {
+    let usable = sin_half.is_finite()
+        && sin_half < core::f32::consts::FRAC_1_SQRT_2
+        && step_rad.is_finite()
+        && step_rad > 0.0
+        && first_rad.abs() <= 64.0;
+    if !usable {
         return all;
     }
     let half = sin_half.asin() + DISC_ANGLE_PAD_RAD;
