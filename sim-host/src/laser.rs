@@ -246,6 +246,63 @@ pub struct LaserSim {
     /// How far the beams reach \[m\] (at least `config.max_range_m`): see
     /// [`Self::with_reach_m`].
     reach_m: f32,
+    /// Each beam's direction and nearest return of the scan in progress (kept between scans
+    /// so that a scan does not allocate).
+    beams: Vec<BeamWork>,
+}
+
+/// One beam of the scan in progress: its unit direction and its nearest return so far.
+#[derive(Clone, Copy, Debug)]
+struct BeamWork {
+    dx: f32,
+    dy: f32,
+    range: Option<f32>,
+}
+
+/// Pad \[rad\] on the half-angle a disc subtends when choosing the beams to test against it:
+/// far more than the rounding of the beams' angles and directions (about 1e-6 rad), so no beam
+/// that hits is left out; a beam let in that misses is rejected by [`ray_disc`].
+const DISC_ANGLE_PAD_RAD: f32 = 1e-3;
+
+/// The beams (indices into `0..count`) whose direction can meet `disc`, seen from `origin`
+/// by a fan whose beam `i` points at `first_rad + i * step_rad`: up to three runs (the fan may
+/// come round to the disc's bearing again), possibly overlapping; all beams when the disc is
+/// close (it subtends more than a right angle) or any input is not finite. Every beam that
+/// [`ray_disc`] finds a hit for is in a run (it meets the disc within its subtended angle).
+fn beams_toward(
+    origin: Point2,
+    disc: &Disc,
+    first_rad: f32,
+    step_rad: f32,
+    count: usize,
+) -> [core::ops::Range<usize>; 3] {
+    let all = [0..count, 0..0, 0..0];
+    let (ox, oy) = (disc.center.x - origin.x, disc.center.y - origin.y);
+    let dist = (ox * ox + oy * oy).sqrt();
+    let sin_half = disc.radius_m / dist;
+    let usable = sin_half.is_finite()
+        && sin_half < core::f32::consts::FRAC_1_SQRT_2
+        && step_rad.is_finite()
+        && step_rad > 0.0
+        && first_rad.abs() <= 64.0;
+    if !usable {
+        return all;
+    }
+    let half = sin_half.asin() + DISC_ANGLE_PAD_RAD;
+    let tau = core::f32::consts::TAU;
+    let v = (oy.atan2(ox) - first_rad).rem_euclid(tau);
+    if !v.is_finite() {
+        return all;
+    }
+    [-tau, 0.0, tau].map(|shift| {
+        let (lo, hi) = ((v + shift - half) / step_rad, (v + shift + half) / step_rad);
+        if hi < 0.0 || lo >= count as f32 {
+            return 0..0;
+        }
+        let lo = lo.max(0.0).ceil() as usize;
+        let hi = (hi.floor() as usize).min(count.saturating_sub(1));
+        lo..(hi + 1).max(lo)
+    })
 }
 
 impl LaserSim {
@@ -257,6 +314,7 @@ impl LaserSim {
             rng: random::seeded(seed),
             noise: config.noise_fraction > 0.0,
             reach_m: config.max_range_m,
+            beams: Vec::new(),
         }
     }
 
@@ -309,20 +367,33 @@ impl LaserSim {
         let laser = robot_pose.compose(cfg.mount);
         let origin = laser.position();
         let max = self.reach_m;
-        for i in 0..cfg.beam_count as usize {
-            let angle_rad = cfg.beam_angle(i);
-            let a = laser.theta + angle_rad;
+        let count = cfg.beam_count as usize;
+        self.beams.clear();
+        for i in 0..count {
+            let a = laser.theta + cfg.beam_angle(i);
             let (dx, dy) = (math::cos(a), math::sin(a));
-            let mut range = cast_ray_along(world, origin, dx, dy, max);
-            for d in discs {
-                if let Some(t) = ray_disc(origin, dx, dy, d)
-                    && t <= max
-                    && range.is_none_or(|r| t < r)
-                {
-                    range = Some(t);
+            let range = cast_ray_along(world, origin, dx, dy, max);
+            self.beams.push(BeamWork { dx, dy, range });
+        }
+        // Each disc against the beams that can meet it only; the nearest return of a beam
+        // does not depend on the order its discs are tried in.
+        let first_rad = laser.theta + cfg.first_angle_rad;
+        for d in discs {
+            for run in beams_toward(origin, d, first_rad, cfg.step_rad, count) {
+                for b in &mut self.beams[run] {
+                    if let Some(t) = ray_disc(origin, b.dx, b.dy, d)
+                        && t <= max
+                        && b.range.is_none_or(|r| t < r)
+                    {
+                        b.range = Some(t);
+                    }
                 }
             }
-            let range_m = range
+        }
+        for (i, b) in self.beams.iter().enumerate() {
+            let angle_rad = cfg.beam_angle(i);
+            let range_m = b
+                .range
                 .map(|r| {
                     if self.noise {
                         (r + cfg.noise_fraction * r * random::gaussian(&mut self.rng)).max(0.0)
@@ -570,6 +641,83 @@ mod tests {
         }
         assert_eq!(beyond, 0);
         assert!((20..=90).contains(&within), "{within} of 300");
+    }
+
+    /// Every beam against every disc, the nearest return kept: what the scan computed before
+    /// it chose the beams to test per disc.
+    fn scan_every_disc(
+        cfg: &LaserConfig,
+        w: &World,
+        pose: Pose2,
+        discs: &[Disc],
+    ) -> Vec<Option<f32>> {
+        let laser = pose.compose(cfg.mount);
+        let origin = laser.position();
+        (0..cfg.beam_count as usize)
+            .map(|i| {
+                let a = laser.theta + cfg.beam_angle(i);
+                let (dx, dy) = (math::cos(a), math::sin(a));
+                let mut range = cast_ray_along(w, origin, dx, dy, cfg.max_range_m);
+                for d in discs {
+                    if let Some(t) = ray_disc(origin, dx, dy, d)
+                        && t <= cfg.max_range_m
+                        && range.is_none_or(|r| t < r)
+                    {
+                        range = Some(t);
+                    }
+                }
+                range
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_crowd_of_discs_reads_as_when_every_beam_tests_every_disc() {
+        // Discs everywhere around the laser, near and far, for the thesis's 180° fan and a
+        // full circle (whose fan comes round past the bearing of a disc behind), at headings
+        // beyond a turn either way: bit for bit the scan that tests every disc with every beam.
+        let w = room();
+        let mut rng = random::seeded(11);
+        let mut hits = 0;
+        for cfg in [
+            LaserConfig {
+                noise_fraction: 0.0,
+                ..LaserConfig::thesis()
+            },
+            full_circle(0.0),
+        ] {
+            let mut laser = LaserSim::new(cfg, 1);
+            for _ in 0..200 {
+                let pose = Pose2::new(
+                    random::range_f32(&mut rng, 0.8, 5.2),
+                    random::range_f32(&mut rng, 0.8, 5.2),
+                    random::range_f32(&mut rng, -9.0, 9.0),
+                );
+                let discs: Vec<Disc> = (0..30)
+                    .map(|_| {
+                        let centre = Point2::new(
+                            random::range_f32(&mut rng, 0.0, 6.0),
+                            random::range_f32(&mut rng, 0.0, 6.0),
+                        );
+                        Disc::new(centre, random::range_f32(&mut rng, 0.05, 0.6))
+                    })
+                    .collect();
+                let want = scan_every_disc(&cfg, &w, pose, &discs);
+                let walls = scan_every_disc(&cfg, &w, pose, &[]);
+                let scan = laser.scan(&w, pose, &discs);
+                for ((b, want), wall) in scan.beams().iter().zip(&want).zip(&walls) {
+                    assert_eq!(
+                        b.range_m.map(f32::to_bits),
+                        want.map(f32::to_bits),
+                        "pose {pose:?}, beam at {}",
+                        b.angle_rad
+                    );
+                    hits += (want != wall) as usize;
+                }
+            }
+        }
+        // The discs are seen (the test can fail if the beams chosen per disc are wrong).
+        assert!(hits > 10_000, "{hits} beams stopped by a disc");
     }
 
     #[test]

@@ -39,6 +39,10 @@ pub const DEFAULT_UNKNOWN_COST_FACTOR: f32 = 1.0;
 /// Most offsets an inflation disc may hold (a radius of up to 17 cells).
 pub const MAX_STENCIL: usize = 1024;
 
+/// Rows of the widest stencil's row spans (a reach of up to 23 cells; the stencil's
+/// capacity allows about 18).
+const MAX_SPAN_ROWS: usize = 47;
+
 /// Per-cell step code: blocked.
 pub(crate) const CODE_BLOCKED: u8 = 0;
 /// Per-cell step code: Free (or Occupied-free benchmark cell), cost factor 1.
@@ -234,6 +238,12 @@ pub struct Traversability<const N: usize> {
     stencil_near_len: usize,
     /// No offset of the stencil is farther than this in a row or a column \[cells\].
     stencil_reach: usize,
+    /// The stencil by rows, for bumping counts a row span at a time: for the row of offset
+    /// `dr`, entry `dr + stencil_reach` holds the largest `|dc|` within the robot radius, the
+    /// no-turn radius and the near radius (each band's whole disc), -1 where the row has none.
+    /// A disc's row is one run of columns, so the offsets `(dc, dr)` of a band are exactly
+    /// those with `|dc|` up to its entry.
+    row_spans: [[i16; 3]; MAX_SPAN_ROWS],
     /// Cell classes (CLASS_*).
     class: [u8; N],
     /// Occupied cells within the inflation radius (the cell itself included).
@@ -281,6 +291,7 @@ impl<const N: usize> Traversability<N> {
             stencil_turn_len: 0,
             stencil_near_len: 0,
             stencil_reach: 0,
+            row_spans: [[-1; 3]; MAX_SPAN_ROWS],
             class: [CLASS_UNKNOWN; N],
             near: [0; N],
             near_turn: [0; N],
@@ -527,6 +538,22 @@ impl<const N: usize> Traversability<N> {
             }
             lens[band] = len;
         }
+        let side = (2 * reach + 1) as usize;
+        if side > MAX_SPAN_ROWS {
+            return Err(TraversabilityError::InflationTooLarge {
+                needed: side * side,
+                capacity: MAX_STENCIL,
+            });
+        }
+        let mut row_spans = [[-1i16; 3]; MAX_SPAN_ROWS];
+        for (k, &[dc, dr]) in stencil[..len].iter().enumerate() {
+            let row = &mut row_spans[(dr as i32 + reach) as usize];
+            // Offset k lies in its own band's disc and every wider one.
+            let first_band = lens.iter().position(|&l| k < l).unwrap_or(2);
+            for span in &mut row[first_band..] {
+                *span = (*span).max(dc.abs());
+            }
+        }
         self.geometry = geometry;
         self.robot_radius_m = r;
         self.unknown_blocked = unknown_blocked;
@@ -537,6 +564,7 @@ impl<const N: usize> Traversability<N> {
         self.stencil_turn_len = lens[1];
         self.stencil_near_len = lens[2];
         self.stencil_reach = reach as usize;
+        self.row_spans = row_spans;
         Ok(())
     }
 
@@ -630,30 +658,29 @@ impl<const N: usize> Traversability<N> {
         let (col, row) = (i % width, i / width);
         if col >= reach && row >= reach && col + reach < width && row + reach < self.geometry.height
         {
-            // The whole disc on the grid: no bounds to test, one loop per band.
-            let bump = |count: &mut u16| {
-                *count = if delta > 0 {
-                    count.saturating_add(1)
+            // The whole disc on the grid: no bounds to test, one run of columns a row and band
+            // (a loop the compiler turns into vector saturating adds).
+            let bump = |counts: &mut [u16]| {
+                if delta > 0 {
+                    counts.iter_mut().for_each(|c| *c = c.saturating_add(1));
                 } else {
-                    count.saturating_sub(1)
-                };
+                    counts.iter_mut().for_each(|c| *c = c.saturating_sub(1));
+                }
             };
-            let w = width as isize;
-            let at = |[dc, dr]: [i16; 2]| (i as isize + dr as isize * w + dc as isize) as usize;
-            for k in 0..self.stencil_len {
-                let j = at(self.stencil[k]);
-                bump(&mut self.near_band[j]);
-                bump(&mut self.near_turn[j]);
-                bump(&mut self.near[j]);
-            }
-            for k in self.stencil_len..self.stencil_turn_len {
-                let j = at(self.stencil[k]);
-                bump(&mut self.near_band[j]);
-                bump(&mut self.near_turn[j]);
-            }
-            for k in self.stencil_turn_len..self.stencil_near_len {
-                let j = at(self.stencil[k]);
-                bump(&mut self.near_band[j]);
+            let rows = 2 * reach + 1;
+            for (k, spans) in self.row_spans[..rows].iter().enumerate() {
+                let mid = (row + k - reach) * width + col;
+                let [a0, a1, a2] = spans.map(|a| a as isize);
+                let run = |a: isize| (mid as isize - a) as usize..(mid as isize + a + 1) as usize;
+                if a2 >= 0 {
+                    bump(&mut self.near_band[run(a2)]);
+                }
+                if a1 >= 0 {
+                    bump(&mut self.near_turn[run(a1)]);
+                }
+                if a0 >= 0 {
+                    bump(&mut self.near[run(a0)]);
+                }
             }
             return;
         }
