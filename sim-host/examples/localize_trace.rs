@@ -3,6 +3,12 @@
 //! the matcher's counters and its last match's quality.
 //!
 //! Run: `cargo run --release -p papillon-sim --example localize_trace -- SEED [none|realistic]`
+//!
+//! Environment: `MAP=lab` (default `house`), `NOISE=0.003` (the laser's range noise, default
+//! the mission's), `LOC_TRAVEL`/`LOC_TURN` (the tracker's minimum travel and turn),
+//! `LOC_GRAPH=1` (keyframes in a pose graph with loop closure, `src/localize/graph.rs`),
+//! `GRAPH_TRAVEL`/`GRAPH_TURN` (its keyframe spacing), `GRAPH_SM`/`GRAPH_SR` (a closure's σ),
+//! `QUIET=1` (the last line only).
 
 use papillon::geometry::normalize_angle;
 use papillon::mission::MissionConfig;
@@ -13,7 +19,8 @@ use papillon_sim::world::World;
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let seed: u64 = args.get(1).map(|s| s.parse().unwrap()).unwrap_or(25);
-    let world = World::load("house", 0.1).unwrap();
+    let map = std::env::var("MAP").unwrap_or_else(|_| "house".into());
+    let world = World::load(&map, 0.1).unwrap();
     let mut m = MissionConfig::default();
     m.localize.enabled = true;
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f32>().ok());
@@ -35,6 +42,30 @@ fn main() {
     if let Some(v) = env("LOC_N") {
         m.localize.every_n_scans = v as u32;
     }
+    if let Some(v) = env("NOISE") {
+        m.laser.noise_fraction = v;
+    }
+    if let Some(v) = env("LOC_TRAVEL") {
+        m.localize.min_travel_m = v;
+    }
+    if let Some(v) = env("LOC_TURN") {
+        m.localize.min_turn_rad = v;
+    }
+    if let Some(v) = env("LOC_GRAPH") {
+        m.localize.graph.enabled = v != 0.0;
+    }
+    if let Some(v) = env("GRAPH_TRAVEL") {
+        m.localize.graph.keyframe_travel_m = v;
+    }
+    if let Some(v) = env("GRAPH_TURN") {
+        m.localize.graph.keyframe_turn_rad = v;
+    }
+    if let Some(v) = env("GRAPH_SM") {
+        m.localize.graph.closure.sigma_m = v;
+    }
+    if let Some(v) = env("GRAPH_SR") {
+        m.localize.graph.closure.sigma_rad = v;
+    }
     let quiet = std::env::var("QUIET").is_ok();
     let mut cfg = RunConfig::new(m, 1, seed);
     cfg.body.slip = if args.get(2).map(|s| s.as_str()) == Some("none") {
@@ -45,9 +76,28 @@ fn main() {
     let mut r = Runner::new(world, Dynamics::new(), cfg).unwrap();
     let mut last = -1.0;
     let mut last_trusted = 0;
+    let (mut err_sum, mut err_n, mut err_max) = (0.0f64, 0u64, 0.0f32);
+    let (mut redraw_s, mut redraw_max_s, mut redraws) = (0.0f64, 0.0f64, 0u32);
+    let wall = std::time::Instant::now();
     while !r.finished() {
+        let before = r.map().graph.stats().redraws;
+        let t0 = std::time::Instant::now();
         r.advance().unwrap();
+        if r.map().graph.stats().redraws != before {
+            // The step that redrew the map: its time is mostly the redraw's.
+            let s = t0.elapsed().as_secs_f64();
+            redraw_s += s;
+            redraw_max_s = redraw_max_s.max(s);
+            redraws += 1;
+        }
         let t = r.sim_time_s();
+        {
+            let e = r.mission(0).pose_map();
+            let d = e.position().distance(r.body(0).true_pose().position());
+            err_sum += f64::from(d);
+            err_n += 1;
+            err_max = err_max.max(d);
+        }
         if !quiet && (t - last >= 5.0 || t < 3.0) {
             last = t;
             let b = r.body(0);
@@ -83,12 +133,23 @@ fn main() {
     let tp = b.true_pose();
     let e = ms.pose_map();
     let rep = r.report();
+    let g = *r.map().graph.stats();
     println!(
-        "seed {seed} final err {:.3} m {:.2} deg coverage {:.1} % map acc {:.1} % t {:.0}",
+        "seed {seed} final err {:.3} m {:.2} deg coverage {:.1} % map acc {:.1} % t {:.0} run mean {:.3} max {:.3} m | keyframes {} closures {}/{} refused {:?} redraws {} ({:.1} ms mean, {:.1} max) wall {:.1} s",
         e.position().distance(tp.position()),
         normalize_angle(e.theta - tp.theta).to_degrees(),
         100.0 * rep.coverage,
         100.0 * rep.map_accuracy.accuracy,
-        r.sim_time_s()
+        r.sim_time_s(),
+        err_sum / err_n.max(1) as f64,
+        err_max,
+        g.keyframes,
+        g.closures,
+        g.attempts,
+        g.refused,
+        redraws,
+        1e3 * redraw_s / f64::from(redraws.max(1)),
+        1e3 * redraw_max_s,
+        wall.elapsed().as_secs_f64()
     );
 }
