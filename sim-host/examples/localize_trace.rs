@@ -8,6 +8,10 @@
 //! the mission's), `LOC_TRAVEL`/`LOC_TURN` (the tracker's minimum travel and turn),
 //! `LOC_GRAPH=1` (keyframes in a pose graph with loop closure, `src/localize/graph.rs`),
 //! `GRAPH_TRAVEL`/`GRAPH_TURN` (its keyframe spacing), `GRAPH_SM`/`GRAPH_SR` (a closure's σ),
+//! `GRAPH_KEYREF=0` (every scan into the reference), `GRAPH_GATE` (closure gate, σ),
+//! `GRAPH_FLOOR_M`/`GRAPH_FLOOR_RAD` (a step's least σ), `GRAPH_EVERY` (path between closures),
+//! `GRAPH_INFO` (a closure's least information per return), `DIAG=1`
+//! (each closure's and each step's error against the truth),
 //! `QUIET=1` (the last line only).
 
 use papillon::geometry::normalize_angle;
@@ -60,6 +64,24 @@ fn main() {
     if let Some(v) = env("GRAPH_TURN") {
         m.localize.graph.keyframe_turn_rad = v;
     }
+    if let Some(v) = env("GRAPH_KEYREF") {
+        m.localize.graph.reference_keyframes_only = v != 0.0;
+    }
+    if let Some(v) = env("GRAPH_GATE") {
+        m.localize.graph.closure.gate_sigmas = v;
+    }
+    if let Some(v) = env("GRAPH_FLOOR_M") {
+        m.localize.graph.step_floor_m = v;
+    }
+    if let Some(v) = env("GRAPH_FLOOR_RAD") {
+        m.localize.graph.step_floor_rad = v;
+    }
+    if let Some(v) = env("GRAPH_EVERY") {
+        m.localize.graph.closure_every_m = v;
+    }
+    if let Some(v) = env("GRAPH_INFO") {
+        m.localize.graph.closure.min_information = v;
+    }
     if let Some(v) = env("GRAPH_SM") {
         m.localize.graph.closure.sigma_m = v;
     }
@@ -79,8 +101,11 @@ fn main() {
     let (mut err_sum, mut err_n, mut err_max) = (0.0f64, 0u64, 0.0f32);
     let (mut redraw_s, mut redraw_max_s, mut redraws) = (0.0f64, 0.0f64, 0u32);
     let wall = std::time::Instant::now();
+    // The true pose of each keyframe (a scan is an `advance` of its own).
+    let mut key_truth = Vec::new();
     while !r.finished() {
         let before = r.map().graph.stats().redraws;
+        let keys = r.map().graph.keyframes().len();
         let t0 = std::time::Instant::now();
         r.advance().unwrap();
         if r.map().graph.stats().redraws != before {
@@ -89,6 +114,9 @@ fn main() {
             redraw_s += s;
             redraw_max_s = redraw_max_s.max(s);
             redraws += 1;
+        }
+        if r.map().graph.keyframes().len() > keys {
+            key_truth.push(r.body(0).true_pose());
         }
         let t = r.sim_time_s();
         {
@@ -134,6 +162,57 @@ fn main() {
     let e = ms.pose_map();
     let rep = r.report();
     let g = *r.map().graph.stats();
+    if std::env::var("DIAG").is_ok() {
+        use papillon::localize::pose_graph::relative;
+        let graph = r.map().graph.graph();
+        for e in graph.edges() {
+            let (i, j) = (usize::from(e.from), usize::from(e.to));
+            if j == i + 1 || j >= key_truth.len() {
+                continue;
+            }
+            let t = relative(key_truth[i], key_truth[j]);
+            let err = relative(t, e.measured);
+            println!(
+                "closure {i:5} -> {j:5}: measured {:6.3} {:6.3} {:6.2}° true {:6.3} {:6.3} {:6.2}° error {:.3} m {:.2}°",
+                e.measured.x,
+                e.measured.y,
+                e.measured.theta.to_degrees(),
+                t.x,
+                t.y,
+                t.theta.to_degrees(),
+                err.x.hypot(err.y),
+                err.theta.to_degrees()
+            );
+        }
+        let (mut n, mut st, mut sm, mut sa) = (0, 0.0f32, 0.0f32, 0.0f32);
+        for e in graph.edges() {
+            let (i, j) = (usize::from(e.from), usize::from(e.to));
+            if j != i + 1 || j >= key_truth.len() {
+                continue;
+            }
+            let err = relative(relative(key_truth[i], key_truth[j]), e.measured);
+            n += 1;
+            st += err.theta;
+            sa += err.theta.abs();
+            sm += err.x.hypot(err.y);
+        }
+        println!(
+            "steps: {n}, heading error sum {:.2}° (mean |.| {:.3}°), mean position error {:.4} m",
+            st.to_degrees(),
+            (sa / n.max(1) as f32).to_degrees(),
+            sm / n.max(1) as f32
+        );
+        let errs: Vec<f32> = (0..key_truth.len())
+            .filter_map(|i| {
+                graph
+                    .pose(i)
+                    .map(|p| p.position().distance(key_truth[i].position()))
+            })
+            .collect();
+        let mean = errs.iter().sum::<f32>() / errs.len().max(1) as f32;
+        let max = errs.iter().cloned().fold(0.0, f32::max);
+        println!("keyframes vs truth: mean {mean:.3} m, max {max:.3} m");
+    }
     println!(
         "seed {seed} final err {:.3} m {:.2} deg coverage {:.1} % map acc {:.1} % t {:.0} run mean {:.3} max {:.3} m | keyframes {} closures {}/{} refused {:?} redraws {} ({:.1} ms mean, {:.1} max) wall {:.1} s",
         e.position().distance(tp.position()),

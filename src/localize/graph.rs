@@ -53,6 +53,10 @@ pub struct GraphConfig {
     pub redraw_move_m: f32,
     /// ... or turned one more than this \[rad\].
     pub redraw_turn_rad: f32,
+    /// Only keyframes are written into the matcher's reference (the returns layer), at their
+    /// corrected pose, as the redraw does; the scans between go to the grid only (Karto and
+    /// slam_toolbox match against their keyframes' scans only).
+    pub reference_keyframes_only: bool,
     /// Gauss-Newton iterations per optimisation.
     pub iterations: u32,
     /// Conjugate-gradient steps per iteration at most.
@@ -63,7 +67,7 @@ impl Default for GraphConfig {
     /// Off; keyframes each 0.2 m or 0.2 rad; steps of (1 cm)² per metre, (0.6°)² per radian
     /// and (0.3°)² per metre, at least 5 mm and 0.1°; the default closures, attempted again
     /// 2 m of path after one is made; a redraw after a move of 1 cm or 0.1°; 10 iterations of
-    /// at most 3000 steps.
+    /// at most 3000 steps; the reference from keyframes only.
     fn default() -> Self {
         Self {
             enabled: false,
@@ -78,6 +82,7 @@ impl Default for GraphConfig {
             closure_every_m: 2.0,
             redraw_move_m: 0.01,
             redraw_turn_rad: 0.002,
+            reference_keyframes_only: true,
             iterations: 10,
             cg_steps: 3000,
         }
@@ -102,8 +107,8 @@ pub struct GraphStats {
     /// Whether a full store stopped the graph.
     pub full: bool,
     /// Closures refused: by the matcher's own checks, as unconstrained, for a low score, for
-    /// little known ground.
-    pub refused: [u32; 4],
+    /// little known ground, as inconsistent with the graph.
+    pub refused: [u32; 5],
 }
 
 impl GraphStats {
@@ -113,6 +118,7 @@ impl GraphStats {
             Refusal::Unconstrained(_) => 1,
             Refusal::LowScore(_) => 2,
             Refusal::LittleKnown(_) => 3,
+            Refusal::Inconsistent(_) => 4,
         };
         self.refused[k] += 1;
     }
@@ -222,7 +228,8 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
             let z = relative(p, pose);
             let d = crate::math::hypot(z.x, z.y);
             let turn = crate::math::abs(z.theta);
-            let var_m2 = (config.step_var_m2_per_m * d).max(config.step_floor_m * config.step_floor_m);
+            let var_m2 =
+                (config.step_var_m2_per_m * d).max(config.step_floor_m * config.step_floor_m);
             let var_rad2 = (config.step_var_rad2_per_rad * turn + config.step_var_rad2_per_m * d)
                 .max(config.step_floor_rad * config.step_floor_rad);
             let edge = Edge {
@@ -277,9 +284,21 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
                 return None;
             }
         };
-        let Some(old_pose) = self.graph.pose(old) else {
-            return None;
-        };
+        let old_pose = self.graph.pose(old)?;
+        if c.gate_sigmas > 0.0 {
+            // The path between the two keyframes, as the graph's steps would drift over it.
+            let path = self.path_m - self.store.get(old).map_or(0.0, |k| k.path_m);
+            let var_m2 = c.sigma_m * c.sigma_m + config.step_var_m2_per_m * path;
+            let var_rad2 = c.sigma_rad * c.sigma_rad + config.step_var_rad2_per_m * path;
+            let dx = matched.x - pose.x;
+            let dy = matched.y - pose.y;
+            let dt = crate::geometry::normalize_angle(matched.theta - pose.theta);
+            let d2 = (dx * dx + dy * dy) / var_m2 + dt * dt / var_rad2;
+            if d2 > c.gate_sigmas * c.gate_sigmas {
+                self.stats.refuse(Refusal::Inconsistent(d2));
+                return None;
+            }
+        }
         let edge = Edge {
             from: old as u16,
             to: node as u16,
@@ -300,8 +319,7 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
         let done = self.graph.optimise(config.iterations, config.cg_steps);
         self.stats.cg_steps += u64::from(done.cg_steps);
         self.stats.max_move_m = self.stats.max_move_m.max(done.max_move_m);
-        if done.max_move_m <= config.redraw_move_m && done.max_turn_rad <= config.redraw_turn_rad
-        {
+        if done.max_move_m <= config.redraw_move_m && done.max_turn_rad <= config.redraw_turn_rad {
             return None;
         }
         self.stats.redraws += 1;

@@ -42,6 +42,10 @@ pub struct ClosureConfig {
     pub search_xy_m: f32,
     /// Rotation searched each way \[rad\].
     pub search_theta_rad: f32,
+    /// A direction is constrained when its information per return is at least this
+    /// \[1/m²\] (the matcher's [`MatchConfig::min_information`] for a closure; all three must
+    /// be).
+    pub min_information: f32,
     /// Mean likelihood of the returns at the match below this: refused.
     pub min_score: f32,
     /// Fraction of the returns on ground the local map knows below this: refused.
@@ -50,12 +54,19 @@ pub struct ClosureConfig {
     pub sigma_m: f32,
     /// ... and heading \[rad\].
     pub sigma_rad: f32,
+    /// A match is refused when it differs from the pose the graph predicts by more than this
+    /// many standard deviations of the closure and of the path between the two keyframes
+    /// (χ² test on each axis; 0: no test), a consistency check as Olson's, *Recognizing
+    /// places using spectrally clustered local matches*, RAS 2009, rejects matches that
+    /// disagree with the odometry of the loop.
+    pub gate_sigmas: f32,
 }
 
 impl Default for ClosureConfig {
     /// Candidates 10 m of path older and within 2.5 m; ±20 keyframes drawn; search ±0.5 m and
-    /// ±0.2 rad; accepted at a mean likelihood of 0.5 and 70 % of returns on known ground, as
-    /// σ 2 cm and 0.6°.
+    /// ±0.2 rad; accepted when all three directions have an information of 0.25/m² per return
+    /// (half the tracker's), at a mean likelihood of 0.5 and 70 % of returns on known ground,
+    /// within 3 σ of the graph's prediction, as σ 2 cm and 0.6°.
     fn default() -> Self {
         Self {
             min_path_m: 10.0,
@@ -63,10 +74,12 @@ impl Default for ClosureConfig {
             neighbours: 20,
             search_xy_m: 0.5,
             search_theta_rad: 0.2,
+            min_information: 0.25,
             min_score: 0.5,
             min_known_fraction: 0.7,
             sigma_m: 0.02,
             sigma_rad: 0.01,
+            gate_sigmas: 3.0,
         }
     }
 }
@@ -84,6 +97,9 @@ pub enum Refusal {
     LittleKnown(f32),
     /// The local map's geometry could not be built.
     NoMap,
+    /// The match disagrees with the graph by more than the path between the two keyframes
+    /// can have drifted ([`ClosureConfig::gate_sigmas`]); the squared normalised distance.
+    Inconsistent(f32),
 }
 
 /// The candidate for a closure: the keyframe nearest `pose` among those at least
@@ -184,6 +200,7 @@ impl<const L: usize> LocalMap<L> {
         let wide = MatchConfig {
             search_xy_m: config.search_xy_m,
             search_theta_rad: config.search_theta_rad,
+            min_information: config.min_information,
             ..*tracker
         };
         let result = matcher.match_scan(&self.grid, &self.hits, scan, laser, predicted, &wide);

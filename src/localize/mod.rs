@@ -47,6 +47,9 @@ pub mod tracker;
 #[cfg(test)]
 mod tests;
 
+#[cfg(test)]
+mod closure_tests;
+
 use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::OccupancyGrid;
 use crate::math;

@@ -391,23 +391,17 @@ impl<const K: usize, const E: usize> PoseGraph<K, E> {
                     self.b[j][d] += gj[d];
                 }
                 // Aᵀ Ω A and Bᵀ Ω B.
-                for r in 0..3 {
-                    for c in 0..3 {
-                        let mut ha = 0.0;
-                        for q in 0..3 {
-                            ha += l.a[q * 3 + r] * w[q] * l.a[q * 3 + c];
-                        }
-                        self.block[i][r * 3 + c] += ha;
-                    }
-                }
                 let bm = [l.r[0], l.r[1], 0.0, l.r[2], l.r[3], 0.0, 0.0, 0.0, 1.0];
+                let jtj = |m: &[f64; 9], r: usize, c: usize| {
+                    w.iter()
+                        .enumerate()
+                        .map(|(q, wq)| m[q * 3 + r] * wq * m[q * 3 + c])
+                        .sum::<f64>()
+                };
                 for r in 0..3 {
                     for c in 0..3 {
-                        let mut hb = 0.0;
-                        for q in 0..3 {
-                            hb += bm[q * 3 + r] * w[q] * bm[q * 3 + c];
-                        }
-                        self.block[j][r * 3 + c] += hb;
+                        self.block[i][r * 3 + c] += jtj(&l.a, r, c);
+                        self.block[j][r * 3 + c] += jtj(&bm, r, c);
                     }
                 }
             }
@@ -441,7 +435,7 @@ impl<const K: usize, const E: usize> PoseGraph<K, E> {
                 for i in 0..n {
                     php += dot(&self.dir[i], &self.hdir[i]);
                 }
-                if !(php > 0.0) {
+                if php.is_nan() || php <= 0.0 {
                     break;
                 }
                 let alpha = rz / php;
@@ -556,7 +550,9 @@ mod tests {
         for (k, t) in truth.iter().enumerate() {
             let p = g.pose(k).unwrap();
             out.0 = out.0.max(p.position().distance(t.position()));
-            out.1 = out.1.max(crate::geometry::normalize_angle(p.theta - t.theta).abs());
+            out.1 = out
+                .1
+                .max(crate::geometry::normalize_angle(p.theta - t.theta).abs());
         }
         out
     }
@@ -583,8 +579,14 @@ mod tests {
         assert!(worst(&g, &truth).0 > 0.5, "the start is not drifted");
         let done = g.optimise(20, 200);
         let (m, r) = worst(&g, &truth);
-        assert!(m < 1e-3 && r < 1e-4, "{m} m, {r} rad off the truth ({done:?})");
-        assert!(done.error_after < 1e-6 * done.error_before.max(1.0), "{done:?}");
+        assert!(
+            m < 1e-3 && r < 1e-4,
+            "{m} m, {r} rad off the truth ({done:?})"
+        );
+        assert!(
+            done.error_after < 1e-6 * done.error_before.max(1.0),
+            "{done:?}"
+        );
     }
 
     #[test]
@@ -607,7 +609,11 @@ mod tests {
         .unwrap();
         g.optimise(20, 200);
         let after = worst(&g, &truth);
-        let gap = g.pose(16).unwrap().position().distance(g.pose(0).unwrap().position());
+        let gap = g
+            .pose(16)
+            .unwrap()
+            .position()
+            .distance(g.pose(0).unwrap().position());
         assert!(gap < 0.01, "the loop stays open by {gap} m");
         // The residual drift is shared out along the loop: every node nearer the truth.
         assert!(
@@ -673,6 +679,9 @@ mod tests {
         );
         g.add_edge(e).unwrap();
         assert_eq!(g.add_edge(e), Err(GraphError::EdgesFull { capacity: 1 }));
-        assert_eq!(g.add_node(Pose2::new(f32::NAN, 0.0, 0.0)), Err(GraphError::NotFinite));
+        assert_eq!(
+            g.add_node(Pose2::new(f32::NAN, 0.0, 0.0)),
+            Err(GraphError::NotFinite)
+        );
     }
 }

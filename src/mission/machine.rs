@@ -263,8 +263,11 @@ impl<const N: usize> Mission<N> {
         )
         .map_err(MissionError::Sensor)?;
         if self.config.localize.enabled {
-            map.hits
-                .add_scan(scan, &self.config.laser, self.senses.pose_map);
+            let graph = &self.config.localize.graph;
+            if !(graph.enabled && graph.reference_keyframes_only) {
+                map.hits
+                    .add_scan(scan, &self.config.laser, self.senses.pose_map);
+            }
             self.keyframe_graph(scan, map)?;
         }
         self.clear_own_trail(map);
@@ -281,6 +284,7 @@ impl<const N: usize> Mission<N> {
         if !loc.graph.enabled {
             return Ok(());
         }
+        let keyframes = map.graph.keyframes().len();
         let Some(moved) = map.graph.on_scan(
             &loc.graph,
             &loc.matcher,
@@ -292,6 +296,10 @@ impl<const N: usize> Mission<N> {
             self.senses.pose_map,
             &mut map.matcher,
         ) else {
+            if loc.graph.reference_keyframes_only && map.graph.keyframes().len() > keyframes {
+                map.hits
+                    .add_scan(scan, &self.config.laser, self.senses.pose_map);
+            }
             return Ok(());
         };
         map.graph
