@@ -8,7 +8,7 @@
 //! the mission's), `LOC_TRAVEL`/`LOC_TURN` (the tracker's minimum travel and turn),
 //! `LOC_GRAPH=1` (keyframes in a pose graph with loop closure, `src/localize/graph.rs`),
 //! `GRAPH_TRAVEL`/`GRAPH_TURN` (its keyframe spacing), `GRAPH_SM`/`GRAPH_SR` (a closure's σ),
-//! `GRAPH_KEYREF=0` (every scan into the reference), `GRAPH_GATE` (closure gate, σ),
+//! `GRAPH_KEYREF=1` (only keyframes into the reference), `GRAPH_GATE` (closure gate, σ),
 //! `GRAPH_FLOOR_M`/`GRAPH_FLOOR_RAD` (a step's least σ), `GRAPH_EVERY` (path between closures),
 //! `GRAPH_INFO` (a closure's least information per return), `DIAG=1`
 //! (each closure's and each step's error against the truth),

@@ -55,7 +55,7 @@ pub struct GraphConfig {
     pub redraw_turn_rad: f32,
     /// Only keyframes are written into the matcher's reference (the returns layer), at their
     /// corrected pose, as the redraw does; the scans between go to the grid only (Karto and
-    /// slam_toolbox match against their keyframes' scans only).
+    /// slam_toolbox match against their keyframes' scans only). Off: measured worse.
     pub reference_keyframes_only: bool,
     /// Gauss-Newton iterations per optimisation.
     pub iterations: u32,
@@ -67,7 +67,8 @@ impl Default for GraphConfig {
     /// Off; keyframes each 0.2 m or 0.2 rad; steps of (1 cm)² per metre, (0.6°)² per radian
     /// and (0.3°)² per metre, at least 5 mm and 0.1°; the default closures, attempted again
     /// 2 m of path after one is made; a redraw after a move of 1 cm or 0.1°; 10 iterations of
-    /// at most 3000 steps; the reference from keyframes only.
+    /// at most 3000 steps; every scan into the reference (from keyframes only, two of 8 house
+    /// seeds diverged with main's matcher: docs/experiments.md, "pose graph").
     fn default() -> Self {
         Self {
             enabled: false,
@@ -82,7 +83,7 @@ impl Default for GraphConfig {
             closure_every_m: 2.0,
             redraw_move_m: 0.01,
             redraw_turn_rad: 0.002,
-            reference_keyframes_only: true,
+            reference_keyframes_only: false,
             iterations: 10,
             cg_steps: 3000,
         }
