@@ -10,7 +10,8 @@
 //! `GRAPH_TRAVEL`/`GRAPH_TURN` (its keyframe spacing), `GRAPH_SM`/`GRAPH_SR` (a closure's σ),
 //! `GRAPH_KEYREF=1` (only keyframes into the reference), `GRAPH_GATE` (closure gate, σ),
 //! `GRAPH_FLOOR_M`/`GRAPH_FLOOR_RAD` (a step's least σ), `GRAPH_EVERY` (path between closures),
-//! `GRAPH_INFO` (a closure's least information per return), `DIAG=1`
+//! `GRAPH_INFO` (a closure's least information per return), `GRAPH_RESID` (a closure's largest
+//! residual after the optimisation, σ; 0: none), `DIAG=1`
 //! (each closure's and each step's error against the truth),
 //! `QUIET=1` (the last line only).
 
@@ -78,6 +79,9 @@ fn main() {
     }
     if let Some(v) = env("GRAPH_EVERY") {
         m.localize.graph.closure_every_m = v;
+    }
+    if let Some(v) = env("GRAPH_RESID") {
+        m.localize.graph.closure.residual_sigmas = v;
     }
     if let Some(v) = env("GRAPH_INFO") {
         m.localize.graph.closure.min_information = v;

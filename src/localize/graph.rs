@@ -318,8 +318,27 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
         self.stats.closures += 1;
         self.next_closure_m = self.path_m + config.closure_every_m;
         let before = self.graph.pose(node)?;
-        let done = self.graph.optimise(config.iterations, config.cg_steps);
+        let mut done = self.graph.optimise(config.iterations, config.cg_steps);
         self.stats.cg_steps += u64::from(done.cg_steps);
+        // After the optimisation the closure must agree with the graph: a closure that the
+        // rest of the graph holds far from its measurement (a residual beyond
+        // `residual_sigmas` on the three axes together) is taken out again, and the graph
+        // goes back to where it was (a consistency check of the kind of Olson's, RAS 2009).
+        let last = self.graph.edge_count() - 1;
+        let limit = f64::from(c.residual_sigmas * c.residual_sigmas) * 3.0;
+        if c.residual_sigmas > 0.0 && self.graph.edge_error(last) > limit {
+            let chi2 = self.graph.edge_error(last) as f32;
+            self.graph.pop_edge();
+            self.stats.closures -= 1;
+            self.stats.refuse(Refusal::Inconsistent(chi2));
+            done = self.graph.optimise(config.iterations, config.cg_steps);
+            self.stats.cg_steps += u64::from(done.cg_steps);
+            // Back at the optimum without it: what moved is measured from `before`.
+            let after = self.graph.pose(node)?;
+            done.max_move_m = after.position().distance(before.position());
+            done.max_turn_rad =
+                crate::math::abs(crate::geometry::normalize_angle(after.theta - before.theta));
+        }
         self.stats.max_move_m = self.stats.max_move_m.max(done.max_move_m);
         if done.max_move_m <= config.redraw_move_m && done.max_turn_rad <= config.redraw_turn_rad {
             return None;

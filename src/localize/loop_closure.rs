@@ -60,6 +60,9 @@ pub struct ClosureConfig {
     /// places using spectrally clustered local matches*, RAS 2009, rejects matches that
     /// disagree with the odometry of the loop.
     pub gate_sigmas: f32,
+    /// After the optimisation, a closure whose residual exceeds this many of its standard
+    /// deviations (on the three axes together) is taken out again (0: kept).
+    pub residual_sigmas: f32,
 }
 
 impl Default for ClosureConfig {
@@ -80,6 +83,7 @@ impl Default for ClosureConfig {
             sigma_m: 0.02,
             sigma_rad: 0.01,
             gate_sigmas: 3.0,
+            residual_sigmas: 0.0,
         }
     }
 }

@@ -322,6 +322,21 @@ impl<const K: usize, const E: usize> PoseGraph<K, E> {
         w[0] * e[0] * e[0] + w[1] * e[1] * e[1] + w[2] * e[2] * e[2]
     }
 
+    /// Removes the last edge added (a closure found inconsistent after an optimisation).
+    pub fn pop_edge(&mut self) -> Option<Edge> {
+        self.edge_len = self.edge_len.checked_sub(1)?;
+        Some(self.edges[self.edge_len])
+    }
+
+    /// Edge `k`'s weighted squared error `eᵀ Ω e` at the current poses (0 past the last).
+    pub fn edge_error(&mut self, k: usize) -> f64 {
+        if k < self.edge_len {
+            self.linearise(k)
+        } else {
+            0.0
+        }
+    }
+
     /// The weighted squared error `Σ eᵀ Ω e` at the current poses.
     pub fn error(&mut self) -> f64 {
         (0..self.edge_len).map(|k| self.linearise(k)).sum()
@@ -679,6 +694,11 @@ mod tests {
         );
         g.add_edge(e).unwrap();
         assert_eq!(g.add_edge(e), Err(GraphError::EdgesFull { capacity: 1 }));
+        // The edge holds at its measurement; taken out, it leaves room for another.
+        assert!(g.edge_error(0) < 1e-12 && g.edge_error(1) == 0.0);
+        assert_eq!(g.pop_edge(), Some(e));
+        assert_eq!(g.edge_count(), 0);
+        assert_eq!(g.pop_edge(), None);
         assert_eq!(
             g.add_node(Pose2::new(f32::NAN, 0.0, 0.0)),
             Err(GraphError::NotFinite)
