@@ -476,7 +476,6 @@ impl<const N: usize> OccupancyGrid<N> {
 
     /// Gives an all-zero grid (as [`crate::heap::boxed_zeroed`] makes it) its geometry and
     /// bounds: zero log-odds is Unknown and the zero counters match it.
-    #[cfg(feature = "std")]
     pub(crate) fn set_up_zeroed(
         &mut self,
         geometry: GridGeometry,

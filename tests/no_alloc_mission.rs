@@ -24,11 +24,28 @@ const CONTROL_PERIOD_US: u64 = 100_000;
 
 #[test]
 fn a_whole_lab_mission_allocates_nothing_in_the_core() {
+    lab_mission(false);
+}
+
+/// With the pose graph on (keyframes, loop closures, optimisation, redraws).
+#[test]
+fn a_whole_lab_mission_with_the_pose_graph_allocates_nothing_in_the_core() {
+    let stats = lab_mission(true);
+    eprintln!("pose graph: {stats:?}");
+    assert!(stats.keyframes > 0 && stats.attempts > 0, "{stats:?}");
+    assert!(
+        stats.closures > 0 && stats.redraws > 0,
+        "no closure to check: {stats:?}"
+    );
+}
+
+fn lab_mission(graph: bool) -> papillon::localize::graph::GraphStats {
     let world = World::load("lab", 0.1).expect("the built-in lab");
     let truth = world.truth_mask();
     let observable = truth.iter().filter(|&&t| t).count();
     let mut config = MissionConfig::default();
     config.localize.enabled = true;
+    config.localize.graph.enabled = graph;
     let start = world.start();
     let mut body = RobotBody::new(
         BodyConfig {
@@ -120,4 +137,5 @@ fn a_whole_lab_mission_allocates_nothing_in_the_core() {
         allocations, 0,
         "{allocations} allocations in {core_calls} calls into the mission ({decisions} decisions, ended {state:?})"
     );
+    *map.graph.stats()
 }

@@ -63,6 +63,12 @@ impl<const N: usize> HitMap<N> {
         &self.geometry
     }
 
+    /// Forgets every return (a pose graph draws the layer again from its keyframes).
+    pub fn clear(&mut self) {
+        let n = self.geometry.cell_count().min(N);
+        self.weights[..n].fill(0.0);
+    }
+
     /// Weight at a flat cell index (0 outside the grid) \[m of surface\].
     #[inline]
     pub fn weight_at(&self, index: usize) -> f32 {

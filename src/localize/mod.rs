@@ -26,18 +26,29 @@
 //! [`tracker`] applies matches to the mission's map-from-odometry transform, every N-th scan,
 //! blended with the prediction by their variances.
 //!
+//! [`graph`] (off by default, [`graph::GraphConfig`]) keeps keyframes ([`keyframes`]) in a pose
+//! graph ([`pose_graph`]), closes loops when a place is seen again ([`loop_closure`]) and then
+//! draws the reference and the grid again from the corrected keyframes.
+//!
 //! `no_std`, allocation-free (the working memory is [`ScanMatcher`], sized by its const
 //! generic), sans-IO and deterministic: the same grid, scan and prediction give the same pose.
 
 pub mod constraint;
 pub mod correlative;
 pub mod gauss_newton;
+pub mod graph;
 pub mod hits;
+pub mod keyframes;
 pub mod likelihood;
+pub mod loop_closure;
+pub mod pose_graph;
 pub mod tracker;
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod closure_tests;
 
 use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::OccupancyGrid;

@@ -8,15 +8,15 @@ use crate::sensor::Beam;
 
 const CELLS: usize = 420 * 60;
 
-type Segment = (Point2, Point2);
+pub(super) type Segment = (Point2, Point2);
 
-fn seg(ax: f32, ay: f32, bx: f32, by: f32) -> Segment {
+pub(super) fn seg(ax: f32, ay: f32, bx: f32, by: f32) -> Segment {
     (Point2::new(ax, ay), Point2::new(bx, by))
 }
 
 /// An 8 m x 6 m room with a pillar, a short wall and a cupboard; walls run through cell
 /// centres, so the drawn map has no half-cell bias.
-fn room() -> ([Segment; 12], GridGeometry) {
+pub(super) fn room() -> ([Segment; 12], GridGeometry) {
     let walls = [
         seg(0.5, 0.5, 8.5, 0.5),
         seg(8.5, 0.5, 8.5, 6.5),
@@ -41,7 +41,7 @@ fn room() -> ([Segment; 12], GridGeometry) {
 }
 
 /// A corridor 40 m long and 2 m wide, along x.
-fn corridor() -> ([Segment; 2], GridGeometry) {
+pub(super) fn corridor() -> ([Segment; 2], GridGeometry) {
     (
         [seg(1.0, 1.0, 41.0, 1.0), seg(1.0, 3.0, 41.0, 3.0)],
         GridGeometry::new(420, 40, 0.1, Point2::new(-0.05, -0.05)).unwrap(),
@@ -89,7 +89,13 @@ fn draw(
 
 /// The scan `laser` takes at `pose` among `walls`, with range noise of `noise` (fraction)
 /// drawn from `seed`.
-fn scan_at(walls: &[Segment], pose: Pose2, laser: &LaserConfig, noise: f32, seed: u64) -> Scan {
+pub(super) fn scan_at(
+    walls: &[Segment],
+    pose: Pose2,
+    laser: &LaserConfig,
+    noise: f32,
+    seed: u64,
+) -> Scan {
     let mut rng = seeded(seed);
     let at = pose.compose(laser.mount);
     let mut scan = Scan::new();
@@ -122,11 +128,11 @@ fn scan_at(walls: &[Segment], pose: Pose2, laser: &LaserConfig, noise: f32, seed
     scan
 }
 
-fn matcher() -> Box<ScanMatcher<WINDOW_CELLS>> {
+pub(super) fn matcher() -> Box<ScanMatcher<WINDOW_CELLS>> {
     Box::new(ScanMatcher::new())
 }
 
-fn config() -> MatchConfig {
+pub(super) fn config() -> MatchConfig {
     MatchConfig::default()
 }
 

@@ -51,6 +51,8 @@ pub struct LocalizeConfig {
     pub min_travel_m: f32,
     /// ... or turned this much \[rad\] since the last match (0 and 0: every scan).
     pub min_turn_rad: f32,
+    /// Keyframes in a pose graph with loop closure ([`super::graph`]; off by default).
+    pub graph: super::graph::GraphConfig,
 }
 
 impl Default for LocalizeConfig {
@@ -72,6 +74,7 @@ impl Default for LocalizeConfig {
             match_sigma_rad: 0.02,
             min_travel_m: 0.5,
             min_turn_rad: 0.5,
+            graph: super::graph::GraphConfig::default(),
         }
     }
 }

@@ -263,13 +263,63 @@ impl<const N: usize> Mission<N> {
         )
         .map_err(MissionError::Sensor)?;
         if self.config.localize.enabled {
-            map.hits
-                .add_scan(scan, &self.config.laser, self.senses.pose_map);
+            let graph = &self.config.localize.graph;
+            if !(graph.enabled && graph.reference_keyframes_only) {
+                map.hits
+                    .add_scan(scan, &self.config.laser, self.senses.pose_map);
+            }
+            self.keyframe_graph(scan, map)?;
         }
         self.clear_own_trail(map);
         self.senses.on_scan(now, scan, true);
         self.watch.path_dirty = true;
         self.publish(now, map)
+    }
+
+    /// With the localisation's pose graph on ([`crate::localize::graph`]): keeps keyframes,
+    /// closes loops, and after an optimisation that moved the keyframes draws the grid and
+    /// the returns layer again from them and moves the estimate with the last keyframe.
+    fn keyframe_graph(&mut self, scan: &Scan, map: &mut SharedMap<N>) -> Result<(), MissionError> {
+        let loc = &self.config.localize;
+        if !loc.graph.enabled {
+            return Ok(());
+        }
+        let keyframes = map.graph.keyframes().len();
+        let Some(moved) = map.graph.on_scan(
+            &loc.graph,
+            &loc.matcher,
+            scan,
+            &self.config.laser,
+            &self.config.sensor,
+            map.grid.bounds(),
+            map.grid.geometry().resolution_m,
+            self.senses.pose_map,
+            &mut map.matcher,
+        ) else {
+            if loc.graph.reference_keyframes_only && map.graph.keyframes().len() > keyframes {
+                map.hits
+                    .add_scan(scan, &self.config.laser, self.senses.pose_map);
+            }
+            return Ok(());
+        };
+        map.graph
+            .redraw(
+                &mut map.grid,
+                &mut map.hits,
+                &self.config.laser,
+                &self.config.sensor,
+            )
+            .map_err(MissionError::Sensor)?;
+        map.rebuild_traversability()?;
+        let pose = moved.apply(self.senses.pose_map);
+        self.senses.pose_map = pose;
+        if self.senses.map_from_odom.is_some() {
+            self.senses.map_from_odom = Some(crate::control::odometry::MapFromOdom::from_start(
+                pose,
+                self.senses.pose_odom,
+            ));
+        }
+        Ok(())
     }
 
     /// A scan read after a later odometry reading than its own time (a real-time pump that

@@ -83,6 +83,12 @@ pub struct SharedMap<const N: usize> {
     /// Where the robots' returns landed, at their corrected poses: the map scans are matched
     /// to (written only with [`MissionConfig::localize`] on; [`crate::localize::hits`]).
     pub hits: crate::localize::HitMap<N>,
+    /// Keyframes, pose graph and loop closures (used only with the localisation's graph on,
+    /// one robot; [`crate::localize::graph`]).
+    pub graph: crate::localize::graph::KeyframeGraph<
+        { crate::localize::graph::GRAPH_KEYFRAMES },
+        { crate::localize::graph::GRAPH_EDGES },
+    >,
 }
 
 impl<const N: usize> core::fmt::Debug for SharedMap<N> {
@@ -109,6 +115,7 @@ impl<const N: usize> SharedMap<N> {
             mark_count: 0,
             matcher: crate::localize::ScanMatcher::new(),
             hits: crate::localize::HitMap::new(geometry),
+            graph: bytemuck::Zeroable::zeroed(),
         })
     }
 
