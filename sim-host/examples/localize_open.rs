@@ -7,7 +7,8 @@
 //!
 //! Run: `cargo run --release -p papillon-sim --example localize_open -- SEED [OFFSET_M] [OFFSET_DEG]`
 //! (defaults: seed 25, offsets drawn uniformly within ±0.05 m and ±1°). Environment variables
-//! override the matcher's settings (SIGMA, MINRET, WR, WF, SMOOTH, BOUNDARY, GAIN) and the
+//! override the matcher's settings (SIGMA, WR, WF, SMOOTH, GAIN; the refinement's BLOCK, MINW,
+//! THICK, HUBER, GATE, MAXSIG; POINTS, SEARCHFIT) and the
 //! laser's range noise (NOISE); PROFILE=1 prints, every 500 scans, where the mean field value
 //! of the scan peaks around the truth (WEIGHTED=1: returns weighted as the matcher does,
 //! CUBIC=1: cubic instead of bilinear interpolation, DUMPRET=1: every return's value).
@@ -76,8 +77,32 @@ fn main() {
     if let Some(v) = env("SIGMA") {
         cfg.sigma_m = v;
     }
-    if let Some(v) = env("MINRET") {
-        cfg.min_return_value = v;
+    if let Some(v) = env("BLOCK") {
+        cfg.fine.block_half_cells = v as i32;
+    }
+    if let Some(v) = env("MINW") {
+        cfg.fine.min_block_weight = v;
+    }
+    if let Some(v) = env("THICK") {
+        cfg.fine.max_thickness_ratio = v;
+    }
+    if let Some(v) = env("HUBER") {
+        cfg.fine.huber_k = v;
+    }
+    if let Some(v) = env("GATE") {
+        cfg.fine.gate = v;
+    }
+    if let Some(v) = env("MAXSIG") {
+        cfg.fine.max_sigma_m = v;
+    }
+    if let Some(v) = env("ITER") {
+        cfg.fine.iterations = v as u32;
+    }
+    if let Some(v) = env("POINTS") {
+        cfg.max_points = v as usize;
+    }
+    if let Some(v) = env("SEARCHFIT") {
+        cfg.search_below_fit = v;
     }
     if let Some(v) = env("WR") {
         cfg.weight_range_m = v;
@@ -87,9 +112,6 @@ fn main() {
     }
     if let Some(v) = env("SMOOTH") {
         cfg.smooth = v > 0.0;
-    }
-    if let Some(v) = env("BOUNDARY") {
-        cfg.boundary_m = v;
     }
     if let Some(v) = env("GAIN") {
         cfg.min_search_gain = v;
@@ -102,7 +124,7 @@ fn main() {
     let mut r = Runner::new(world, Dynamics::new(), run).unwrap();
     let mut grid: Box<OccupancyGrid<DEFAULT_CELL_CAPACITY>> =
         OccupancyGrid::new_boxed(geom, grid_bounds).unwrap();
-    let mut hits: Box<HitMap<DEFAULT_CELL_CAPACITY>> = Box::new(HitMap::new(geom));
+    let mut hits: Box<HitMap<DEFAULT_CELL_CAPACITY>> = HitMap::new_boxed(geom);
     let mut matcher = Box::new(ScanMatcher::<WINDOW_CELLS>::new());
     // A small deterministic generator for the offsets (xorshift).
     let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
@@ -142,6 +164,9 @@ fn main() {
                 truth.theta + off_rad * uniform(),
             );
             let res = matcher.match_scan(&grid, &hits, scan, &laser, predicted, &cfg);
+            if std::env::var("DEBUG").is_ok() && matched % 200 == 0 {
+                println!("{:?}", res.quality);
+            }
             if res.quality.trusted() {
                 trusted += 1;
                 let e = [

@@ -253,18 +253,24 @@ impl<const N: usize> Mission<N> {
             &mut self.senses.map_from_odom,
             &mut self.senses.pose_map,
         );
-        integrate_scan(
-            &mut map.grid,
-            scan,
-            self.senses.pose_map,
-            &self.config.laser,
-            &self.config.sensor,
-            &mut map.trav,
-        )
-        .map_err(MissionError::Sensor)?;
-        if self.config.localize.enabled {
-            map.hits
-                .add_scan(scan, &self.config.laser, self.senses.pose_map);
+        if self.localizer.grids_scan(&self.config.localize) {
+            integrate_scan(
+                &mut map.grid,
+                scan,
+                self.senses.pose_map,
+                &self.config.laser,
+                &self.config.sensor,
+                &mut map.trav,
+            )
+            .map_err(MissionError::Sensor)?;
+        }
+        if self.config.localize.enabled && self.localizer.maps_scan(&self.config.localize) {
+            map.hits.add_scan_capped(
+                scan,
+                &self.config.laser,
+                self.senses.pose_map,
+                self.config.localize.max_cell_weight,
+            );
         }
         self.clear_own_trail(map);
         self.senses.on_scan(now, scan, true);
