@@ -7,7 +7,9 @@
 //! The environment sets the matcher's and the tracker's settings (`NOISE`, `MAP`, `LOC_*`,
 //! read at the top of `main`; docs/experiments.md, seventh measurement, lists them);
 //! `QUIET=1` prints only the last line: final error, coverage, map accuracy, and the run's
-//! mean and largest position error.
+//! mean and largest position error. `ODOCHECK=1` also prints the raw odometry's largest error
+//! against the truth over the run (0 with `none`: the scans and the odometry are taken at the
+//! same instant and pose).
 
 use papillon::geometry::normalize_angle;
 use papillon::mission::MissionConfig;
@@ -98,6 +100,15 @@ fn main() {
     if let Some(v) = env("LOC_KEYREF") {
         m.localize.reference_keyframes_only = v != 0.0;
     }
+    if let Some(v) = env("LOC_STOPM") {
+        m.localize.stop_var_m2 = v * v;
+    }
+    if let Some(v) = env("LOC_STOPDEG") {
+        m.localize.stop_var_rad2 = v.to_radians() * v.to_radians();
+    }
+    if let Some(v) = env("LOC_NFLOOR") {
+        m.localize.matcher.fine.sigma_floor_m = v;
+    }
     if let Some(v) = env("LOC_REST") {
         m.localize.match_at_rest = v != 0.0;
     }
@@ -119,6 +130,8 @@ fn main() {
     let mut sums: std::collections::BTreeMap<&str, (u32, f64, f64, f64)> = Default::default();
     let mut jumps: Vec<(f64, f32, f32, &str)> = Vec::new();
     let (mut err_sum, mut err_n, mut err_max) = (0.0f64, 0u64, 0.0f32);
+    // The raw odometry's largest error against the truth over the run (0 with `none`).
+    let (mut odo_max_m, mut odo_max_rad) = (0.0f32, 0.0f32);
     while !r.finished() {
         r.advance().unwrap();
         let t = r.sim_time_s();
@@ -128,6 +141,9 @@ fn main() {
             err_sum += ep as f64;
             err_n += 1;
             err_max = err_max.max(ep);
+            let o = r.body(0).odometry_in_map();
+            odo_max_m = odo_max_m.max(o.position().distance(tp.position()));
+            odo_max_rad = odo_max_rad.max(normalize_angle(o.theta - tp.theta).abs());
         }
         if attrib {
             let tp = r.body(0).true_pose();
@@ -216,6 +232,12 @@ fn main() {
     let tp = b.true_pose();
     let e = ms.pose_map();
     let rep = r.report();
+    if std::env::var("ODOCHECK").is_ok() {
+        println!(
+            "raw odometry's largest error over the run: {odo_max_m:.4} m {:.3} deg",
+            odo_max_rad.to_degrees()
+        );
+    }
     println!(
         "seed {seed} final err {:.3} m {:.2} deg coverage {:.1} % map acc {:.1} % t {:.0} run mean {:.3} m max {:.3} m",
         e.position().distance(tp.position()),
