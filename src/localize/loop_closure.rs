@@ -201,6 +201,10 @@ impl<const L: usize> LocalMap<L> {
         let wide = MatchConfig {
             search_xy_m: config.search_xy_m,
             search_theta_rad: config.search_theta_rad,
+            // A closure starts from a drifted prediction: always run the correlative search
+            // over the whole window before the refinement (the tracker's match runs it only
+            // when the refinement from the prediction pairs too few returns).
+            search_below_fit: f32::INFINITY,
             ..*tracker
         };
         let result = matcher.match_scan(&self.grid, &self.hits, scan, laser, predicted, &wide);
