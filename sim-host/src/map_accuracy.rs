@@ -45,9 +45,7 @@ pub fn measure<const N: usize>(
 ) -> MapAccuracy {
     let geom = *grid.geometry();
     let mask = truth.mask();
-    let (mut known, mut right) = (0usize, 0usize);
-    let (mut free_known, mut free_right) = (0usize, 0usize);
-    let (mut wall_known, mut wall_right) = (0usize, 0usize);
+    let mut agreement = Agreement::default();
     let (mut occupied, mut distance_sum) = (0usize, 0.0f64);
     for (i, &observable) in mask.iter().enumerate().take(geom.cell_count()) {
         let class = grid.class(i);
@@ -59,22 +57,12 @@ pub fn measure<const N: usize>(
         if !observable || class == CellClass::Unknown {
             continue;
         }
-        known += 1;
-        let says_blocked = class == CellClass::Occupied;
-        right += usize::from(says_blocked == blocked);
-        if blocked {
-            wall_known += 1;
-            wall_right += usize::from(says_blocked);
-        } else {
-            free_known += 1;
-            free_right += usize::from(!says_blocked);
-        }
+        agreement.add(class == CellClass::Occupied, blocked);
     }
-    let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f32 / b as f32 };
     MapAccuracy {
-        accuracy: ratio(right, known),
-        free_agreement: ratio(free_right, free_known),
-        occupied_agreement: ratio(wall_right, wall_known),
+        accuracy: agreement.accuracy(),
+        free_agreement: agreement.free_agreement(),
+        occupied_agreement: agreement.occupied_agreement(),
         wall_error_m: if occupied == 0 {
             0.0
         } else {
@@ -82,6 +70,59 @@ pub fn measure<const N: usize>(
         },
         occupied_cells: occupied,
     }
+}
+
+/// The class tallies behind [`MapAccuracy`]'s agreement measures: one known observable cell
+/// at a time, what the map says (Occupied or not) against what the world has there.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Agreement {
+    known: usize,
+    right: usize,
+    free_known: usize,
+    free_right: usize,
+    wall_known: usize,
+    wall_right: usize,
+}
+
+impl Agreement {
+    /// One known observable cell: the map calls it Occupied (`says_blocked`) or Free; the world
+    /// has it `blocked` or not.
+    pub(crate) fn add(&mut self, says_blocked: bool, blocked: bool) {
+        self.known += 1;
+        self.right += usize::from(says_blocked == blocked);
+        if blocked {
+            self.wall_known += 1;
+            self.wall_right += usize::from(says_blocked);
+        } else {
+            self.free_known += 1;
+            self.free_right += usize::from(!says_blocked);
+        }
+    }
+
+    /// Known cells counted.
+    pub(crate) fn known(&self) -> usize {
+        self.known
+    }
+
+    /// Cells whose class matches, over known cells (0 with none).
+    pub(crate) fn accuracy(&self) -> f32 {
+        ratio(self.right, self.known)
+    }
+
+    /// Truly free cells called Free, over truly free known cells.
+    pub(crate) fn free_agreement(&self) -> f32 {
+        ratio(self.free_right, self.free_known)
+    }
+
+    /// Truly blocked cells called Occupied, over truly blocked known cells.
+    pub(crate) fn occupied_agreement(&self) -> f32 {
+        ratio(self.wall_right, self.wall_known)
+    }
+}
+
+/// `a / b`, 0 when `b` is 0.
+pub(crate) fn ratio(a: usize, b: usize) -> f32 {
+    if b == 0 { 0.0 } else { a as f32 / b as f32 }
 }
 
 /// Distance \[cells\] from `cell` to the nearest blocked cell of `world`, searched in growing

@@ -18,6 +18,7 @@ use papillon::geometry::{Point2, Pose2};
 use papillon::grid::CellClass;
 use papillon::mapfile::MapImage;
 
+use crate::map_accuracy::{Agreement, ratio};
 use crate::world::World;
 
 /// The score of a robot map.
@@ -99,26 +100,14 @@ pub fn score(world: &World, map: &MapImage, robot_start: Pose2) -> Score {
             )
         }
     };
-    let (mut known_cells, mut right) = (0usize, 0usize);
-    let (mut free_known, mut free_right) = (0usize, 0usize);
-    let (mut wall_known, mut wall_right) = (0usize, 0usize);
+    let mut agreement = Agreement::default();
     for (i, _) in truth.mask().iter().enumerate().filter(|(_, m)| **m) {
         let class = class_of(i);
-        if !class.is_known() {
-            continue;
-        }
-        known_cells += 1;
-        let says_blocked = class == CellClass::Occupied;
-        let blocked = world.is_blocked_index(i);
-        right += usize::from(says_blocked == blocked);
-        if blocked {
-            wall_known += 1;
-            wall_right += usize::from(says_blocked);
-        } else {
-            free_known += 1;
-            free_right += usize::from(!says_blocked);
+        if class.is_known() {
+            agreement.add(class == CellClass::Occupied, world.is_blocked_index(i));
         }
     }
+    let known_cells = agreement.known();
     // Every cell the robot map calls Occupied, wherever it is, against the nearest true wall.
     let world_from_robot = inverse(robot_from_world);
     let (mut occupied_cells, mut distance_cells) = (0usize, 0.0f64);
@@ -137,15 +126,14 @@ pub fn score(world: &World, map: &MapImage, robot_start: Pose2) -> Score {
             g.cell_at_unchecked(p),
         ));
     }
-    let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f32 / b as f32 };
     let observable_cells = truth.len();
     Score {
         coverage: ratio(known_cells, observable_cells),
         observable_cells,
         known_cells,
-        accuracy: ratio(right, known_cells),
-        free_agreement: ratio(free_right, free_known),
-        occupied_agreement: ratio(wall_right, wall_known),
+        accuracy: agreement.accuracy(),
+        free_agreement: agreement.free_agreement(),
+        occupied_agreement: agreement.occupied_agreement(),
         wall_error_m: if occupied_cells == 0 {
             0.0
         } else {
