@@ -21,6 +21,29 @@ fn keep(walls: &[super::tests::Segment], poses: &[Pose2], laser: &LaserConfig) -
     store
 }
 
+/// Draws the local map of the old keyframes `store` (taken at `old`) around `predicted`, on a
+/// 10 cm grid with the default sensor model.
+fn render_old(
+    local: &mut LocalMap<LOCAL_CELLS>,
+    store: &Store,
+    old: &[Pose2],
+    predicted: Pose2,
+    laser: &LaserConfig,
+) {
+    local
+        .render(
+            store,
+            |i| old.get(i).copied(),
+            0..old.len(),
+            predicted.position(),
+            0.1,
+            laser,
+            &SensorModel::default(),
+            LogOddsBounds::default(),
+        )
+        .unwrap();
+}
+
 #[test]
 fn a_drifted_return_to_a_furnished_room_is_closed_at_the_true_pose() {
     let (walls, _) = room();
@@ -47,18 +70,7 @@ fn a_drifted_return_to_a_furnished_room_is_closed_at_the_true_pose() {
     for (k, (truth, (dx, dy, dth))) in cases.into_iter().enumerate() {
         // The drifted estimate of the current pose, beyond the tracker's ±0.3 m / ±0.1 rad.
         let predicted = Pose2::new(truth.x + dx, truth.y + dy, truth.theta + dth);
-        local
-            .render(
-                &store,
-                |i| old.get(i).copied(),
-                0..old.len(),
-                predicted.position(),
-                0.1,
-                &laser,
-                &SensorModel::default(),
-                LogOddsBounds::default(),
-            )
-            .unwrap();
+        render_old(&mut local, &store, &old, predicted, &laser);
         let scan = scan_at(&walls, truth, &laser, 0.003, k as u64);
         let (verdict, q) = local.close(&mut m, &scan, &laser, predicted, &config(), &c);
         let pose = verdict.unwrap_or_else(|why| panic!("case {k}: refused {why:?}, {q:?}"));
@@ -87,18 +99,7 @@ fn a_featureless_corridor_is_not_closed() {
     let mut m = matcher();
     let truth = Pose2::new(19.5, 2.1, 3.1);
     let predicted = Pose2::new(19.8, 2.0, 3.05);
-    local
-        .render(
-            &store,
-            |i| old.get(i).copied(),
-            0..old.len(),
-            predicted.position(),
-            0.1,
-            &laser,
-            &SensorModel::default(),
-            LogOddsBounds::default(),
-        )
-        .unwrap();
+    render_old(&mut local, &store, &old, predicted, &laser);
     let scan = scan_at(&walls, truth, &laser, 0.003, 7);
     let c = ClosureConfig::default();
     let (verdict, q) = local.close(&mut m, &scan, &laser, predicted, &config(), &c);
