@@ -73,11 +73,18 @@ pub const WINDOW_CELLS: usize = 120 * 120;
 /// match refused ([`Distrust::WindowTooLarge`]); the board check refuses it instead.
 pub fn window_side_cells(reach_m: f32, resolution_m: f32, config: &MatchConfig) -> usize {
     let res = resolution_m.max(1e-3);
-    let margin = math::ceil(config.search_xy_m / res).max(0.0) * res
+    let margin = window_margin_m(reach_m, res, config);
+    math::ceil((2.0 * reach_m + 2.0 * margin) / res) as usize + 2
+}
+
+/// How far the likelihood window reaches beyond the scan's extent at the prediction \[m\]:
+/// the translation searched (whole cells), the arc the farthest return (`reach_m` from the
+/// robot's centre) sweeps over the rotation searched, twice the blur, and two cells.
+fn window_margin_m(reach_m: f32, res: f32, config: &MatchConfig) -> f32 {
+    math::ceil(config.search_xy_m / res).max(0.0) * res
         + reach_m * math::sin(config.search_theta_rad.min(1.5))
         + 2.0 * config.sigma_m
-        + 2.0 * res;
-    math::ceil((2.0 * reach_m + 2.0 * margin) / res) as usize + 2
+        + 2.0 * res
 }
 
 /// Settings of a match.
@@ -341,10 +348,7 @@ impl<const T: usize> ScanMatcher<T> {
         // The window: the scan at the prediction, grown by the search and the blur.
         let res = geom.resolution_m;
         let cells = math::ceil(config.search_xy_m / res).max(0.0) as i32;
-        let margin = cells as f32 * res
-            + reach * math::sin(config.search_theta_rad.min(1.5))
-            + 2.0 * config.sigma_m
-            + 2.0 * res;
+        let margin = window_margin_m(reach, res, config);
         lo = Point2::new(lo.x - margin, lo.y - margin);
         hi = Point2::new(hi.x + margin, hi.y + margin);
         if !self.field.build(
