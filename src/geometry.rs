@@ -82,6 +82,15 @@ impl Pose2 {
         let p = self.transform_point(rel.position());
         Pose2::new(p.x, p.y, self.theta + rel.theta)
     }
+
+    /// `origin⁻¹ ⊕ self`: this pose in `origin`'s body frame, the inverse of
+    /// [`Self::compose`] (`origin.compose(p.in_frame_of(origin))` is `p`). The heading is the
+    /// plain difference, not wrapped.
+    pub fn in_frame_of(self, origin: Pose2) -> Pose2 {
+        let (s, c) = (math::sin(origin.theta), math::cos(origin.theta));
+        let (dx, dy) = (self.x - origin.x, self.y - origin.y);
+        Pose2::new(c * dx + s * dy, -s * dx + c * dy, self.theta - origin.theta)
+    }
 }
 
 /// Wraps an angle into (-pi, pi] \[rad\].

@@ -167,15 +167,14 @@ fn main() {
     let rep = r.report();
     let g = *r.map().graph.stats();
     if std::env::var("DIAG").is_ok() {
-        use papillon::localize::pose_graph::relative;
         let graph = r.map().graph.graph();
         for e in graph.edges() {
             let (i, j) = (usize::from(e.from), usize::from(e.to));
             if j == i + 1 || j >= key_truth.len() {
                 continue;
             }
-            let t = relative(key_truth[i], key_truth[j]);
-            let err = relative(t, e.measured);
+            let t = key_truth[j].in_frame_of(key_truth[i]);
+            let err = e.measured.in_frame_of(t);
             println!(
                 "closure {i:5} -> {j:5}: measured {:6.3} {:6.3} {:6.2}° true {:6.3} {:6.3} {:6.2}° error {:.3} m {:.2}°",
                 e.measured.x,
@@ -194,7 +193,9 @@ fn main() {
             if j != i + 1 || j >= key_truth.len() {
                 continue;
             }
-            let err = relative(relative(key_truth[i], key_truth[j]), e.measured);
+            let err = e
+                .measured
+                .in_frame_of(key_truth[j].in_frame_of(key_truth[i]));
             n += 1;
             st += err.theta;
             sa += err.theta.abs();

@@ -17,7 +17,7 @@ use crate::sensor::{IntegrationError, LaserConfig, Scan, SensorModel, integrate_
 
 use super::keyframes::{KeyframeStore, is_keyframe};
 use super::loop_closure::{ClosureConfig, LOCAL_CELLS, LocalMap, Refusal, candidate};
-use super::pose_graph::{Edge, PoseGraph, relative};
+use super::pose_graph::{Edge, PoseGraph};
 use super::{HitMap, MatchConfig, ScanMatcher, WINDOW_CELLS};
 
 /// Keyframes a mission's graph holds: one each 0.2 m or 0.2 rad, about 40 minutes of a house
@@ -138,7 +138,7 @@ pub struct Moved {
 impl Moved {
     /// `pose` (near the last keyframe) moved as the keyframe moved.
     pub fn apply(&self, pose: Pose2) -> Pose2 {
-        self.after.compose(relative(self.before, pose))
+        self.after.compose(pose.in_frame_of(self.before))
     }
 }
 
@@ -227,7 +227,7 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
         }
         self.stats.keyframes += 1;
         if let Some(p) = prev {
-            let z = relative(p, pose);
+            let z = pose.in_frame_of(p);
             let d = crate::math::hypot(z.x, z.y);
             let turn = crate::math::abs(z.theta);
             let var_m2 =
@@ -304,7 +304,7 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
         let edge = Edge {
             from: old as u16,
             to: node as u16,
-            measured: relative(old_pose, matched),
+            measured: matched.in_frame_of(old_pose),
             information: [
                 1.0 / (c.sigma_m * c.sigma_m),
                 1.0 / (c.sigma_m * c.sigma_m),

@@ -507,13 +507,6 @@ impl<const K: usize, const E: usize> PoseGraph<K, E> {
     }
 }
 
-/// `a⁻¹ ⊕ b`: `b` in `a`'s frame.
-pub fn relative(a: Pose2, b: Pose2) -> Pose2 {
-    let (s, c) = (math::sin(a.theta), math::cos(a.theta));
-    let (dx, dy) = (b.x - a.x, b.y - a.y);
-    Pose2::new(c * dx + s * dy, -s * dx + c * dy, b.theta - a.theta)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -577,10 +570,10 @@ mod tests {
         let truth = square();
         // Exact edges, but the nodes start from a dead reckoning that turned 0.02 rad too much
         // each step (0.32 rad, more than half a metre off).
-        let mut g = chain(&truth, |k| relative(truth[k - 1], truth[k]));
+        let mut g = chain(&truth, |k| truth[k].in_frame_of(truth[k - 1]));
         let mut p = truth[0];
         for k in 1..truth.len() {
-            let z = relative(truth[k - 1], truth[k]);
+            let z = truth[k].in_frame_of(truth[k - 1]);
             p = p.compose(Pose2::new(z.x, z.y, z.theta + 0.02));
             g.nodes[k] = [f64::from(p.x), f64::from(p.y), f64::from(p.theta)];
         }
@@ -609,7 +602,7 @@ mod tests {
         let truth = square();
         // The measured steps turn 0.02 rad too much: dead-reckoned, the loop ends far off.
         let mut g = chain(&truth, |k| {
-            let z = relative(truth[k - 1], truth[k]);
+            let z = truth[k].in_frame_of(truth[k - 1]);
             Pose2::new(z.x, z.y, z.theta + 0.02)
         });
         let before = worst(&g, &truth);
@@ -640,7 +633,7 @@ mod tests {
     #[test]
     fn a_wrong_closure_of_little_information_barely_moves_the_graph() {
         let truth = square();
-        let mut g = chain(&truth, |k| relative(truth[k - 1], truth[k]));
+        let mut g = chain(&truth, |k| truth[k].in_frame_of(truth[k - 1]));
         // Claims the end is 1 m and 0.3 rad away from the start: wrong, but given as σ 3 m
         // and 3 rad against steps of σ 1 cm.
         g.add_edge(Edge {
@@ -654,7 +647,7 @@ mod tests {
         let (m, r) = worst(&g, &truth);
         assert!(m < 0.01 && r < 0.002, "{m} m, {r} rad ({done:?})");
         // The same closure given as σ 1 cm moves it: the test can tell.
-        let mut h = chain(&truth, |k| relative(truth[k - 1], truth[k]));
+        let mut h = chain(&truth, |k| truth[k].in_frame_of(truth[k - 1]));
         h.add_edge(Edge {
             from: 0,
             to: 16,
