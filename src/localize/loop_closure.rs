@@ -162,7 +162,7 @@ impl<const L: usize> LocalMap<L> {
         sensor: &SensorModel,
         bounds: LogOddsBounds,
     ) -> Result<(), Refusal> {
-        let side = math_side(L);
+        let side = L.isqrt().max(1);
         let half = side as f32 * resolution_m * 0.5;
         // Cell borders on the same lattice as the mission's grid (multiples of the cell).
         let snap = |v: f32| crate::math::floor(v / resolution_m) * resolution_m;
@@ -229,13 +229,4 @@ impl<const L: usize> LocalMap<L> {
     pub fn grid(&self) -> &OccupancyGrid<L> {
         &self.grid
     }
-}
-
-/// The side of a square of `cells` cells.
-fn math_side(cells: usize) -> usize {
-    let mut s = 1;
-    while (s + 1) * (s + 1) <= cells {
-        s += 1;
-    }
-    s
 }
