@@ -358,6 +358,12 @@ impl<const N: usize> Mission<N> {
         let fp = self.config.safety.footprint;
         let laser = &self.config.laser;
         let mut walls = SideWalls::new(-fp.rear_m, fp.front_m + 0.1);
+        // Ahead of the body, a point near its axis is a wall across the way, not one beside it.
+        let mut see = |p: Point2| {
+            if p.x <= fp.front_m || math::abs(p.y) >= 0.5 * fp.width_m {
+                walls.see(p);
+            }
+        };
         if self.senses.scan_time.is_some() {
             for beam in self.senses.scan.beams() {
                 let Some(r) = beam.range_m else { continue };
@@ -365,18 +371,11 @@ impl<const N: usize> Mission<N> {
                     continue;
                 }
                 let (c, s) = (math::cos(beam.angle_rad), math::sin(beam.angle_rad));
-                // Ahead of the body, a return near its axis is a wall across the way, not
-                // one beside it.
-                let p = laser.mount.transform_point(Point2::new(r * c, r * s));
-                if p.x <= fp.front_m || math::abs(p.y) >= 0.5 * fp.width_m {
-                    walls.see(p);
-                }
+                see(laser.mount.transform_point(Point2::new(r * c, r * s)));
             }
         }
         for &p in self.remembered_around(map).iter() {
-            if p.x <= fp.front_m || math::abs(p.y) >= 0.5 * fp.width_m {
-                walls.see(p);
-            }
+            see(p);
         }
         let Some((left, right)) = walls.nearest() else {
             return 0;
