@@ -46,13 +46,11 @@ pub fn measure<const N: usize>(
     let geom = *grid.geometry();
     let mask = truth.mask();
     let mut agreement = Agreement::default();
-    let (mut occupied, mut distance_sum) = (0usize, 0.0f64);
     for (i, &observable) in mask.iter().enumerate().take(geom.cell_count()) {
         let class = grid.class(i);
         let blocked = world.is_blocked_index(i);
         if class == CellClass::Occupied {
-            occupied += 1;
-            distance_sum += nearest_wall_cells(world, geom.cell(i)) as f64;
+            agreement.add_occupied(nearest_wall_cells(world, geom.cell(i)));
         }
         if !observable || class == CellClass::Unknown {
             continue;
@@ -63,17 +61,14 @@ pub fn measure<const N: usize>(
         accuracy: agreement.accuracy(),
         free_agreement: agreement.free_agreement(),
         occupied_agreement: agreement.occupied_agreement(),
-        wall_error_m: if occupied == 0 {
-            0.0
-        } else {
-            (distance_sum / occupied as f64) as f32 * geom.resolution_m
-        },
-        occupied_cells: occupied,
+        wall_error_m: agreement.wall_error_m(geom.resolution_m),
+        occupied_cells: agreement.occupied_cells(),
     }
 }
 
-/// The class tallies behind [`MapAccuracy`]'s agreement measures: one known observable cell
-/// at a time, what the map says (Occupied or not) against what the world has there.
+/// The tallies behind [`MapAccuracy`]'s measures: one known observable cell at a time, what
+/// the map says (Occupied or not) against what the world has there; and one map-occupied cell
+/// at a time, its distance to the nearest true wall.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Agreement {
     known: usize,
@@ -82,6 +77,8 @@ pub(crate) struct Agreement {
     free_right: usize,
     wall_known: usize,
     wall_right: usize,
+    occupied: usize,
+    distance_cells: f64,
 }
 
 impl Agreement {
@@ -96,6 +93,27 @@ impl Agreement {
         } else {
             self.free_known += 1;
             self.free_right += usize::from(!says_blocked);
+        }
+    }
+
+    /// One cell the map calls Occupied, `distance_cells` from the nearest true wall.
+    pub(crate) fn add_occupied(&mut self, distance_cells: f32) {
+        self.occupied += 1;
+        self.distance_cells += f64::from(distance_cells);
+    }
+
+    /// Map-occupied cells counted.
+    pub(crate) fn occupied_cells(&self) -> usize {
+        self.occupied
+    }
+
+    /// Mean distance from a map-occupied cell to the nearest true wall \[m\] on cells of
+    /// `resolution_m` (0 with none).
+    pub(crate) fn wall_error_m(&self, resolution_m: f32) -> f32 {
+        if self.occupied == 0 {
+            0.0
+        } else {
+            (self.distance_cells / self.occupied as f64) as f32 * resolution_m
         }
     }
 

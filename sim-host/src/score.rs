@@ -110,18 +110,16 @@ pub fn score(world: &World, map: &MapImage, robot_start: Pose2) -> Score {
     let known_cells = agreement.known();
     // Every cell the robot map calls Occupied, wherever it is, against the nearest true wall.
     let world_from_robot = inverse(robot_from_world);
-    let (mut occupied_cells, mut distance_cells) = (0usize, 0.0f64);
     for (i, _) in map
         .cells
         .iter()
         .enumerate()
         .filter(|(_, c)| **c == CellClass::Occupied)
     {
-        occupied_cells += 1;
         let p = world_from_robot.transform_point(map.geometry.cell_center(map.geometry.cell(i)));
         // A cell beyond the world's edge (a wall on the edge drawn a cell too far) is measured
         // to the nearest wall inside it all the same.
-        distance_cells += f64::from(crate::map_accuracy::nearest_wall_cells(
+        agreement.add_occupied(crate::map_accuracy::nearest_wall_cells(
             world,
             g.cell_at_unchecked(p),
         ));
@@ -134,12 +132,8 @@ pub fn score(world: &World, map: &MapImage, robot_start: Pose2) -> Score {
         accuracy: agreement.accuracy(),
         free_agreement: agreement.free_agreement(),
         occupied_agreement: agreement.occupied_agreement(),
-        wall_error_m: if occupied_cells == 0 {
-            0.0
-        } else {
-            (distance_cells / occupied_cells as f64) as f32 * g.resolution_m
-        },
-        occupied_cells,
+        wall_error_m: agreement.wall_error_m(g.resolution_m),
+        occupied_cells: agreement.occupied_cells(),
     }
 }
 
