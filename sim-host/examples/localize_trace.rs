@@ -18,8 +18,14 @@
 //! closures), `GRAPH_RESID` (a
 //! closure's largest residual after the optimisation, σ; 0: none), `DIAG=1` (each closure's
 //! and each step's error against the truth).
+//!
+//! Odometry self-calibration (`src/localize/odometry_calibration.rs`): `LOC_CAL=1` (on),
+//! `CAL_RANDOM` (the share of the odometry variances kept as random), `CAL_SG`/`CAL_SK` (the
+//! priors' σ of the turn gain and of the curvature, rad/m); with it on, a line before the last
+//! reports the estimate against the wheels the simulator drew (`Ed`, `Eb`).
 
 use papillon::geometry::normalize_angle;
+use papillon::localize::odometry_calibration::gain_and_curvature_of;
 use papillon::mission::MissionConfig;
 use papillon_sim::dynamic::Dynamics;
 use papillon_sim::physics::SlipConfig;
@@ -153,8 +159,22 @@ fn main() {
     if let Some(v) = env("LOC_REST") {
         m.localize.match_at_rest = v != 0.0;
     }
+    if let Some(v) = env("LOC_CAL") {
+        m.localize.calibration.enabled = v != 0.0;
+    }
+    if let Some(v) = env("CAL_RANDOM") {
+        m.localize.calibration.random_scale = v;
+    }
+    if let Some(v) = env("CAL_SG") {
+        m.localize.calibration.turn_gain_sigma = v;
+    }
+    if let Some(v) = env("CAL_SK") {
+        m.localize.calibration.curvature_sigma_rad_per_m = v;
+    }
     let quiet = std::env::var("QUIET").is_ok();
+    let m_cal = m.localize.calibration.enabled;
     let mut cfg = RunConfig::new(m, 1, seed);
+    let track_m = cfg.body.track_m;
     cfg.body.slip = args
         .get(2)
         .and_then(|s| SlipConfig::named(s))
@@ -347,6 +367,27 @@ fn main() {
         println!(
             "raw odometry's largest error over the run: {odo_max_m:.4} m {:.3} deg",
             odo_max_rad.to_degrees()
+        );
+    }
+    if m_cal {
+        // The estimate against the wheels the simulator drew for this robot.
+        let cal = ms.localizer().calibration();
+        let w = b.wheels();
+        let (g, k) = gain_and_curvature_of(w.ed, w.eb, track_m);
+        let (sg, sk) = cal.sigmas();
+        let (ed, eb) = cal.wheel_errors(track_m);
+        println!(
+            "calibration: turn gain {:.5} ± {:.5} (drawn {:.5}) curvature {:+.5} ± {:.5} rad/m (drawn {:+.5}) | Ed {:.5} (drawn {:.5}) Eb {:.5} (drawn {:.5})",
+            cal.turn_gain(),
+            sg,
+            g,
+            cal.curvature_rad_per_m(),
+            sk,
+            k,
+            ed,
+            w.ed,
+            eb,
+            w.eb
         );
     }
     println!(

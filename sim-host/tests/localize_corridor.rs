@@ -33,16 +33,25 @@ const CELLS: usize = 440 * 40;
 #[test]
 #[ignore = "fails: the thesis laser loses the heading in the corridor (docs/experiments.md, sixth measurement)"]
 fn along_a_featureless_corridor_with_the_thesis_laser() {
-    corridor(0.05);
+    corridor(0.05, false);
 }
 
 #[test]
 fn along_a_featureless_corridor_with_a_real_lasers_noise() {
-    corridor(0.003);
+    corridor(0.003, false);
 }
 
-/// Drives the corridor with the mission's laser at range noise `noise_fraction`.
-fn corridor(noise_fraction: f32) {
+/// The same with the odometry's systematic errors estimated online
+/// (`papillon::localize::odometry_calibration`): the corridor constrains the heading, so the
+/// curvature is learnt from it, and nothing constrains the distance along it.
+#[test]
+fn along_a_featureless_corridor_with_odometry_calibration() {
+    corridor(0.003, true);
+}
+
+/// Drives the corridor with the mission's laser at range noise `noise_fraction`, with the
+/// tracker's odometry self-calibration on or off.
+fn corridor(noise_fraction: f32, calibrate: bool) {
     let geom = GridGeometry::from_extent(44.0, 4.0, 0.1, Default::default()).unwrap();
     let mut world = World::new("corridor", geom);
     world.fill_rect(0.0, 0.0, 44.0, 0.8, true);
@@ -64,6 +73,8 @@ fn corridor(noise_fraction: f32) {
         min_turn_rad: 0.0,
         ..LocalizeConfig::default()
     };
+    let mut config = config;
+    config.calibration.enabled = calibrate;
     let mut tracker = Tracker::new();
 
     let start = Pose2::new(1.5, 2.0, 0.0);
@@ -191,6 +202,19 @@ fn corridor(noise_fraction: f32) {
          {worst_across} m; heading worst {worst_heading} rad; constrained {counts:?}; \
          corrections along summed {along_sum} m"
     );
+    if calibrate {
+        // The odometry turns 0.15° left per metre that the robot does not.
+        let cal = tracker.calibration();
+        eprintln!(
+            "calibration: turn gain {} curvature {} rad/m (odometry's error {} rad/m), σ {:?}",
+            cal.turn_gain(),
+            cal.curvature_rad_per_m(),
+            -(0.15f32).to_radians() / 1.02,
+            cal.sigmas()
+        );
+        let err = cal.curvature_rad_per_m() + (0.15f32).to_radians() / 1.02;
+        assert!(err.abs() < 1e-3, "curvature {err} rad/m off");
+    }
     assert!(tracker.trusted() > steps as u32 / 2, "{tracker:?}");
     assert!(
         worst_across <= 0.10,

@@ -25,7 +25,9 @@
 //! Then the prediction is returned unchanged. [`MatchQuality`] reports what the decision was
 //! based on.
 //!
-//! [`tracker`] applies matches to the mission's map-from-odometry transform.
+//! [`tracker`] applies matches to the mission's map-from-odometry transform; with
+//! [`odometry_calibration`] on (off by default) it also estimates the odometry's systematic
+//! errors from them and corrects each odometry increment before the prediction.
 //!
 //! [`graph`] (off by default, [`graph::GraphConfig`]) keeps keyframes ([`keyframes`]) in a pose
 //! graph ([`pose_graph`]), closes loops when a place is seen again ([`loop_closure`]) and then
@@ -42,6 +44,7 @@ pub mod keyframes;
 pub mod likelihood;
 pub mod loop_closure;
 pub mod ndt;
+pub mod odometry_calibration;
 pub mod pose_graph;
 pub mod tracker;
 

@@ -28,6 +28,7 @@ use crate::math;
 use crate::sensor::{LaserConfig, Scan};
 use nalgebra::{Matrix3, Vector3};
 
+use super::odometry_calibration::OdometryCalibration;
 use super::{HitMap, MatchConfig, MatchQuality, ScanMatcher, WINDOW_CELLS};
 
 /// When and how a mission matches its scans.
@@ -107,6 +108,12 @@ pub struct LocalizeConfig {
     /// Heading variance added when the odometry comes to rest \[rad²\] (see
     /// [`Self::stop_var_m2`]).
     pub stop_var_rad2: f32,
+    /// Online estimation of the odometry's systematic errors (turn gain and curvature per
+    /// metre, [`super::odometry_calibration`]): each odometry increment is corrected with the
+    /// estimate before the prediction. Off by default (off: the prediction is the odometry as
+    /// reported, as before). While on, [`Self::innovation_gate`]'s fading memory (> 0) is not
+    /// applied; its validation gate (< 0) is.
+    pub calibration: super::odometry_calibration::CalibrationConfig,
 }
 
 impl Default for LocalizeConfig {
@@ -137,6 +144,7 @@ impl Default for LocalizeConfig {
             stop_var_m2: 0.015 * 0.015,
             stop_var_rad2: 0.5f32.to_radians() * 0.5f32.to_radians(),
             graph: super::graph::GraphConfig::default(),
+            calibration: super::odometry_calibration::CalibrationConfig::default(),
         }
     }
 }
@@ -160,6 +168,8 @@ pub struct Tracker {
     keyframe: bool,
     /// The odometry moved between the last two scans.
     moving: bool,
+    /// The estimate of the odometry's systematic errors ([`LocalizeConfig::calibration`]).
+    calibration: OdometryCalibration,
 }
 
 impl core::fmt::Debug for Tracker {
@@ -193,6 +203,7 @@ impl Tracker {
             disagrees: false,
             keyframe: false,
             moving: false,
+            calibration: OdometryCalibration::new(),
         }
     }
 
@@ -221,7 +232,28 @@ impl Tracker {
             p.position().distance(pose_odom.position()) < 1e-4
                 && math::abs(normalize_angle(pose_odom.theta - p.theta)) < 1e-4
         });
-        if let Some(prev) = self.last_odom {
+        if let Some(prev) = self.last_odom
+            && config.calibration.enabled
+        {
+            // The increment corrected by the estimate; the pose and the parameters predicted
+            // together, with the random part of the odometry's noise.
+            let d = prev.position().distance(pose_odom.position()) as f64;
+            let turn = math::abs(normalize_angle(pose_odom.theta - prev.theta)) as f64;
+            let scale = config.calibration.random_scale.max(0.0) as f64;
+            let q_m2 = config.odometry_var_m2_per_m as f64 * d * scale;
+            let q_rad2 = (config.odometry_var_rad2_per_rad as f64 * turn
+                + config.odometry_var_rad2_per_m as f64 * d)
+                * scale;
+            let q = Matrix3::from_diagonal(&Vector3::new(q_m2, q_m2, q_rad2));
+            let to = self.calibration.predict(
+                &config.calibration,
+                map_from_odom.map_pose(prev),
+                pose_odom.in_frame_of(prev),
+                &mut self.cov,
+                &q,
+            );
+            *map_from_odom = MapFromOdom::from_start(to, pose_odom);
+        } else if let Some(prev) = self.last_odom {
             // The motion in the map frame, and its Jacobian with respect to the heading.
             let from = map_from_odom.map_pose(prev);
             let to = map_from_odom.map_pose(pose_odom);
@@ -309,19 +341,24 @@ impl Tracker {
                 return None;
             }
         }
-        if gate > 0.0 {
-            let d2 = delta.dot(&(prior_info * delta));
-            if d2.is_finite() && d2 > gate {
-                self.cov *= d2 / gate;
-                prior_info /= d2 / gate;
+        let step = if config.calibration.enabled {
+            self.calibration.update(&mut self.cov, &h, &delta)?
+        } else {
+            if gate > 0.0 {
+                let d2 = delta.dot(&(prior_info * delta));
+                if d2.is_finite() && d2 > gate {
+                    self.cov *= d2 / gate;
+                    prior_info /= d2 / gate;
+                }
             }
-        }
-        let cov = (prior_info + h).try_inverse()?;
-        let step = cov * h * delta;
-        if !step.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        self.cov = 0.5 * (cov + cov.transpose());
+            let cov = (prior_info + h).try_inverse()?;
+            let step = cov * h * delta;
+            if !step.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            self.cov = 0.5 * (cov + cov.transpose());
+            step
+        };
         let pose = Pose2::new(
             predicted.x + step[0] as f32,
             predicted.y + step[1] as f32,
@@ -349,13 +386,22 @@ impl Tracker {
     ) {
         // Before the odometry frame is set the scan is drawn at the start pose: a keyframe.
         self.keyframe = map_from_odom.is_none();
-        if let Some(transform) = map_from_odom.as_mut()
-            && let Some(corrected) = self.on_scan(
+        if let Some(transform) = map_from_odom.as_mut() {
+            if let Some(corrected) = self.on_scan(
                 config, grid, hits, matcher, scan, laser, pose_odom, transform,
-            )
-        {
-            *pose_map = corrected;
+            ) {
+                *pose_map = corrected;
+            } else if config.enabled && config.calibration.enabled {
+                // The prediction from the corrected increment moved the transform.
+                *pose_map = transform.map_pose(pose_odom);
+            }
         }
+    }
+
+    /// The estimate of the odometry's systematic errors ([`LocalizeConfig::calibration`];
+    /// turn gain 1 and curvature 0 until calibrating starts).
+    pub fn calibration(&self) -> &OdometryCalibration {
+        &self.calibration
     }
 
     /// Whether the last scan may be written into the matcher's reference
