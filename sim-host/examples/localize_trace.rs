@@ -22,7 +22,9 @@
 //! Odometry self-calibration (`src/localize/odometry_calibration.rs`): `LOC_CAL=1` (on),
 //! `CAL_RANDOM` (the share of the odometry variances kept as random), `CAL_SG`/`CAL_SK` (the
 //! priors' σ of the turn gain and of the curvature, rad/m); with it on, a line before the last
-//! reports the estimate against the wheels the simulator drew (`Ed`, `Eb`).
+//! reports the estimate against the wheels the simulator drew (`Ed`, `Eb`). `SLIP_RANDOM=F`
+//! scales the slip model's random walks and fast-turn slip by `F` (0: systematic wheel errors
+//! and the end-of-move slide only).
 
 use papillon::geometry::normalize_angle;
 use papillon::localize::odometry_calibration::gain_and_curvature_of;
@@ -179,6 +181,14 @@ fn main() {
         .get(2)
         .and_then(|s| SlipConfig::named(s))
         .unwrap_or_else(SlipConfig::realistic);
+    if let Some(v) = env("SLIP_RANDOM") {
+        // The slip model's random walks scaled (0: only the systematic wheel errors and the
+        // end-of-move slide remain).
+        cfg.body.slip.distance_var_m2_per_m *= v;
+        cfg.body.slip.rotation_var_rad2_per_rad *= v;
+        cfg.body.slip.drift_var_rad2_per_m *= v;
+        cfg.body.slip.wheels.fast_turn_var_rad2_per_rad *= v;
+    }
     let mut r = Runner::new(world, Dynamics::new(), cfg).unwrap();
     let mut last = -1.0;
     let mut last_trusted = 0;
