@@ -7,10 +7,21 @@
 //!
 //! Run: `cargo run --release -p papillon-sim --example localize_open -- SEED [OFFSET_M] [OFFSET_DEG]`
 //! (defaults: seed 25, offsets drawn uniformly within ±0.05 m and ±1°). Environment variables
-//! override the matcher's settings (SIGMA, MINRET, WR, WF, SMOOTH, BOUNDARY, GAIN) and the
+//! override the matcher's settings (SIGMA, WR, WF, SMOOTH, GAIN; the refinement's BLOCK, MINW,
+//! THICK, HUBER, GATE, MAXSIG; POINTS, SEARCHFIT) and the
 //! laser's range noise (NOISE); PROFILE=1 prints, every 500 scans, where the mean field value
 //! of the scan peaks around the truth (WEIGHTED=1: returns weighted as the matcher does,
 //! CUBIC=1: cubic instead of bilinear interpolation, DUMPRET=1: every return's value).
+//! NFLOOR sets the refinement's floor under a return's range noise (`sigma_floor_m`). The
+//! summary also gives the spread of the means of consecutive windows of heading errors (a
+//! local bias keeps them apart), the fit's own heading σ and the fraction of the prediction's
+//! heading error a match keeps.
+//!
+//! `CLOSED=truth|estimate` runs instead a replica of the mission's tracker closed loop on
+//! exact odometry (the mission's own path, drawn with matching off), every scan, with the map
+//! drawn at the truth or at the tracker's estimate (INFO scales the fit's information; DEBUG=1
+//! prints the error every 250 scans): the difference between the two is what the map drawn at
+//! the estimate adds (docs/experiments.md, ninth measurement).
 
 use papillon::geometry::{Pose2, normalize_angle};
 use papillon::grid::{DEFAULT_CELL_CAPACITY, OccupancyGrid};
@@ -76,8 +87,35 @@ fn main() {
     if let Some(v) = env("SIGMA") {
         cfg.sigma_m = v;
     }
-    if let Some(v) = env("MINRET") {
-        cfg.min_return_value = v;
+    if let Some(v) = env("BLOCK") {
+        cfg.fine.block_half_cells = v as i32;
+    }
+    if let Some(v) = env("MINW") {
+        cfg.fine.min_block_weight = v;
+    }
+    if let Some(v) = env("THICK") {
+        cfg.fine.max_thickness_ratio = v;
+    }
+    if let Some(v) = env("HUBER") {
+        cfg.fine.huber_k = v;
+    }
+    if let Some(v) = env("GATE") {
+        cfg.fine.gate = v;
+    }
+    if let Some(v) = env("MAXSIG") {
+        cfg.fine.max_sigma_m = v;
+    }
+    if let Some(v) = env("ITER") {
+        cfg.fine.iterations = v as u32;
+    }
+    if let Some(v) = env("NFLOOR") {
+        cfg.fine.sigma_floor_m = v;
+    }
+    if let Some(v) = env("POINTS") {
+        cfg.max_points = v as usize;
+    }
+    if let Some(v) = env("SEARCHFIT") {
+        cfg.search_below_fit = v;
     }
     if let Some(v) = env("WR") {
         cfg.weight_range_m = v;
@@ -87,9 +125,6 @@ fn main() {
     }
     if let Some(v) = env("SMOOTH") {
         cfg.smooth = v > 0.0;
-    }
-    if let Some(v) = env("BOUNDARY") {
-        cfg.boundary_m = v;
     }
     if let Some(v) = env("GAIN") {
         cfg.min_search_gain = v;
@@ -102,7 +137,7 @@ fn main() {
     let mut r = Runner::new(world, Dynamics::new(), run).unwrap();
     let mut grid: Box<OccupancyGrid<DEFAULT_CELL_CAPACITY>> =
         OccupancyGrid::new_boxed(geom, grid_bounds).unwrap();
-    let mut hits: Box<HitMap<DEFAULT_CELL_CAPACITY>> = Box::new(HitMap::new(geom));
+    let mut hits: Box<HitMap<DEFAULT_CELL_CAPACITY>> = HitMap::new_boxed(geom);
     let mut matcher = Box::new(ScanMatcher::<WINDOW_CELLS>::new());
     // A small deterministic generator for the offsets (xorshift).
     let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
@@ -123,6 +158,31 @@ fn main() {
     ];
     let (mut all_th, mut all_xy, mut before_th, mut before_xy) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // Signed heading errors in scan order and the fit's own heading σ (from its information).
+    let (mut signed_th, mut claimed_th): (Vec<f64>, Vec<f32>) = (Vec::new(), Vec::new());
+    // The heading error after a match against the one before: 0 a matcher that removes the
+    // prediction's error, 1 one that keeps it.
+    let (mut slope_ab, mut slope_bb) = (0.0f64, 0.0f64);
+    // CLOSED=truth|estimate: instead of the open-loop matches, a replica of the mission's
+    // tracker runs closed loop on exact odometry (its default settings), and the map is drawn
+    // at the truth or at its estimate; the run's heading and position errors are printed.
+    let closed = std::env::var("CLOSED").ok();
+    let mut tracker = papillon::localize::Tracker::new();
+    let mut lcfg = papillon::localize::LocalizeConfig {
+        enabled: true,
+        matcher: cfg,
+        ..Default::default()
+    };
+    if let Some(v) = env("INFO") {
+        lcfg.information_scale = v;
+    }
+    let mut mfo = papillon::control::odometry::MapFromOdom::from_start(
+        r.body(0).true_pose(),
+        r.body(0).true_pose(),
+    );
+    let (mut c_n, mut c_sum_th, mut c_max_th, mut c_max_m) = (0usize, 0.0f64, 0.0f32, 0.0f32);
+    let mut c_by = [(0usize, 0.0f64); 4];
+    let mut c_prev_th = 0.0f32;
     while !r.finished() {
         r.advance().unwrap();
         let scan = r.last_scan(0);
@@ -132,6 +192,52 @@ fn main() {
         }
         last_ranges = ranges;
         let truth = r.body(0).true_pose();
+        if let Some(at) = closed.as_deref() {
+            if grid.cell_count() > 0 {
+                tracker.on_scan(
+                    &lcfg,
+                    &grid,
+                    &hits,
+                    &mut matcher,
+                    scan,
+                    &laser,
+                    truth,
+                    &mut mfo,
+                );
+            }
+            let est = mfo.map_pose(truth);
+            let eth = normalize_angle(est.theta - truth.theta);
+            // Where the heading error changes: by the truth's motion since the last scan.
+            let turn = normalize_angle(truth.theta - last_true.theta);
+            let bin = if turn > 0.005 {
+                0
+            } else if turn < -0.005 {
+                1
+            } else if truth.position().distance(last_true.position()) > 0.002 {
+                2
+            } else {
+                3
+            };
+            c_by[bin].0 += 1;
+            c_by[bin].1 += (eth - c_prev_th).to_degrees() as f64;
+            c_prev_th = eth;
+            last_true = truth;
+            c_n += 1;
+            c_sum_th += eth.abs().to_degrees() as f64;
+            c_max_th = c_max_th.max(eth.abs().to_degrees());
+            c_max_m = c_max_m.max(est.position().distance(truth.position()));
+            if std::env::var("DEBUG").is_ok() && c_n % 250 == 0 {
+                println!(
+                    "scan {c_n} err {:.4} m {:+.3} deg",
+                    est.position().distance(truth.position()),
+                    eth.to_degrees()
+                );
+            }
+            let draw = if at == "truth" { truth } else { est };
+            hits.add_scan(scan, &laser, draw);
+            integrate_scan(&mut *grid, scan, draw, &laser, &sensor, &mut ()).unwrap();
+            continue;
+        }
         let dth = normalize_angle(truth.theta - last_true.theta);
         let d = truth.position().distance(last_true.position());
         last_true = truth;
@@ -142,6 +248,9 @@ fn main() {
                 truth.theta + off_rad * uniform(),
             );
             let res = matcher.match_scan(&grid, &hits, scan, &laser, predicted, &cfg);
+            if std::env::var("DEBUG").is_ok() && matched % 200 == 0 {
+                println!("{:?}", res.quality);
+            }
             if res.quality.trusted() {
                 trusted += 1;
                 let e = [
@@ -152,6 +261,14 @@ fn main() {
                 let (s, c) = truth.theta.sin_cos();
                 let k = [c * e[0] + s * e[1], -s * e[0] + c * e[1], e[2]];
                 all_th.push(e[2].abs().to_degrees());
+                signed_th.push(e[2].to_degrees() as f64);
+                let b = normalize_angle(predicted.theta - truth.theta) as f64;
+                slope_ab += e[2] as f64 * b;
+                slope_bb += b * b;
+                let h = res.information[2][2];
+                if h > 0.0 {
+                    claimed_th.push((1.0 / h.sqrt()).to_degrees());
+                }
                 all_xy.push(e[0].hypot(e[1]));
                 before_th.push(
                     normalize_angle(predicted.theta - truth.theta)
@@ -178,6 +295,28 @@ fn main() {
         hits.add_scan(scan, &laser, truth);
         integrate_scan(&mut *grid, scan, truth, &laser, &sensor, &mut ()).unwrap();
     }
+    if closed.is_some() {
+        let est = mfo.map_pose(r.body(0).true_pose());
+        let truth = r.body(0).true_pose();
+        println!(
+            "seed {seed} closed loop, map at the {}: final {:.4} m {:+.3} deg, run mean |heading| {:.3} deg, max {:.3} deg {:.4} m ({} matches, {} trusted)",
+            closed.as_deref().unwrap_or(""),
+            est.position().distance(truth.position()),
+            normalize_angle(est.theta - truth.theta).to_degrees(),
+            c_sum_th / c_n.max(1) as f64,
+            c_max_th,
+            c_max_m,
+            tracker.matches(),
+            tracker.trusted()
+        );
+        for ((n, sum), name) in
+            c_by.iter()
+                .zip(["turning left", "turning right", "driving", "standing"])
+        {
+            println!("  {name:>13}: {n:6} scans, heading error changed {sum:+.3} deg in all");
+        }
+        return;
+    }
     let pct = |v: &mut Vec<f32>| {
         v.sort_by(f32::total_cmp);
         let at = |p: f32| v[((v.len() - 1) as f32 * p) as usize];
@@ -196,6 +335,30 @@ fn main() {
         "|position| m after {} (before {})",
         pct(&mut all_xy),
         pct(&mut before_xy)
+    );
+    // Whether the errors are independent from scan to scan: the spread of the means of
+    // consecutive windows against the spread of single errors over the window's root (a local
+    // bias, one that holds while the robot sees the same walls, keeps the windows' means apart).
+    for w in [25usize, 100, 400] {
+        let means: Vec<f64> = signed_th
+            .chunks_exact(w)
+            .map(|c| c.iter().sum::<f64>() / w as f64)
+            .collect();
+        let n = signed_th.len().max(1) as f64;
+        let m = signed_th.iter().sum::<f64>() / n;
+        let sd = (signed_th.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt();
+        let k = means.len().max(1) as f64;
+        let mm = means.iter().sum::<f64>() / k;
+        let sdm = (means.iter().map(|v| (v - mm).powi(2)).sum::<f64>() / k).sqrt();
+        println!(
+            "heading windows of {w}: sd of means {sdm:.4} deg (independent errors: {:.4})",
+            sd / (w as f64).sqrt()
+        );
+    }
+    println!("fit's own heading sigma deg {}", pct(&mut claimed_th));
+    println!(
+        "heading error kept from the prediction's: {:.3}",
+        slope_ab / slope_bb.max(1e-30)
     );
     for (b, name) in by
         .iter()

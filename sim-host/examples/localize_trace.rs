@@ -2,20 +2,32 @@
 //! scan of the first 3 s), the estimate's and the raw odometry's errors against the true pose,
 //! the matcher's counters and its last match's quality.
 //!
-//! Run: `cargo run --release -p papillon-sim --example localize_trace -- SEED [none|realistic]`
+//! Run: `cargo run --release -p papillon-sim --example localize_trace -- SEED [none|full|thesis|realistic]`
 //!
-//! Environment: `MAP=lab` (default `house`), `NOISE=0.003` (the laser's range noise, default
-//! the mission's), `LOC_TRAVEL`/`LOC_TURN` (the tracker's minimum travel and turn),
-//! `LOC_GRAPH=1` (keyframes in a pose graph with loop closure, `src/localize/graph.rs`),
-//! `GRAPH_TRAVEL`/`GRAPH_TURN` (its keyframe spacing), `GRAPH_SM`/`GRAPH_SR` (a closure's σ),
-//! `GRAPH_KEYREF=1` (only keyframes into the reference), `GRAPH_GATE` (closure gate, σ),
-//! `GRAPH_FLOOR_M`/`GRAPH_FLOOR_RAD` (a step's least σ), `GRAPH_EVERY` (path between closures),
-//! `GRAPH_INFO` (a closure's least information per return), `GRAPH_RESID` (a closure's largest
-//! residual after the optimisation, σ; 0: none), `DIAG=1`
-//! (each closure's and each step's error against the truth),
-//! `QUIET=1` (the last line only).
+//! The environment sets the matcher's and the tracker's settings (`NOISE`, `MAP`, `LOC_*`,
+//! read at the top of `main`; docs/experiments.md, seventh measurement, lists them);
+//! `QUIET=1` prints only the last line: final error, coverage, map accuracy, and the run's
+//! mean and largest position error. `ODOCHECK=1` also prints the raw odometry's largest error
+//! against the truth over the run (0 with `none`: the scans and the odometry are taken at the
+//! same instant and pose).
+//!
+//! Pose graph (`src/localize/graph.rs`): `LOC_GRAPH=1` (keyframes in a pose graph with loop
+//! closure), `GRAPH_TRAVEL`/`GRAPH_TURN` (its keyframe spacing), `GRAPH_SM`/`GRAPH_SR` (a
+//! closure's σ), `GRAPH_KEYREF=1` (only keyframes into the reference), `GRAPH_GATE` (closure
+//! gate, σ), `GRAPH_FLOOR_M`/`GRAPH_FLOOR_RAD` (a step's least σ), `GRAPH_EVERY` (path between
+//! closures), `GRAPH_RESID` (a
+//! closure's largest residual after the optimisation, σ; 0: none), `DIAG=1` (each closure's
+//! and each step's error against the truth).
+//!
+//! Odometry self-calibration (`src/localize/odometry_calibration.rs`): `LOC_CAL=1` (on),
+//! `CAL_RANDOM` (the share of the odometry variances kept as random), `CAL_SG`/`CAL_SK` (the
+//! priors' σ of the turn gain and of the curvature, rad/m); with it on, a line before the last
+//! reports the estimate against the wheels the simulator drew (`Ed`, `Eb`). `SLIP_RANDOM=F`
+//! scales the slip model's random walks and fast-turn slip by `F` (0: systematic wheel errors
+//! and the end-of-move slide only).
 
 use papillon::geometry::normalize_angle;
+use papillon::localize::odometry_calibration::gain_and_curvature_of;
 use papillon::mission::MissionConfig;
 use papillon_sim::dynamic::Dynamics;
 use papillon_sim::physics::SlipConfig;
@@ -29,11 +41,8 @@ fn main() {
     let mut m = MissionConfig::default();
     m.localize.enabled = true;
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f32>().ok());
-    if let Some(v) = env("LOC_SM") {
-        m.localize.match_sigma_m = v;
-    }
-    if let Some(v) = env("LOC_SR") {
-        m.localize.match_sigma_rad = v;
+    if let Some(v) = env("LOC_INFO") {
+        m.localize.information_scale = v;
     }
     if let Some(v) = env("LOC_WR") {
         m.localize.matcher.weight_range_m = v;
@@ -44,17 +53,20 @@ fn main() {
     if let Some(v) = env("LOC_VR") {
         m.localize.odometry_var_rad2_per_rad = v;
     }
-    if let Some(v) = env("LOC_N") {
-        m.localize.every_n_scans = v as u32;
-    }
-    if let Some(v) = env("NOISE") {
-        m.laser.noise_fraction = v;
-    }
     if let Some(v) = env("LOC_TRAVEL") {
         m.localize.min_travel_m = v;
     }
     if let Some(v) = env("LOC_TURN") {
         m.localize.min_turn_rad = v;
+    }
+    if let Some(v) = env("LOC_VRM") {
+        m.localize.odometry_var_rad2_per_m = v;
+    }
+    if let Some(v) = env("NOISE") {
+        m.laser.noise_fraction = v;
+    }
+    if let Some(v) = env("LOC_N") {
+        m.localize.every_n_scans = v as u32;
     }
     if let Some(v) = env("LOC_GRAPH") {
         m.localize.graph.enabled = v != 0.0;
@@ -83,30 +95,118 @@ fn main() {
     if let Some(v) = env("GRAPH_RESID") {
         m.localize.graph.closure.residual_sigmas = v;
     }
-    if let Some(v) = env("GRAPH_INFO") {
-        m.localize.graph.closure.min_information = v;
-    }
     if let Some(v) = env("GRAPH_SM") {
         m.localize.graph.closure.sigma_m = v;
     }
     if let Some(v) = env("GRAPH_SR") {
         m.localize.graph.closure.sigma_rad = v;
     }
+    if let Some(v) = env("LOC_MAPAGREE") {
+        m.localize.map_only_agreeing = v != 0.0;
+    }
+    if let Some(v) = env("LOC_ANNEAL") {
+        m.localize.matcher.fine.anneal_gate_m = v;
+    }
+    if let Some(v) = env("LOC_GATE") {
+        m.localize.matcher.fine.gate = v;
+    }
+    if let Some(v) = env("LOC_MINFIT") {
+        m.localize.matcher.min_fit_fraction = v;
+    }
+    if let Some(v) = env("LOC_RATIO") {
+        m.localize.matcher.fine.min_information_ratio = v;
+    }
+    if let Some(v) = env("LOC_SXY") {
+        m.localize.matcher.search_xy_m = v;
+    }
+    if let Some(v) = env("LOC_STH") {
+        m.localize.matcher.search_theta_rad = v;
+    }
+    if let Some(v) = env("LOC_BELOW") {
+        m.localize.matcher.search_below_fit = v;
+    }
+    if let Some(v) = env("LOC_NSIG") {
+        m.localize.matcher.fine.normal_sigmas = v;
+    }
+    if let Some(v) = env("LOC_MAXN") {
+        m.localize.matcher.fine.max_normal_sigma_rad = v;
+    }
+    if let Some(v) = env("LOC_HUBER") {
+        m.localize.matcher.fine.huber_k = v;
+    }
+    if let Some(v) = env("LOC_CAP") {
+        m.localize.max_cell_weight = v;
+    }
+    if let Some(v) = env("LOC_FLOOR") {
+        m.localize.matcher.min_sigma_m = v;
+    }
+    if let Some(v) = env("LOC_INNOV") {
+        m.localize.innovation_gate = v;
+    }
+    if let Some(v) = env("LOC_GRIDAGREE") {
+        m.localize.grid_only_agreeing = v != 0.0;
+    }
+    if let Some(v) = env("LOC_KEYREF") {
+        m.localize.reference_keyframes_only = v != 0.0;
+    }
+    if let Some(v) = env("LOC_STOPM") {
+        m.localize.stop_var_m2 = v * v;
+    }
+    if let Some(v) = env("LOC_STOPDEG") {
+        m.localize.stop_var_rad2 = v.to_radians() * v.to_radians();
+    }
+    if let Some(v) = env("LOC_NFLOOR") {
+        m.localize.matcher.fine.sigma_floor_m = v;
+    }
+    if let Some(v) = env("LOC_REST") {
+        m.localize.match_at_rest = v != 0.0;
+    }
+    if let Some(v) = env("LOC_CAL") {
+        m.localize.calibration.enabled = v != 0.0;
+    }
+    if let Some(v) = env("CAL_RANDOM") {
+        m.localize.calibration.random_scale = v;
+    }
+    if let Some(v) = env("CAL_SG") {
+        m.localize.calibration.turn_gain_sigma = v;
+    }
+    if let Some(v) = env("CAL_SK") {
+        m.localize.calibration.curvature_sigma_rad_per_m = v;
+    }
     let quiet = std::env::var("QUIET").is_ok();
+    let m_cal = m.localize.calibration.enabled;
     let mut cfg = RunConfig::new(m, 1, seed);
-    cfg.body.slip = if args.get(2).map(|s| s.as_str()) == Some("none") {
-        SlipConfig::none()
-    } else {
-        SlipConfig::realistic()
-    };
+    let track_m = cfg.body.track_m;
+    cfg.body.slip = args
+        .get(2)
+        .and_then(|s| SlipConfig::named(s))
+        .unwrap_or_else(SlipConfig::realistic);
+    if let Some(v) = env("SLIP_RANDOM") {
+        // The slip model's random walks scaled (0: only the systematic wheel errors and the
+        // end-of-move slide remain).
+        cfg.body.slip.distance_var_m2_per_m *= v;
+        cfg.body.slip.rotation_var_rad2_per_rad *= v;
+        cfg.body.slip.drift_var_rad2_per_m *= v;
+        cfg.body.slip.wheels.fast_turn_var_rad2_per_rad *= v;
+    }
     let mut r = Runner::new(world, Dynamics::new(), cfg).unwrap();
     let mut last = -1.0;
     let mut last_trusted = 0;
-    let (mut err_sum, mut err_n, mut err_max) = (0.0f64, 0u64, 0.0f32);
     let (mut redraw_s, mut redraw_max_s, mut redraws) = (0.0f64, 0.0f64, 0u32);
     let wall = std::time::Instant::now();
     // The true pose of each keyframe (a scan is an `advance` of its own).
     let mut key_truth = Vec::new();
+    // ATTRIB=1: where the error grows. Each step's change of the position and heading error
+    // is put to the robot's true motion (turning faster than 0.2 rad/s, driving, standing)
+    // and to the last match (untrusted, or on ground less than 80 % known: entering new
+    // ground); printed at the end with the largest heading jumps.
+    let attrib = std::env::var("ATTRIB").is_ok();
+    let mut prev: Option<(f64, papillon::geometry::Pose2, f32, f32)> = None;
+    let mut sums: std::collections::BTreeMap<&str, (u32, f64, f64, f64)> = Default::default();
+    let mut jumps: Vec<(f64, f32, f32, &str)> = Vec::new();
+    let (mut err_sum, mut err_n, mut err_max) = (0.0f64, 0u64, 0.0f32);
+    // The raw odometry's largest error against the truth over the run (0 with `none`).
+    let (mut odo_max_m, mut odo_max_rad) = (0.0f32, 0.0f32);
     while !r.finished() {
         let before = r.map().graph.stats().redraws;
         let keys = r.map().graph.keyframes().len();
@@ -124,11 +224,54 @@ fn main() {
         }
         let t = r.sim_time_s();
         {
-            let e = r.mission(0).pose_map();
-            let d = e.position().distance(r.body(0).true_pose().position());
-            err_sum += f64::from(d);
+            let tp = r.body(0).true_pose();
+            let ep = r.mission(0).pose_map().position().distance(tp.position());
+            err_sum += ep as f64;
             err_n += 1;
-            err_max = err_max.max(d);
+            err_max = err_max.max(ep);
+            let o = r.body(0).odometry_in_map();
+            odo_max_m = odo_max_m.max(o.position().distance(tp.position()));
+            odo_max_rad = odo_max_rad.max(normalize_angle(o.theta - tp.theta).abs());
+        }
+        if attrib {
+            let tp = r.body(0).true_pose();
+            let e = r.mission(0).pose_map();
+            let ep = e.position().distance(tp.position());
+            let eh = normalize_angle(e.theta - tp.theta);
+            if let Some((t0, p0, ep0, eh0)) = prev {
+                let dt = (t - t0).max(1e-3) as f32;
+                let w = normalize_angle(tp.theta - p0.theta).abs() / dt;
+                let v = tp.position().distance(p0.position()) / dt;
+                let motion = if w > 0.2 {
+                    "turning"
+                } else if v > 0.05 {
+                    "driving"
+                } else {
+                    "standing"
+                };
+                let ground = match r.mission(0).localizer().last() {
+                    Some(q) if !q.trusted() => match q.distrust {
+                        Some(papillon::localize::Distrust::MostlyUnknown) => "unt-unknown",
+                        Some(papillon::localize::Distrust::PoorFit) => "unt-poorfit",
+                        Some(papillon::localize::Distrust::TooFewReturns) => "unt-few",
+                        _ => "unt-other",
+                    },
+                    Some(q) if q.known_fraction < 0.8 => "new-ground",
+                    Some(_) => "known",
+                    None => "none",
+                };
+                let key: &'static str =
+                    Box::leak(format!("{motion:8} {ground:10}").into_boxed_str());
+                let dh = (eh.abs() - eh0.abs()) as f64;
+                let dp = (ep - ep0) as f64;
+                let s = sums.entry(key).or_default();
+                s.0 += 1;
+                s.1 += dp;
+                s.2 += dh.to_degrees();
+                s.3 += (eh - eh0).abs().to_degrees() as f64;
+                jumps.push((t, (eh - eh0).to_degrees(), ep - ep0, key));
+            }
+            prev = Some((t, tp, ep, eh));
         }
         if !quiet && (t - last >= 5.0 || t < 3.0) {
             last = t;
@@ -158,6 +301,18 @@ fn main() {
                 ))
             );
             last_trusted = l.trusted();
+        }
+    }
+    if attrib {
+        println!(
+            "motion   last match | steps | Δ|pos err| m | Δ|heading err| deg | Σ|Δ heading| deg"
+        );
+        for (k, (n, dp, dh, ah)) in &sums {
+            println!("{k} | {n:6} | {dp:+8.3} | {dh:+8.2} | {ah:8.2}");
+        }
+        jumps.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        for (t, dh, dp, k) in jumps.iter().take(8) {
+            println!("jump t {t:7.1} heading {dh:+.2} deg pos {dp:+.3} m {k}");
         }
     }
     let b = r.body(0);
@@ -217,6 +372,33 @@ fn main() {
         let mean = errs.iter().sum::<f32>() / errs.len().max(1) as f32;
         let max = errs.iter().cloned().fold(0.0, f32::max);
         println!("keyframes vs truth: mean {mean:.3} m, max {max:.3} m");
+    }
+    if std::env::var("ODOCHECK").is_ok() {
+        println!(
+            "raw odometry's largest error over the run: {odo_max_m:.4} m {:.3} deg",
+            odo_max_rad.to_degrees()
+        );
+    }
+    if m_cal {
+        // The estimate against the wheels the simulator drew for this robot.
+        let cal = ms.localizer().calibration();
+        let w = b.wheels();
+        let (g, k) = gain_and_curvature_of(w.ed, w.eb, track_m);
+        let (sg, sk) = cal.sigmas();
+        let (ed, eb) = cal.wheel_errors(track_m);
+        println!(
+            "calibration: turn gain {:.5} ± {:.5} (drawn {:.5}) curvature {:+.5} ± {:.5} rad/m (drawn {:+.5}) | Ed {:.5} (drawn {:.5}) Eb {:.5} (drawn {:.5})",
+            cal.turn_gain(),
+            sg,
+            g,
+            cal.curvature_rad_per_m(),
+            sk,
+            k,
+            ed,
+            w.ed,
+            eb,
+            w.eb
+        );
     }
     println!(
         "seed {seed} final err {:.3} m {:.2} deg coverage {:.1} % map acc {:.1} % t {:.0} run mean {:.3} max {:.3} m | keyframes {} closures {}/{} refused {:?} redraws {} ({:.1} ms mean, {:.1} max) wall {:.1} s",

@@ -31,7 +31,7 @@ fn main() {
     let geom = *world.geometry();
     let mut grid: Box<OccupancyGrid<DEFAULT_CELL_CAPACITY>> =
         OccupancyGrid::new_boxed(geom, m.grid_bounds).unwrap();
-    let mut hits: Box<HitMap<DEFAULT_CELL_CAPACITY>> = Box::new(HitMap::new(geom));
+    let mut hits: Box<HitMap<DEFAULT_CELL_CAPACITY>> = HitMap::new_boxed(geom);
     let mut matcher = Box::new(ScanMatcher::<WINDOW_CELLS>::new());
     let mut cfg = MatchConfig::default();
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f32>().ok());
@@ -40,9 +40,6 @@ fn main() {
     }
     if let Some(v) = env("WEIGHT_RANGE") {
         cfg.weight_range_m = v;
-    }
-    if let Some(v) = env("MIN_VALUE") {
-        cfg.min_return_value = v;
     }
     let mut start = world.start();
     if let (Some(x), Some(y)) = (env("START_X"), env("START_Y")) {

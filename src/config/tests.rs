@@ -509,7 +509,7 @@ fn the_localize_section_is_optional_and_sets_the_matcher() {
     assert!((l.matcher.search_theta_rad - 8f32.to_radians()).abs() < 1e-6);
     // What the board does not give stays the core's.
     let d = LocalizeConfig::default();
-    assert_eq!(l.match_sigma_m, d.match_sigma_m);
+    assert_eq!(l.information_scale, d.information_scale);
     assert_eq!(l.matcher.sigma_m, d.matcher.sigma_m);
     // Only `enabled`: the defaults, switched on.
     let json = SIM.replacen(

@@ -9,7 +9,7 @@
 //! equally well (a corridor seen without its ends), the one nearest the odometry wins. The
 //! search is global within its window, so it cannot be trapped in a local optimum the way a
 //! gradient method can; its result is a whole-cell translation, refined by
-//! [`super::gauss_newton`].
+//! [`super::ndt`].
 
 use crate::geometry::{Point2, Pose2};
 use crate::math;

@@ -18,7 +18,23 @@
 //! so the ridge of their density is on it. [`super::likelihood`] blurs this layer into the
 //! field a scan is scored against.
 //!
-//! One `f32` per grid cell (metres of surface, see [`HitMap::add_scan`]). No allocation.
+//! One `f32` per grid cell (metres of surface, see [`HitMap::add_scan`]) for the coarse search's
+//! field.
+//!
+//! Beside it, every cell keeps the statistics of the returns that landed in it, as the normal
+//! distributions transform does (Biber & Straßer, *The normal distributions transform: a new
+//! approach to laser scan matching*, IROS 2003): the weight, the weighted sums of the return
+//! positions (relative to the cell centre, so `f32` keeps sub-millimetre precision) and of their
+//! products. [`HitMap::surface_at`] adds up the cells of a block and returns the mean and the
+//! principal axes of the returns there: where they lie on a wall, the mean is on the wall to a
+//! fraction of the range noise and the minor axis is its normal, however the wall lies against
+//! the cells ([`super::ndt`] fits scans to these lines).
+//!
+//! Each return is weighted by the inverse of its range variance (`σ = noise_fraction · range`,
+//! at least [`SIGMA_FLOOR_M`]), so the mean leans on the precise returns; and its expected noise
+//! scatter (`σ² u uᵀ` along its beam `u`) is taken off the second moments, so a wall seen from
+//! afar (its returns scattered along the beams more than along the wall) still shows the wall's
+//! direction and not the beams'. No allocation.
 
 use crate::geometry::{Point2, Pose2};
 use crate::grid::GridGeometry;
@@ -28,11 +44,37 @@ use crate::sensor::{LaserConfig, Scan};
 /// Surface one return stands for at most \[m\] (a return beside a gap in the scan).
 pub const MAX_FOOTPRINT_M: f32 = 0.2;
 
+/// A return's range noise counts as at least this in its weight \[m\]: a return with this
+/// noise or less weighs 1, one with `σ` weighs `(SIGMA_FLOOR_M / σ)²`.
+pub const SIGMA_FLOOR_M: f32 = 0.01;
+
+/// The returns of a block of cells: where they lie and how they spread.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    /// Weighted mean of the returns (map frame) \[m\].
+    pub mean: Point2,
+    /// Unit normal: the minor axis of their spread.
+    pub normal: Point2,
+    /// Their spread along the normal, net of the range noise (at least 0) \[m²\].
+    pub across_var_m2: f32,
+    /// Their spread along the major axis \[m²\].
+    pub along_var_m2: f32,
+    /// Total weight (a return with [`SIGMA_FLOOR_M`] of noise weighs 1).
+    pub weight: f32,
+    /// Variance of the normal's angle \[rad²\]: how far the minor axis may be off the
+    /// surface's true normal ([`HitMap::surface_at`] says why).
+    pub normal_var_rad2: f32,
+}
+
 /// Where returns landed, per grid cell.
 #[derive(bytemuck::Zeroable)]
 pub struct HitMap<const N: usize> {
     geometry: GridGeometry,
     weights: [f32; N],
+    /// Per cell: weight, `Σ w dx`, `Σ w dy`, `Σ w (dx² - σ²uₓ²)`, `Σ w (dx dy - σ²uₓu_y)`,
+    /// `Σ w (dy² - σ²u_y²)`, `Σ w σ²uₓ²`, `Σ w σ²uₓu_y`, `Σ w σ²u_y²`, with `d` the return's
+    /// offset from the cell centre and `σ` its range noise along its beam `u`.
+    stats: [[f32; 9]; N],
 }
 
 impl<const N: usize> core::fmt::Debug for HitMap<N> {
@@ -50,7 +92,16 @@ impl<const N: usize> HitMap<N> {
         Self {
             geometry,
             weights: [0.0; N],
+            stats: [[0.0; 9]; N],
         }
+    }
+
+    /// An empty layer over `geometry`, built on the heap whatever `N`.
+    #[cfg(feature = "std")]
+    pub fn new_boxed(geometry: GridGeometry) -> std::boxed::Box<Self> {
+        let mut h = crate::heap::boxed_zeroed::<Self>();
+        h.set_up_zeroed(geometry);
+        h
     }
 
     /// Sets up a zeroed layer (built by [`bytemuck::Zeroable`] on the heap) over `geometry`.
@@ -116,6 +167,21 @@ impl<const N: usize> HitMap<N> {
     /// of wall a scan sees weighs the same, and the field does not pull returns along a wall
     /// toward where it was seen densest.
     pub fn add_scan(&mut self, scan: &Scan, laser: &LaserConfig, pose: Pose2) {
+        self.add_scan_capped(scan, laser, pose, f32::INFINITY);
+    }
+
+    /// [`Self::add_scan`], leaving out the returns that land in a cell whose statistics
+    /// already weigh `max_cell_weight` or more: a wall the map knows well stays where the
+    /// first scans put it, and a pose that drifts later does not drag it along (scan after
+    /// scan, the matcher would otherwise fit the newest returns, drawn at the newest poses,
+    /// and the pose would random-walk with the map).
+    pub fn add_scan_capped(
+        &mut self,
+        scan: &Scan,
+        laser: &LaserConfig,
+        pose: Pose2,
+        max_cell_weight: f32,
+    ) {
         let at = pose.compose(laser.mount);
         let point = |i: usize| -> Option<Point2> {
             let b = scan.beams().get(i)?;
@@ -136,7 +202,8 @@ impl<const N: usize> HitMap<N> {
         let mut here = point(0);
         for i in 0..n {
             let next = point(i + 1);
-            if let Some(p) = here {
+            let full = here.is_some_and(|p| self.cell_weight(p) >= max_cell_weight);
+            if let Some(p) = here.filter(|_| !full) {
                 let side = |q: Option<Point2>| {
                     q.map_or(0.0, |q| (0.5 * q.distance(p)).min(MAX_FOOTPRINT_M))
                 };
@@ -152,10 +219,134 @@ impl<const N: usize> HitMap<N> {
                 if w > 0.0 {
                     self.add_point(p, w);
                 }
+                if let Some(r) = scan.beams()[i].range_m {
+                    let a = at.theta + scan.beams()[i].angle_rad;
+                    let sigma = laser.noise_fraction.max(0.0) * r;
+                    self.add_return(p, Point2::new(math::cos(a), math::sin(a)), sigma);
+                }
             }
             prev = here;
             here = next;
         }
+    }
+
+    /// Weight of the statistics of the cell holding `p` (0 off the grid).
+    fn cell_weight(&self, p: Point2) -> f32 {
+        let g = self.geometry;
+        g.cell_at(p)
+            .and_then(|c| g.index(c))
+            .filter(|&i| i < N)
+            .map_or(0.0, |i| self.stats[i][0])
+    }
+
+    /// Adds one return at map point `p`, seen along the unit beam direction `u` with range
+    /// noise `sigma_m`, to the statistics of the cell it lands in.
+    pub fn add_return(&mut self, p: Point2, u: Point2, sigma_m: f32) {
+        let g = self.geometry;
+        let Some(i) = g.cell_at(p).and_then(|c| g.index(c)).filter(|&i| i < N) else {
+            return;
+        };
+        if !(sigma_m.is_finite() && u.x.is_finite() && u.y.is_finite()) {
+            return;
+        }
+        let c = g.cell_center(g.cell_at_unchecked(p));
+        let (dx, dy) = (p.x - c.x, p.y - c.y);
+        let s = sigma_m.max(SIGMA_FLOOR_M);
+        let w = (SIGMA_FLOOR_M / s) * (SIGMA_FLOOR_M / s);
+        let n2 = sigma_m * sigma_m;
+        let st = &mut self.stats[i];
+        st[0] += w;
+        st[1] += w * dx;
+        st[2] += w * dy;
+        st[3] += w * (dx * dx - n2 * u.x * u.x);
+        st[4] += w * (dx * dy - n2 * u.x * u.y);
+        st[5] += w * (dy * dy - n2 * u.y * u.y);
+        st[6] += w * n2 * u.x * u.x;
+        st[7] += w * n2 * u.x * u.y;
+        st[8] += w * n2 * u.y * u.y;
+    }
+
+    /// The returns of the `(2 half + 1)²` cells centred on the cell holding `p`: their mean
+    /// and principal axes ([`Surface`]), or `None` when they weigh less than `min_weight`
+    /// or `p` is off the grid.
+    pub fn surface_at(&self, p: Point2, half: i32, min_weight: f32) -> Option<Surface> {
+        let g = self.geometry;
+        let centre = g.cell_at(p)?;
+        let res = g.resolution_m;
+        let (mut w, mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut nxx, mut nxy, mut nyy) = (0.0f32, 0.0f32, 0.0f32);
+        for dr in -half..=half {
+            let row = centre.row + dr;
+            if row < 0 || row as usize >= g.height {
+                continue;
+            }
+            let oy = dr as f32 * res;
+            for dc in -half..=half {
+                let col = centre.col + dc;
+                if col < 0 || col as usize >= g.width {
+                    continue;
+                }
+                let i = row as usize * g.width + col as usize;
+                if i >= N {
+                    continue;
+                }
+                let st = &self.stats[i];
+                if st[0] <= 0.0 {
+                    continue;
+                }
+                let ox = dc as f32 * res;
+                w += st[0];
+                sx += st[1] + st[0] * ox;
+                sy += st[2] + st[0] * oy;
+                sxx += st[3] + 2.0 * ox * st[1] + st[0] * ox * ox;
+                sxy += st[4] + ox * st[2] + oy * st[1] + st[0] * ox * oy;
+                syy += st[5] + 2.0 * oy * st[2] + st[0] * oy * oy;
+                nxx += st[6];
+                nxy += st[7];
+                nyy += st[8];
+            }
+        }
+        if w < min_weight.max(f32::MIN_POSITIVE) {
+            return None;
+        }
+        let (mx, my) = (sx / w, sy / w);
+        let cxx = sxx / w - mx * mx;
+        let cxy = sxy / w - mx * my;
+        let cyy = syy / w - my * my;
+        // Eigen-decomposition of the symmetric 2 x 2 spread.
+        let half_tr = 0.5 * (cxx + cyy);
+        let disc = math::sqrt((0.5 * (cxx - cyy)) * (0.5 * (cxx - cyy)) + cxy * cxy);
+        let (major, minor) = (half_tr + disc, half_tr - disc);
+        // The major axis is the angle of the eigenvector of `major`.
+        let angle = 0.5 * math::atan2(2.0 * cxy, cxx - cyy);
+        let c = g.cell_center(centre);
+        // The normal's angle is the ratio of the spread's off-diagonal (in the surface's
+        // frame) to the spread along, `S`. Two things move that off-diagonal. Sampling: the
+        // mean's own variance, `σ_floor² / W`, over `S`. And the range noise, whose expected
+        // part is taken off above but which, where beams meet the surface at a slant, also
+        // carries returns across the block's ends along their beams: a fraction `σₜ / L` of
+        // the returns (`σₜ`, `σₙ` the noise along and across the surface, `L` the block's
+        // length) cross an end, each at `L / 2` from the mean and `σₙ` off the surface, and
+        // those entering at one end lie deeper than those leaving at the other; a tilt of
+        // `σₜ σₙ / (2 S)`, the noise's weighted mean `|tᵀ Σ w σ² u uᵀ n| / W` over `2 S`,
+        // that the subtraction cannot see (zero for returns seen head-on or along the
+        // surface; measured: 5 % range noise seen from behind tilts a corridor's walls 6°;
+        // docs/experiments.md, sixth measurement).
+        let along = (major - minor.max(0.0)).max(f32::MIN_POSITIVE);
+        let floor2 = SIGMA_FLOOR_M * SIGMA_FLOOR_M;
+        let (ca, sa) = (math::cos(angle), math::sin(angle));
+        // t = (cos, sin), n = (-sin, cos): tᵀ N n.
+        let tn = -ca * sa * nxx + (ca * ca - sa * sa) * nxy + sa * ca * nyy;
+        let tilt = math::abs(tn) / w / (2.0 * along);
+        let normal_var_rad2 = floor2 / w / along + tilt * tilt;
+        Some(Surface {
+            mean: Point2::new(c.x + mx, c.y + my),
+            normal: Point2::new(-math::sin(angle), math::cos(angle)),
+            across_var_m2: minor.max(0.0),
+            along_var_m2: major.max(0.0),
+            weight: w,
+            normal_var_rad2,
+        })
     }
 
     /// Forgets every return within `radius_m` of `centre` (cell centres), e.g. where a robot
@@ -171,6 +362,7 @@ impl<const N: usize> HitMap<N> {
                     && g.cell_center(cell).distance(centre) <= radius_m
                 {
                     self.weights[i] = 0.0;
+                    self.stats[i] = [0.0; 9];
                 }
             }
         }
@@ -226,5 +418,46 @@ mod tests {
         let foot = h.weight_at(20 * 40 + 29) + h.weight_at(20 * 40 + 30);
         let along = h.weight_at(35 * 40 + 29) + h.weight_at(35 * 40 + 30);
         assert!((foot - along).abs() < 0.02, "{foot} vs {along}");
+    }
+    #[test]
+    fn a_capped_cell_takes_no_more_returns() {
+        use crate::sensor::{Beam, LaserConfig, Scan};
+        // The same wall 1 m ahead, added ten times: without a cap the cell's statistics
+        // grow with every scan; capped at 3.5 scans' weight they stop within the fourth.
+        let g = GridGeometry::new(40, 40, 0.1, Point2::new(-2.0, -2.0)).unwrap();
+        let laser = LaserConfig::thesis();
+        let mut scan = Scan::new();
+        for i in 0..laser.beam_count as usize {
+            let a = laser.beam_angle(i);
+            scan.push(Beam {
+                angle_rad: a,
+                range_m: (math::cos(a) > 0.3).then_some(1.0 / math::cos(a)),
+            })
+            .unwrap();
+        }
+        let pose = Pose2::new(0.0, 0.0, 0.0);
+        let foot = Point2::new(1.0, 0.0);
+        let once = {
+            let mut h = HitMap::<1600>::new(g);
+            h.add_scan(&scan, &laser, pose);
+            h.cell_weight(foot)
+        };
+        assert!(once > 0.0, "one scan: {once}");
+        let mut free = HitMap::<1600>::new(g);
+        let mut capped = HitMap::<1600>::new(g);
+        for _ in 0..10 {
+            free.add_scan(&scan, &laser, pose);
+            capped.add_scan_capped(&scan, &laser, pose, 3.5 * once);
+        }
+        let (wf, wc) = (free.cell_weight(foot), capped.cell_weight(foot));
+        assert!(
+            (wf - 10.0 * once).abs() < 1e-3 * wf,
+            "uncapped: {wf} (one scan {once})"
+        );
+        // The fourth scan's returns stop as soon as the cell reaches the cap.
+        assert!(
+            wc >= 3.5 * once && wc <= 4.0 * once * 1.001,
+            "capped: {wc} (one scan {once})"
+        );
     }
 }

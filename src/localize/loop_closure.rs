@@ -42,10 +42,6 @@ pub struct ClosureConfig {
     pub search_xy_m: f32,
     /// Rotation searched each way \[rad\].
     pub search_theta_rad: f32,
-    /// A direction is constrained when its information per return is at least this
-    /// \[1/m²\] (the matcher's [`MatchConfig::min_information`] for a closure; all three must
-    /// be).
-    pub min_information: f32,
     /// Mean likelihood of the returns at the match below this: refused.
     pub min_score: f32,
     /// Fraction of the returns on ground the local map knows below this: refused.
@@ -79,7 +75,6 @@ impl Default for ClosureConfig {
             neighbours: 20,
             search_xy_m: 0.5,
             search_theta_rad: 0.2,
-            min_information: 0.25,
             min_score: 0.5,
             min_known_fraction: 0.7,
             sigma_m: 0.05,
@@ -206,7 +201,10 @@ impl<const L: usize> LocalMap<L> {
         let wide = MatchConfig {
             search_xy_m: config.search_xy_m,
             search_theta_rad: config.search_theta_rad,
-            min_information: config.min_information,
+            // A closure starts from a drifted prediction: always run the correlative search
+            // over the whole window before the refinement (the tracker's match runs it only
+            // when the refinement from the prediction pairs too few returns).
+            search_below_fit: f32::INFINITY,
             ..*tracker
         };
         let result = matcher.match_scan(&self.grid, &self.hits, scan, laser, predicted, &wide);

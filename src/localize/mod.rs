@@ -5,16 +5,18 @@
 //! ([`hits`], a layer of the shared map written at the corrected pose after every match): the
 //! grid's free-space clearing moves and erodes walls in ways that bias a match (see there).
 //!
-//! A match ([`ScanMatcher::match_scan`]) starts from the odometry prediction and runs in four
-//! parts, one file each:
-//! 1. [`likelihood`]: a blurred local copy of the returns around the scan
-//!    (Olson, *Real-time correlative scan matching*, ICRA 2009);
-//! 2. [`correlative`]: Olson's exhaustive search of a small pose window around the prediction,
-//!    which finds the right basin whatever the local shape of the cost;
-//! 3. [`gauss_newton`]: Hector SLAM's Gauss-Newton refinement on the bilinearly interpolated
-//!    map (Kohlbrecher et al., *A flexible and scalable SLAM system with full 3D motion
-//!    estimation*, SSRR 2011), which gives a sub-cell pose and the fit's information matrix;
-//! 4. [`constraint`]: the eigen-analysis of that matrix; the correction is kept only along
+//! A match ([`ScanMatcher::match_scan`]) starts from the odometry prediction and runs in up to
+//! four parts, one file each:
+//! 1. [`ndt`]: point-to-line refinement of the prediction against the per-cell statistics of
+//!    the returns ([`hits`], a normal distributions transform, Biber & Straßer, IROS 2003),
+//!    with a robust kernel; it gives the pose to a fraction of the range noise and the fit's
+//!    information matrix;
+//! 2. only when that pairs too few returns with the map (the prediction is poor):
+//!    [`likelihood`], a blurred local copy of the returns around the scan, and [`correlative`],
+//!    Olson's exhaustive search of a small pose window around the prediction on it (*Real-time
+//!    correlative scan matching*, ICRA 2009), which finds the right basin; the refinement
+//!    starts again from there;
+//! 3. [`constraint`]: the eigen-analysis of the information; the correction is kept only along
 //!    directions the scan constrains, and the odometry prediction along the others (a
 //!    featureless corridor).
 //!
@@ -23,8 +25,9 @@
 //! Then the prediction is returned unchanged. [`MatchQuality`] reports what the decision was
 //! based on.
 //!
-//! [`tracker`] applies matches to the mission's map-from-odometry transform, every N-th scan,
-//! blended with the prediction by their variances.
+//! [`tracker`] applies matches to the mission's map-from-odometry transform; with
+//! [`odometry_calibration`] on (off by default) it also estimates the odometry's systematic
+//! errors from them and corrects each odometry increment before the prediction.
 //!
 //! [`graph`] (off by default, [`graph::GraphConfig`]) keeps keyframes ([`keyframes`]) in a pose
 //! graph ([`pose_graph`]), closes loops when a place is seen again ([`loop_closure`]) and then
@@ -35,12 +38,13 @@
 
 pub mod constraint;
 pub mod correlative;
-pub mod gauss_newton;
 pub mod graph;
 pub mod hits;
 pub mod keyframes;
 pub mod likelihood;
 pub mod loop_closure;
+pub mod ndt;
+pub mod odometry_calibration;
 pub mod pose_graph;
 pub mod tracker;
 
@@ -105,49 +109,47 @@ pub struct MatchConfig {
     /// Fewer returns than this fraction on known cells or near known walls (at the
     /// prediction): no match.
     pub min_known_fraction: f32,
-    /// Mean likelihood of the returns below this after the fit: no match.
-    pub min_score: f32,
-    /// A direction is constrained when its information per return is at least this \[1/m²\]
-    /// ...
-    pub min_information: f32,
-    /// ... and at least this fraction of the strongest direction's.
-    pub min_information_ratio: f32,
     /// Returns farther than this count less, as `(weight_range_m / range)²`: the range noise
     /// grows with the range \[m\].
     pub weight_range_m: f32,
     /// Length that turns a rotation into a distance for the eigen-analysis \[m\].
     pub length_scale_m: f32,
-    /// Gauss-Newton steps at most.
-    pub iterations: u32,
     /// Motion prior: mean likelihood taken off at the edge of the search window.
     pub prior_at_edge: f32,
     /// The search's best pose replaces the prediction as the refinement's start only when it
     /// scores this much more (mean likelihood).
     pub min_search_gain: f32,
-    /// Only returns where the field is at least this at the refinement's start take part in
-    /// it (0..=1; 0.5 is about 1.2 σ from a wall's ridge).
-    pub min_return_value: f32,
-    /// Fewer than this fraction of the returns on known ground fitting so: no match.
+    /// Fewer than this fraction of the returns on known ground paired with a surface after
+    /// the fit: no match.
     pub min_fit_fraction: f32,
+    /// The refinement from the prediction pairs fewer than this fraction: Olson's search
+    /// looks for a better start.
+    pub search_below_fit: f32,
+    /// The point-to-line refinement ([`ndt`]; its `noise_fraction` and `length_scale_m` are
+    /// taken from the laser and from this configuration).
+    pub fine: ndt::NdtConfig,
     /// A cell of the returns layer is a wall cell (scores 1) at this fraction of the largest
     /// weight within the blur's reach ([`likelihood::WALL_FRACTION`]).
     pub wall_fraction: f32,
+    /// A match's error is taken as at least this \[m\] in every constrained direction of
+    /// `(x, y, θ·L)`, whatever its residuals say: the fit's information counts each return's
+    /// noise as independent, but the map it fits was drawn at poses that were themselves a
+    /// few millimetres off, an error shared by every return on a wall (0: the fit as it is).
+    /// An experiment, off: with exact odometry it halves the closed-loop error, with the
+    /// realistic odometry's it makes it worse (docs/experiments.md, seventh measurement).
+    pub min_sigma_m: f32,
     /// Blur the returns by a Gaussian sum (a density of returns) before normalising, instead
     /// of by Olson's max-convolution after (an experiment, off: measured no better,
     /// docs/experiments.md).
     pub smooth: bool,
-    /// A return takes part in the refinement only when its neighbours along the scan within
-    /// this distance fit too \[m\] (0: no boundary test).
-    pub boundary_m: f32,
 }
 
 impl Default for MatchConfig {
     /// ±0.3 m and ±0.1 rad (5.7°) at 0.01 rad, σ 0.1 m, at most 270 returns, at least 30,
-    /// half of them on known cells, mean likelihood 0.25, information 0.5/m² and 3 % of the
-    /// strongest, returns beyond 1 m
-    /// weighted by 1/r², L = 1 m, 10 steps, prior 0.02, search gain 0.03, returns refined from a field value of 0.5, at least 30 % of them,
-    /// with their neighbours along the scan within 15 cm; wall cells at half the local peak,
-    /// max-convolution.
+    /// half of them on known cells, returns beyond 1 m weighted by 1/r² in the search, L = 1 m,
+    /// prior 0.02, search gain 0.03; at least 30 % of the returns paired after the fit, the
+    /// search only when fewer than 60 % are; the refinement's defaults ([`ndt::NdtConfig`]);
+    /// wall cells at half the local peak, max-convolution.
     fn default() -> Self {
         Self {
             search_xy_m: 0.3,
@@ -157,19 +159,16 @@ impl Default for MatchConfig {
             max_points: 270,
             min_points: 30,
             min_known_fraction: 0.5,
-            min_score: 0.25,
-            min_information: 0.5,
-            min_information_ratio: 0.03,
             weight_range_m: 1.0,
             length_scale_m: 1.0,
-            iterations: 10,
             prior_at_edge: 0.02,
             min_search_gain: 0.03,
-            min_return_value: 0.5,
             min_fit_fraction: 0.3,
+            search_below_fit: 0.6,
+            fine: ndt::NdtConfig::default(),
             wall_fraction: likelihood::WALL_FRACTION,
+            min_sigma_m: 0.0,
             smooth: false,
-            boundary_m: 0.15,
         }
     }
 }
@@ -224,6 +223,9 @@ pub struct MatchResult {
     pub pose: Pose2,
     /// What it was based on.
     pub quality: MatchQuality,
+    /// The fit's information (inverse covariance) along the constrained directions, in
+    /// `(x [m], y [m], θ [rad])` (zero when not trusted).
+    pub information: [[f32; 3]; 3],
 }
 
 /// The working memory of a scan matcher: the likelihood window of `T` cells and the scan's
@@ -292,6 +294,7 @@ impl<const T: usize> ScanMatcher<T> {
             MatchResult {
                 pose: predicted,
                 quality: q,
+                information: [[0.0; 3]; 3],
             }
         };
 
@@ -400,107 +403,58 @@ impl<const T: usize> ScanMatcher<T> {
             return refuse(quality, Distrust::MostlyUnknown);
         }
 
-        // Olson's search, then Hector's refinement.
-        let steps = if config.theta_step_rad > 0.0 {
-            math::floor(config.search_theta_rad / config.theta_step_rad) as i32
-        } else {
-            0
-        };
-        let window = SearchWindow {
-            cells,
-            steps,
-            step_rad: config.theta_step_rad,
-            prior_at_edge: config.prior_at_edge,
-        };
-        let coarse = correlative::search(
-            &self.field,
-            &self.points[..self.len],
-            &self.weights[..self.len],
-            predicted,
-            &window,
-            &mut self.scratch,
-        );
-        // The search scores returns at their nearest cell centre, so poses whose scores differ
-        // by less than that rounding are ties; a tie keeps the prediction, or the pose would
-        // slide along whatever the scan leaves unconstrained.
-        let start = if coarse.score - coarse.score_at_prediction > config.min_search_gain {
-            coarse.pose
-        } else {
-            predicted
-        };
-        // The refinement uses only the returns that already fit the map well at its start:
-        // a return that lands a little beyond the end of a wall seen so far has the wall's
-        // end within the blur and would pull the scan along the wall toward it (a bias in
-        // the direction the robot turns or drives, several tenths of a degree per scan).
-        //
-        // Returns at the boundary of what fits are left out too, as Turk & Levoy reject
-        // correspondences on the boundary of the reference (*Zippered polygon meshes from
-        // range images*, SIGGRAPH 1994): a return whose neighbours along the scan, within
-        // [`MatchConfig::boundary_m`], do not all fit stands at the end of the part of a
-        // surface the map knows, where the field falls off along the surface and pulls it
-        // back (measured in a house mission with exact poses and noiseless scans: the first
-        // 15 cm of a wall coming into view at the edge of the scan scored 0.2-0.9 and pulled
-        // the match 10 cm back along it).
-        let total = self.len;
-        for i in 0..total {
-            let q = start.transform_point(self.points[i]);
-            self.scratch[i].1 = self.field.sample(q).0;
-        }
-        let fits = |v: f32| v >= config.min_return_value;
-        let reach2 = config.boundary_m * config.boundary_m;
-        let mut kept = 0;
-        for i in 0..total {
-            let p = self.points[i];
-            let near = |j: usize| {
-                let d = self.points[j];
-                let (dx, dy) = (d.x - p.x, d.y - p.y);
-                dx * dx + dy * dy <= reach2
+        // The point-to-line refinement from the prediction ([`ndt`]); when it pairs too few
+        // returns with the map (the prediction is poor), Olson's search finds the basin and
+        // the refinement starts again from its best pose.
+        let mut fine_cfg = config.fine;
+        fine_cfg.noise_fraction = laser.noise_fraction.max(0.0);
+        fine_cfg.length_scale_m = config.length_scale_m;
+        let fraction = |f: &ndt::Fitted| f.inliers as f32 / self.len.max(1) as f32;
+        let mut fine = ndt::refine(hits, &self.points[..self.len], origin, predicted, &fine_cfg);
+        if fraction(&fine) < config.search_below_fit {
+            let steps = if config.theta_step_rad > 0.0 {
+                math::floor(config.search_theta_rad / config.theta_step_rad) as i32
+            } else {
+                0
             };
-            let mut ok = fits(self.scratch[i].1);
-            let mut j = i + 1;
-            while ok && j < total && near(j) {
-                ok = fits(self.scratch[j].1);
-                j += 1;
-            }
-            let mut j = i;
-            while ok && j > 0 && near(j - 1) {
-                ok = fits(self.scratch[j - 1].1);
-                j -= 1;
-            }
-            if ok {
-                self.points[kept] = self.points[i];
-                self.weights[kept] = self.weights[i];
-                kept += 1;
+            let window = SearchWindow {
+                cells,
+                steps,
+                step_rad: config.theta_step_rad,
+                prior_at_edge: config.prior_at_edge,
+            };
+            let coarse = correlative::search(
+                &self.field,
+                &self.points[..self.len],
+                &self.weights[..self.len],
+                predicted,
+                &window,
+                &mut self.scratch,
+            );
+            if coarse.score - coarse.score_at_prediction > config.min_search_gain {
+                let again = ndt::refine(
+                    hits,
+                    &self.points[..self.len],
+                    origin,
+                    coarse.pose,
+                    &fine_cfg,
+                );
+                if again.inliers > fine.inliers {
+                    fine = again;
+                }
             }
         }
-        self.len = kept;
-        if kept < config.min_points.max(1) || (kept as f32) < config.min_fit_fraction * total as f32
-        {
-            return refuse(quality, Distrust::PoorFit);
-        }
-        let limits = gauss_newton::Limits {
-            length_scale_m: config.length_scale_m,
-            min_information: config.min_information,
-            min_information_ratio: config.min_information_ratio,
-        };
-        let fine = gauss_newton::refine(
-            &self.field,
-            &self.points[..self.len],
-            &self.weights[..self.len],
-            start,
-            config.iterations,
-            &limits,
-        );
-
+        let min_eig = 1.0 / (fine_cfg.max_sigma_m * fine_cfg.max_sigma_m).max(1e-12);
         let constraint = Constraint::analyse(
             &fine.information,
-            config.min_information,
-            config.min_information_ratio,
+            &fine.position_test,
+            min_eig,
+            fine_cfg.min_information_ratio,
         );
         quality.eigenvalues = constraint.eigenvalues;
         quality.constrained = constraint.constrained_count();
-        quality.score = fine.mean_value;
-        if quality.score < config.min_score {
+        quality.score = fraction(&fine);
+        if quality.score < config.min_fit_fraction || (fine.inliers as usize) < config.min_points {
             return refuse(quality, Distrust::PoorFit);
         }
         if quality.constrained == 0 {
@@ -516,6 +470,21 @@ impl<const T: usize> ScanMatcher<T> {
         ];
         let kept = constraint.project(delta);
         quality.correction = [kept[0], kept[1], kept[2] / l];
+        // The information along the constrained directions, in (x, y, θ).
+        let mut information = [[0.0f32; 3]; 3];
+        let d = [1.0, 1.0, l];
+        for k in 0..3 {
+            if constraint.constrained[k] {
+                let v = constraint.directions[k];
+                let floor2 = config.min_sigma_m * config.min_sigma_m;
+                let lambda = 1.0 / (1.0 / constraint.eigenvalues[k].max(1e-12) + floor2);
+                for (a, row) in information.iter_mut().enumerate() {
+                    for (b, cell) in row.iter_mut().enumerate() {
+                        *cell += lambda * v[a] * d[a] * v[b] * d[b];
+                    }
+                }
+            }
+        }
         MatchResult {
             pose: Pose2::new(
                 predicted.x + kept[0],
@@ -523,6 +492,7 @@ impl<const T: usize> ScanMatcher<T> {
                 predicted.theta + kept[2] / l,
             ),
             quality,
+            information,
         }
     }
 }

@@ -1,31 +1,34 @@
-//! Scan matching applied to a robot's odometry: every N-th scan is matched at the pose the
-//! odometry predicts, and a trusted match moves the map-from-odometry transform so that the
-//! odometry pose of that instant maps to the matched pose. Later odometry then carries the
-//! correction forward, and the map, the planner and the controller all see the corrected pose.
+//! Scan matching applied to a robot's odometry: scans are matched at the pose the odometry
+//! predicts, and a trusted match moves the map-from-odometry transform so that the odometry pose
+//! of that instant maps to the corrected pose. Later odometry then carries the correction
+//! forward, and the map, the planner and the controller all see the corrected pose.
 //!
-//! A match is a noisy measurement (a few centimetres and tenths of a degree for one scan with
-//! the thesis's 5 % range noise), and the map it is matched to was drawn from earlier matched
-//! poses: applied in full, every scan's own noise would be written into the map and the pose
-//! would random-walk even with perfect odometry. So the correction is blended with the
-//! prediction as a Kalman filter does for independent axes (Thrun, Burgard & Fox,
-//! *Probabilistic Robotics*, 2005, §3.2): the prediction's variance grows with the distance and
-//! rotation the odometry reports since the last match, the match's is fixed, and the gain
-//! `K = P / (P + R)` decides how much of the correction is kept. A robot standing still keeps
-//! its pose; one that has driven far takes most of the correction.
+//! One match of a noisy scan is a noisy measurement: with the thesis's 5 % range noise the
+//! information of one scan pins the heading to about half a degree and the position to a few
+//! centimetres (Cramér-Rao: a return at range `r` with noise `0.05 r` whose surface it sees at
+//! incidence `α` carries `(sin α / 0.05)²` of heading information, whatever `r`;
+//! docs/experiments.md, fifth measurement). So matches are fused with the odometry by an
+//! extended Kalman filter in information form (Thrun, Burgard & Fox, *Probabilistic Robotics*,
+//! 2005, §3.3, §3.5): the prediction's covariance grows with the distance and rotation the
+//! odometry reports (propagated through the motion's Jacobian, so a heading error becomes a
+//! lateral position error as the robot drives), the match's is the inverse of its fit's
+//! information ([`super::MatchResult::information`], inflated by
+//! [`LocalizeConfig::information_scale`]), and the update
+//! `P⁺ = (P⁻¹ + H)⁻¹, x⁺ = x⁻ + P⁺ H δ` keeps the odometry along directions the scan does not
+//! constrain (`H` is zero there) and follows a precise match where it does.
 //!
-//! A scan is matched only after a minimum travel or turn since the last match, as gmapping
+//! A scan may be matched only after a minimum travel or turn since the last match, as gmapping
 //! (`linearUpdate`, `angularUpdate`) and slam_toolbox (`minimum_travel_distance`,
-//! `minimum_travel_heading`) do: every match injects its own error, and over a short motion the
-//! odometry is more precise than a match. With exact odometry in the house (seeds 25-34) this
-//! brought the final error from a median of 1.97 m to 0.36 m; it is still not centimetres
-//! (docs/experiments.md).
+//! `minimum_travel_heading`) do (0 and 0, the default: every scan).
 
 use crate::control::odometry::MapFromOdom;
 use crate::geometry::{Pose2, normalize_angle};
 use crate::grid::OccupancyGrid;
 use crate::math;
 use crate::sensor::{LaserConfig, Scan};
+use nalgebra::{Matrix3, Vector3};
 
+use super::odometry_calibration::OdometryCalibration;
 use super::{HitMap, MatchConfig, MatchQuality, ScanMatcher, WINDOW_CELLS};
 
 /// When and how a mission matches its scans.
@@ -43,25 +46,84 @@ pub struct LocalizeConfig {
     pub odometry_var_rad2_per_rad: f32,
     /// Variance the odometry adds to the heading per metre driven \[rad²/m\].
     pub odometry_var_rad2_per_m: f32,
-    /// Standard deviation of one match's position \[m\].
-    pub match_sigma_m: f32,
-    /// Standard deviation of one match's heading \[rad\].
-    pub match_sigma_rad: f32,
+    /// The fit's information is multiplied by this before it is fused (below 1: the fit is
+    /// trusted less than its residuals say, for the map's own errors).
+    pub information_scale: f32,
     /// A scan is matched only once the odometry has moved this far \[m\] ...
     pub min_travel_m: f32,
     /// ... or turned this much \[rad\] since the last match (0 and 0: every scan).
     pub min_turn_rad: f32,
     /// Keyframes in a pose graph with loop closure ([`super::graph`]; off by default).
     pub graph: super::graph::GraphConfig,
+    /// A scan whose match was refused because it disagrees with the map at the predicted
+    /// pose ([`super::Distrust::PoorFit`]) is not written into the matcher's reference (the
+    /// returns layer), so a pose gone wrong does not draw a second copy of the walls that the
+    /// next matches would then fit (Hector SLAM and Cartographer insert a scan only at a
+    /// pose the matcher found). An experiment, off: measured worse (docs/experiments.md,
+    /// seventh measurement).
+    pub map_only_agreeing: bool,
+    /// The same for the occupancy grid (the safety monitor still sees every scan). An
+    /// experiment, off: measured no better.
+    pub grid_only_agreeing: bool,
+    /// A cell of the matcher's reference takes no more returns once its statistics weigh
+    /// this much ([`super::HitMap::add_scan_capped`]; a return with 1 cm of noise weighs 1).
+    /// An experiment, off (infinite): measured worse.
+    pub max_cell_weight: f32,
+    /// A trusted match whose correction lies farther than this squared Mahalanobis
+    /// distance from the prediction (under the prediction's covariance) scales that
+    /// covariance up until it does not, before the update: a fading-memory filter (Jazwinski,
+    /// *Stochastic processes and filtering theory*, 1970, §8.6) for what the odometry model
+    /// does not say (the slide at the end of a move is not reported by the wheels).
+    /// Negative: such a match is refused instead (a validation gate, Bar-Shalom & Fortmann,
+    /// *Tracking and data association*, 1988), its distance taken under the prediction's
+    /// covariance plus (3 mm)² in every direction. 0: off. An experiment, off: both measured
+    /// worse (docs/experiments.md, seventh measurement).
+    pub innovation_gate: f32,
+    /// Only the scans that were matched (keyframes: the first, then one each
+    /// [`Self::min_travel_m`] or [`Self::min_turn_rad`]) are written into the matcher's
+    /// reference (the returns layer), at their corrected pose; the scans between them go to
+    /// the occupancy grid only. Without it, with a minimum travel, the scans between two
+    /// matches are drawn into the reference at the odometry's drifting pose and the next
+    /// match fits that drift (as Karto and slam_toolbox do, whose map is built from the
+    /// matched scans only: Konolige et al., *Efficient sparse pose adjustment for 2D
+    /// mapping*, IROS 2010; Macenski & Jambrecic, JOSS 2021). An experiment, off.
+    pub reference_keyframes_only: bool,
+    /// With a minimum travel or turn: also match the first scan after the odometry comes to
+    /// rest away from the last match (one match a stop, not one a scan while standing), for
+    /// what the wheels do not report when a move ends (the robot slides on).
+    /// An experiment, off.
+    pub match_at_rest: bool,
+    /// Position variance \[m²\] and heading variance \[rad²\] added to the prediction when
+    /// the odometry comes to rest (the first scan with no odometry motion since the scan
+    /// before), along the heading and in heading: the slide at the end of a move that no
+    /// wheel reports (the thesis measured 1-2 cm on a P3-DX; `papillon-sim`'s slip models
+    /// draw 1.5 cm and 0.5°, 1 σ). Without it the filter takes a robot at rest to be where
+    /// the odometry says and refuses most of the first match's correction (unit test: 12 % of the slide's position taken, 49 % with
+    /// the term), and the scans of the stop are drawn between the two poses. Default
+    /// (1.5 cm)² and (0.5°)², the slide's size: on 20 house seeds with the realistic odometry
+    /// it took the median final error from 8.8 to 5.9 cm and the worst from 96 to 31 cm, and
+    /// changed nothing with exact odometry (docs/experiments.md, ninth measurement); 0 and 0:
+    /// no such term.
+    pub stop_var_m2: f32,
+    /// Heading variance added when the odometry comes to rest \[rad²\] (see
+    /// [`Self::stop_var_m2`]).
+    pub stop_var_rad2: f32,
+    /// Online estimation of the odometry's systematic errors (turn gain and curvature per
+    /// metre, [`super::odometry_calibration`]): each odometry increment is corrected with the
+    /// estimate before the prediction. Off by default (off: the prediction is the odometry as
+    /// reported, as before). While on, [`Self::innovation_gate`]'s fading memory (> 0) is not
+    /// applied; its validation gate (< 0) is.
+    pub calibration: super::odometry_calibration::CalibrationConfig,
 }
 
 impl Default for LocalizeConfig {
-    /// Off; when on, the default matcher, once the odometry has moved 0.5 m or turned 0.5 rad
-    /// since the last match (slam_toolbox's `minimum_travel_distance` and
-    /// `minimum_travel_heading` defaults); odometry variances of (2 cm)² per metre, (1.1°)² per
-    /// radian and (0.6°)² per metre; matches of σ 5 cm and 1.15° (about the spread of one
-    /// match measured open loop in a house mission, `examples/localize_open.rs` in the
-    /// simulator, docs/experiments.md).
+    /// Off; when on, every scan matched with the default matcher; odometry variances of
+    /// (2 cm)² per metre, (1.1°)² per radian and (0.6°)² per metre; the fit's information
+    /// taken as it is (halved, the closed-loop heading error was larger where matches were
+    /// refused and the odometry's heading pulled: docs/experiments.md, sixth measurement);
+    /// every scan mapped, with no cap on a cell's weight (the experiments
+    /// `map_only_agreeing`, `grid_only_agreeing` and `max_cell_weight` measured no better:
+    /// docs/experiments.md, seventh measurement).
     fn default() -> Self {
         Self {
             enabled: false,
@@ -70,11 +132,19 @@ impl Default for LocalizeConfig {
             odometry_var_m2_per_m: 4e-4,
             odometry_var_rad2_per_rad: 4e-4,
             odometry_var_rad2_per_m: 1e-4,
-            match_sigma_m: 0.05,
-            match_sigma_rad: 0.02,
-            min_travel_m: 0.5,
-            min_turn_rad: 0.5,
+            information_scale: 1.0,
+            min_travel_m: 0.0,
+            min_turn_rad: 0.0,
+            map_only_agreeing: false,
+            grid_only_agreeing: false,
+            max_cell_weight: f32::INFINITY,
+            innovation_gate: 0.0,
+            reference_keyframes_only: false,
+            match_at_rest: false,
+            stop_var_m2: 0.015 * 0.015,
+            stop_var_rad2: 0.5f32.to_radians() * 0.5f32.to_radians(),
             graph: super::graph::GraphConfig::default(),
+            calibration: super::odometry_calibration::CalibrationConfig::default(),
         }
     }
 }
@@ -90,9 +160,16 @@ pub struct Tracker {
     last_odom: Option<Pose2>,
     /// Odometry pose at the last match.
     matched_odom: Option<Pose2>,
-    /// Variance of the predicted position \[m²\] and heading \[rad²\].
-    var_m2: f32,
-    var_rad2: f32,
+    /// Covariance of the pose estimate (map frame, `x, y, θ`) \[m², m·rad, rad²\].
+    cov: Matrix3<f64>,
+    /// The last scan's match was refused because the scan disagrees with the map.
+    disagrees: bool,
+    /// The last scan was matched (a keyframe) or came before the odometry frame was set.
+    keyframe: bool,
+    /// The odometry moved between the last two scans.
+    moving: bool,
+    /// The estimate of the odometry's systematic errors ([`LocalizeConfig::calibration`]).
+    calibration: OdometryCalibration,
 }
 
 impl core::fmt::Debug for Tracker {
@@ -122,8 +199,11 @@ impl Tracker {
             last: None,
             last_odom: None,
             matched_odom: None,
-            var_m2: 0.0,
-            var_rad2: 0.0,
+            cov: Matrix3::new(1e-6, 0.0, 0.0, 0.0, 1e-6, 0.0, 0.0, 0.0, 1e-6),
+            disagrees: false,
+            keyframe: false,
+            moving: false,
+            calibration: OdometryCalibration::new(),
         }
     }
 
@@ -142,15 +222,79 @@ impl Tracker {
         pose_odom: Pose2,
         map_from_odom: &mut MapFromOdom,
     ) -> Option<Pose2> {
+        self.disagrees = false;
+        self.keyframe = false;
         if !config.enabled {
             return None;
         }
-        if let Some(prev) = self.last_odom {
-            let d = prev.position().distance(pose_odom.position());
-            let turn = math::abs(normalize_angle(pose_odom.theta - prev.theta));
-            self.var_m2 += config.odometry_var_m2_per_m * d;
-            self.var_rad2 +=
-                config.odometry_var_rad2_per_rad * turn + config.odometry_var_rad2_per_m * d;
+        // The odometry has not moved since the last scan.
+        let at_rest = self.last_odom.is_some_and(|p| {
+            p.position().distance(pose_odom.position()) < 1e-4
+                && math::abs(normalize_angle(pose_odom.theta - p.theta)) < 1e-4
+        });
+        if let Some(prev) = self.last_odom
+            && config.calibration.enabled
+        {
+            // The increment corrected by the estimate; the pose and the parameters predicted
+            // together, with the random part of the odometry's noise.
+            let d = prev.position().distance(pose_odom.position()) as f64;
+            let turn = math::abs(normalize_angle(pose_odom.theta - prev.theta)) as f64;
+            let scale = config.calibration.random_scale.max(0.0) as f64;
+            let q_m2 = config.odometry_var_m2_per_m as f64 * d * scale;
+            let q_rad2 = (config.odometry_var_rad2_per_rad as f64 * turn
+                + config.odometry_var_rad2_per_m as f64 * d)
+                * scale;
+            let q = Matrix3::from_diagonal(&Vector3::new(q_m2, q_m2, q_rad2));
+            let to = self.calibration.predict(
+                &config.calibration,
+                map_from_odom.map_pose(prev),
+                pose_odom.in_frame_of(prev),
+                &mut self.cov,
+                &q,
+            );
+            *map_from_odom = MapFromOdom::from_start(to, pose_odom);
+        } else if let Some(prev) = self.last_odom {
+            // The motion in the map frame, and its Jacobian with respect to the heading.
+            let from = map_from_odom.map_pose(prev);
+            let to = map_from_odom.map_pose(pose_odom);
+            let d = prev.position().distance(pose_odom.position()) as f64;
+            let turn = math::abs(normalize_angle(pose_odom.theta - prev.theta)) as f64;
+            let f = Matrix3::new(
+                1.0,
+                0.0,
+                -(to.y - from.y) as f64,
+                0.0,
+                1.0,
+                (to.x - from.x) as f64,
+                0.0,
+                0.0,
+                1.0,
+            );
+            let q_m2 = config.odometry_var_m2_per_m as f64 * d;
+            let q_rad2 = config.odometry_var_rad2_per_rad as f64 * turn
+                + config.odometry_var_rad2_per_m as f64 * d;
+            self.cov = f * self.cov * f.transpose()
+                + Matrix3::from_diagonal(&Vector3::new(q_m2, q_m2, q_rad2));
+        }
+        if self.last_odom.is_some() {
+            if at_rest && self.moving {
+                // The slide is along the robot's heading.
+                let th = map_from_odom.map_pose(pose_odom).theta;
+                let (c, s) = (math::cos(th) as f64, math::sin(th) as f64);
+                let v = config.stop_var_m2 as f64;
+                self.cov += Matrix3::new(
+                    v * c * c,
+                    v * c * s,
+                    0.0,
+                    v * c * s,
+                    v * s * s,
+                    0.0,
+                    0.0,
+                    0.0,
+                    config.stop_var_rad2 as f64,
+                );
+            }
+            self.moving = !at_rest;
         }
         self.last_odom = Some(pose_odom);
         self.scans += 1;
@@ -160,37 +304,66 @@ impl Tracker {
         // Like gmapping's linearUpdate/angularUpdate and slam_toolbox's
         // minimum_travel_distance/minimum_travel_heading: between matches the odometry alone
         // carries the pose.
-        if let Some(at) = self.matched_odom
-            && at.position().distance(pose_odom.position()) < config.min_travel_m
-            && math::abs(normalize_angle(pose_odom.theta - at.theta)) < config.min_turn_rad
-        {
-            return None;
+        if let Some(at) = self.matched_odom {
+            let moved = at.position().distance(pose_odom.position());
+            let turned = math::abs(normalize_angle(pose_odom.theta - at.theta));
+            let stopped_elsewhere =
+                config.match_at_rest && at_rest && (moved > 1e-4 || turned > 1e-4);
+            if moved < config.min_travel_m && turned < config.min_turn_rad && !stopped_elsewhere {
+                return None;
+            }
         }
         self.matched_odom = Some(pose_odom);
+        self.keyframe = true;
         let predicted = map_from_odom.map_pose(pose_odom);
         let result = matcher.match_scan(grid, hits, scan, laser, predicted, &config.matcher);
         self.matches += 1;
         self.last = Some(result.quality);
+        self.disagrees = result.quality.distrust == Some(super::Distrust::PoorFit);
         if !result.quality.trusted() {
             return None;
         }
         self.trusted += 1;
-        let r_m2 = config.match_sigma_m * config.match_sigma_m;
-        let r_rad2 = config.match_sigma_rad * config.match_sigma_rad;
-        let k_m = self.var_m2 / (self.var_m2 + r_m2).max(f32::MIN_POSITIVE);
-        let k_rad = self.var_rad2 / (self.var_rad2 + r_rad2).max(f32::MIN_POSITIVE);
+        // Information-form update with the match's information along what it constrains.
+        let scale = config.information_scale.max(0.0) as f64;
+        let h = Matrix3::from_fn(|a, b| result.information[a][b] as f64 * scale);
         let c = result.quality.correction;
-        let pose = Pose2::new(
-            predicted.x + k_m * c[0],
-            predicted.y + k_m * c[1],
-            predicted.theta + k_rad * c[2],
-        );
-        // The heading is pinned down by any match that constrains two directions; the position
-        // only by a full fix (a corridor leaves it uncertain along its axis).
-        self.var_rad2 *= 1.0 - k_rad;
-        if result.quality.constrained == 3 {
-            self.var_m2 *= 1.0 - k_m;
+        let delta = Vector3::new(c[0] as f64, c[1] as f64, c[2] as f64);
+        let mut prior_info = self.cov.try_inverse()?;
+        let gate = config.innovation_gate as f64;
+        if gate < 0.0 {
+            let slack = self.cov + Matrix3::from_diagonal_element(9e-6);
+            let d2 = slack
+                .try_inverse()
+                .map_or(f64::INFINITY, |i| delta.dot(&(i * delta)));
+            if d2.is_nan() || d2 > -gate {
+                self.trusted -= 1;
+                return None;
+            }
         }
+        let step = if config.calibration.enabled {
+            self.calibration.update(&mut self.cov, &h, &delta)?
+        } else {
+            if gate > 0.0 {
+                let d2 = delta.dot(&(prior_info * delta));
+                if d2.is_finite() && d2 > gate {
+                    self.cov *= d2 / gate;
+                    prior_info /= d2 / gate;
+                }
+            }
+            let cov = (prior_info + h).try_inverse()?;
+            let step = cov * h * delta;
+            if !step.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            self.cov = 0.5 * (cov + cov.transpose());
+            step
+        };
+        let pose = Pose2::new(
+            predicted.x + step[0] as f32,
+            predicted.y + step[1] as f32,
+            normalize_angle(predicted.theta + step[2] as f32),
+        );
         *map_from_odom = MapFromOdom::from_start(pose, pose_odom);
         Some(pose)
     }
@@ -211,13 +384,43 @@ impl Tracker {
         map_from_odom: &mut Option<MapFromOdom>,
         pose_map: &mut Pose2,
     ) {
-        if let Some(transform) = map_from_odom.as_mut()
-            && let Some(corrected) = self.on_scan(
+        // Before the odometry frame is set the scan is drawn at the start pose: a keyframe.
+        self.keyframe = map_from_odom.is_none();
+        if let Some(transform) = map_from_odom.as_mut() {
+            if let Some(corrected) = self.on_scan(
                 config, grid, hits, matcher, scan, laser, pose_odom, transform,
-            )
-        {
-            *pose_map = corrected;
+            ) {
+                *pose_map = corrected;
+            } else if config.enabled && config.calibration.enabled {
+                // The prediction from the corrected increment moved the transform.
+                *pose_map = transform.map_pose(pose_odom);
+            }
         }
+    }
+
+    /// The estimate of the odometry's systematic errors ([`LocalizeConfig::calibration`];
+    /// turn gain 1 and curvature 0 until calibrating starts).
+    pub fn calibration(&self) -> &OdometryCalibration {
+        &self.calibration
+    }
+
+    /// Whether the last scan may be written into the matcher's reference
+    /// ([`LocalizeConfig::map_only_agreeing`]
+    /// and [`LocalizeConfig::reference_keyframes_only`]).
+    pub fn maps_scan(&self, config: &LocalizeConfig) -> bool {
+        !(config.map_only_agreeing && self.disagrees)
+            && (self.keyframe || !config.reference_keyframes_only)
+    }
+
+    /// Whether the last scan was matched (or came before the odometry frame was set).
+    pub fn keyframe(&self) -> bool {
+        self.keyframe
+    }
+
+    /// Whether the last scan may be written into the occupancy grid
+    /// ([`LocalizeConfig::grid_only_agreeing`]).
+    pub fn grids_scan(&self, config: &LocalizeConfig) -> bool {
+        !(config.grid_only_agreeing && self.disagrees)
     }
 
     /// Scans matched so far.

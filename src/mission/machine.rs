@@ -253,20 +253,28 @@ impl<const N: usize> Mission<N> {
             &mut self.senses.map_from_odom,
             &mut self.senses.pose_map,
         );
-        integrate_scan(
-            &mut map.grid,
-            scan,
-            self.senses.pose_map,
-            &self.config.laser,
-            &self.config.sensor,
-            &mut map.trav,
-        )
-        .map_err(MissionError::Sensor)?;
+        if self.localizer.grids_scan(&self.config.localize) {
+            integrate_scan(
+                &mut map.grid,
+                scan,
+                self.senses.pose_map,
+                &self.config.laser,
+                &self.config.sensor,
+                &mut map.trav,
+            )
+            .map_err(MissionError::Sensor)?;
+        }
         if self.config.localize.enabled {
             let graph = &self.config.localize.graph;
-            if !(graph.enabled && graph.reference_keyframes_only) {
-                map.hits
-                    .add_scan(scan, &self.config.laser, self.senses.pose_map);
+            if self.localizer.maps_scan(&self.config.localize)
+                && !(graph.enabled && graph.reference_keyframes_only)
+            {
+                map.hits.add_scan_capped(
+                    scan,
+                    &self.config.laser,
+                    self.senses.pose_map,
+                    self.config.localize.max_cell_weight,
+                );
             }
             self.keyframe_graph(scan, map)?;
         }

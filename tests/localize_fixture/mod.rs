@@ -67,7 +67,7 @@ impl HalfExplored {
         let mut grid =
             OccupancyGrid::<CELLS>::new_boxed(*world.geometry(), LogOddsBounds::default())
                 .expect("the house fits");
-        let mut hits = Box::new(HitMap::<CELLS>::new(*world.geometry()));
+        let mut hits = HitMap::<CELLS>::new_boxed(*world.geometry());
         let mut sim = LaserSim::new(laser, 11);
         for pose in TOUR {
             for _ in 0..3 {
