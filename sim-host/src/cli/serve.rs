@@ -77,7 +77,7 @@ pub struct Args {
     /// Range noise of the emulated laser that does not grow with the range, standard deviation
     /// in metres, added in quadrature to --laser-noise's: 0.012 for a SICK LMS1xx's typical
     /// statistical error (SICK: 12 mm, 1 σ, over its whole range). Default 0.
-    #[arg(long, default_value_t = 0.0, value_parser = super::range_sigma_m)]
+    #[arg(long, default_value_t = 0.0, value_parser = super::range_sigma_m, allow_negative_numbers = true)]
     pub laser_noise_m: f32,
     /// The serial speed of the emulated microcontroller on `--pty`, in baud: it answers only a
     /// client that set its line to this speed, as a real serial line would (a pty itself
