@@ -51,7 +51,9 @@ target=${CARGO_TARGET_DIR:-$root/target}
 papillon=$target/release/papillon
 sim=$target/release/papillon-sim
 work=$(mktemp -d "${TMPDIR:-/tmp}/papillon-house-check.XXXXXX")
-echo "house-check: map $map, board $board, slip ${slip:-serve's default}, localize ${localize:-the board's}, laser noise ${noise_m:-0} m beside the board's fraction, logs in $work" >&2
+# (No apostrophe inside ${...:-...} within double quotes: bash pairs it with the next one and
+# the text between is lost.)
+echo "house-check: map $map, board $board, slip ${slip:-as serve defaults}, localize ${localize:-as the board says}, laser noise ${noise_m:-0} m beside the board's fraction, logs in $work" >&2
 
 serve_pid=""
 cleanup() { [ -n "$serve_pid" ] && kill "$serve_pid" 2>/dev/null || true; }
