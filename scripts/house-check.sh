@@ -5,7 +5,8 @@
 # to the seed), then `papillon-sim score` of the saved map against the world's truth.
 #
 #   scripts/house-check.sh [--map house|lab|...] [--limit-s N] [--board FILE] [--faults SPEC]
-#                          [--slip thesis|full|realistic|none] [--localize on|off] SEED...
+#                          [--slip thesis|full|realistic|none] [--localize on|off]
+#                          [--laser-noise-m S] SEED...
 #
 # One line per seed: coverage of the truth, map accuracy (known observable cells whose class
 # matches the truth), final position and heading error (`papillon run`'s saved pose against
@@ -13,7 +14,9 @@
 # how the mission ended (its `done` telemetry; `limit` if it was stopped with SIGTERM at the
 # time limit). `--slip` goes to serve (default: serve's, the thesis's slide), `--localize` to
 # run (default: the board's $.localize.enabled). Issue 18's check: `--slip realistic
-# --localize on`. A house mission takes 15-20 minutes of real time.
+# --localize on`. `--laser-noise-m S` adds serve's range noise that does not grow with the
+# range (S metres, 1 sigma; 0.012 for an LMS1xx's statistical error) to the board's fraction.
+# A house mission takes 15-20 minutes of real time.
 # Release binaries are built into $CARGO_TARGET_DIR (default ./target). Needs jq 1.6+.
 set -euo pipefail
 
@@ -24,6 +27,7 @@ board="$root/boards/sim.json"
 faults=""
 slip=""
 localize=""
+noise_m=""
 seeds=()
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -33,7 +37,8 @@ while [ $# -gt 0 ]; do
         --faults) faults=$2; shift 2 ;;
         --slip) slip=$2; shift 2 ;;
         --localize) localize=$2; shift 2 ;;
-        -h|--help) sed -n 2,17p "$0"; exit 0 ;;
+        --laser-noise-m) noise_m=$2; shift 2 ;;
+        -h|--help) sed -n 2,20p "$0"; exit 0 ;;
         -*) echo "house-check: unknown option $1" >&2; exit 2 ;;
         *) seeds+=("$1"); shift ;;
     esac
@@ -46,7 +51,9 @@ target=${CARGO_TARGET_DIR:-$root/target}
 papillon=$target/release/papillon
 sim=$target/release/papillon-sim
 work=$(mktemp -d "${TMPDIR:-/tmp}/papillon-house-check.XXXXXX")
-echo "house-check: map $map, board $board, slip ${slip:-serve's default}, localize ${localize:-the board's}, logs in $work" >&2
+# (No apostrophe inside ${...:-...} within double quotes: bash pairs it with the next one and
+# the text between is lost.)
+echo "house-check: map $map, board $board, slip ${slip:-as serve defaults}, localize ${localize:-as the board says}, laser noise ${noise_m:-0} m beside the board's fraction, logs in $work" >&2
 
 serve_pid=""
 cleanup() { [ -n "$serve_pid" ] && kill "$serve_pid" 2>/dev/null || true; }
@@ -63,6 +70,7 @@ for seed in "${seeds[@]}"; do
           --truth-log "$dir/truth.jsonl")
     [ -n "$faults" ] && args+=(--faults "$faults")
     [ -n "$slip" ] && args+=(--slip "$slip")
+    [ -n "$noise_m" ] && args+=(--laser-noise-m "$noise_m")
     run_args=()
     [ -n "$localize" ] && run_args+=(--localize "$localize")
     "$sim" "${args[@]}" > "$dir/serve.out" 2> "$dir/serve.err" &

@@ -11,7 +11,12 @@
 //! [`LaserConfig`]. A return beyond `max_range_m` is no return (`None`). A return closer than
 //! the blind zone is reported as measured: the consumer ignores readings below `min_range_m`,
 //! as it must with a real laser. With noise on, each range gets Gaussian noise of standard
-//! deviation `noise_fraction · range` (the thesis's 5 %), from the simulator's own seeded RNG.
+//! deviation `noise_fraction · range` (the thesis's 5 %), from the simulator's own seeded RNG;
+//! [`LaserSim::with_range_sigma_m`] adds a part that does not grow with the range, in
+//! quadrature: `σ = √((noise_fraction · range)² + range_sigma_m²)`. A real time-of-flight laser's
+//! statistical error is mostly that constant part (SICK gives a typical 12 mm, 1 σ, for the
+//! LMS1xx over its whole range: SICK support, "Measurement Errors LMSxxx"), where the
+//! fraction alone makes a laser precise near and noisy far.
 
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::Cell;
@@ -243,6 +248,9 @@ pub struct LaserSim {
     config: LaserConfig,
     rng: ProjectRng,
     noise: bool,
+    /// The range noise's part that does not grow with the range \[m\] (1 σ): see
+    /// [`Self::with_range_sigma_m`].
+    range_sigma_m: f32,
     /// How far the beams reach \[m\] (at least `config.max_range_m`): see
     /// [`Self::with_reach_m`].
     reach_m: f32,
@@ -313,6 +321,7 @@ impl LaserSim {
             config,
             rng: random::seeded(seed),
             noise: config.noise_fraction > 0.0,
+            range_sigma_m: 0.0,
             reach_m: config.max_range_m,
             beams: Vec::new(),
         }
@@ -326,6 +335,18 @@ impl LaserSim {
     /// six at 5 % noise); a laser that reaches only its usable range never shows it.
     pub fn with_reach_m(mut self, reach_m: f32) -> Self {
         self.reach_m = reach_m.max(self.config.max_range_m);
+        self
+    }
+
+    /// Each range's noise gets a part of standard deviation `range_sigma_m` \[m\] that does not
+    /// grow with the range, added in quadrature to the configuration's `noise_fraction · range`
+    /// (noise turns on if it is positive). A value that is not finite or not positive adds
+    /// nothing.
+    pub fn with_range_sigma_m(mut self, range_sigma_m: f32) -> Self {
+        if range_sigma_m.is_finite() && range_sigma_m > 0.0 {
+            self.range_sigma_m = range_sigma_m;
+            self.noise = true;
+        }
         self
     }
 
@@ -396,7 +417,8 @@ impl LaserSim {
                 .range
                 .map(|r| {
                     if self.noise {
-                        (r + cfg.noise_fraction * r * random::gaussian(&mut self.rng)).max(0.0)
+                        let sigma = (cfg.noise_fraction * r).hypot(self.range_sigma_m);
+                        (r + sigma * random::gaussian(&mut self.rng)).max(0.0)
                     } else {
                         r
                     }
@@ -778,6 +800,55 @@ mod tests {
         let sd = (r.iter().map(|x| (x - mean).powi(2)).sum::<f32>() / r.len() as f32).sqrt();
         assert!((mean - 3.0).abs() < 0.03, "mean {mean}");
         assert!((sd - 0.15).abs() < 0.02, "sd {sd}");
+    }
+
+    /// Mean and standard deviation of 1000 beams' ranges from `pose` with `laser`.
+    fn spread(laser: &mut LaserSim, w: &World, pose: Pose2) -> (f32, f32) {
+        let r: Vec<f32> = laser
+            .scan(w, pose, &[])
+            .beams()
+            .iter()
+            .map(|b| b.range_m.unwrap())
+            .collect();
+        let mean = r.iter().sum::<f32>() / r.len() as f32;
+        let sd = (r.iter().map(|x| (x - mean).powi(2)).sum::<f32>() / r.len() as f32).sqrt();
+        (mean, sd)
+    }
+
+    #[test]
+    fn a_range_sigma_is_the_same_near_and_far_and_adds_in_quadrature() {
+        let w = room();
+        let one_way = LaserConfig {
+            first_angle_rad: 0.0,
+            step_rad: 0.0,
+            beam_count: 1000,
+            noise_fraction: 0.0,
+            ..LaserConfig::thesis()
+        };
+        let near = Pose2::new(4.5, 3.0, 0.0); // 1 m to the east wall.
+        let far = Pose2::new(2.5, 3.0, 0.0); // 3 m.
+        let mut sick = LaserSim::new(one_way, 4).with_range_sigma_m(0.012);
+        assert!(sick.noise());
+        for (pose, range) in [(near, 1.0), (far, 3.0)] {
+            let (mean, sd) = spread(&mut sick, &w, pose);
+            assert!((mean - range).abs() < 0.003, "mean {mean} at {range} m");
+            assert!((sd - 0.012).abs() < 0.0015, "sd {sd} at {range} m");
+        }
+        // 1 % of 3 m (3 cm) and 4 cm: 5 cm.
+        let both = LaserConfig {
+            noise_fraction: 0.01,
+            ..one_way
+        };
+        let mut laser = LaserSim::new(both, 5).with_range_sigma_m(0.04);
+        let (_, sd) = spread(&mut laser, &w, far);
+        assert!((sd - 0.05).abs() < 0.005, "sd {sd}");
+        // Not finite or not positive: nothing added, noise stays off.
+        for bad in [0.0, -0.01, f32::NAN, f32::INFINITY] {
+            let mut exact = LaserSim::new(one_way, 4).with_range_sigma_m(bad);
+            assert!(!exact.noise());
+            let (mean, sd) = spread(&mut exact, &w, far);
+            assert!((mean - 3.0).abs() < 1e-4 && sd < 1e-4, "{bad}: {mean} {sd}");
+        }
     }
 
     #[test]

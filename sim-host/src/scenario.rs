@@ -168,6 +168,10 @@ pub struct ScenarioSpec {
     /// `None`: the mission's laser's (the thesis's 5 %). A SICK LMS1xx is nearer 0.3 %
     /// (about 12 mm at 4 m).
     pub laser_noise: Option<f32>,
+    /// Range noise of the simulated laser that does not grow with the range, standard
+    /// deviation \[m\] (the simulator's only, [`crate::laser::LaserSim::with_range_sigma_m`]);
+    /// `None`: none.
+    pub laser_noise_m: Option<f32>,
     /// The optimizer's parameter set (`--preset`; default
     /// [`papillon::explore::DEFAULT_PRESET`]; the frontier rules ignore it).
     pub preset: Preset,
@@ -194,6 +198,7 @@ impl Default for ScenarioSpec {
             slip: Slip::Thesis,
             localize: false,
             laser_noise: None,
+            laser_noise_m: None,
             preset: papillon::explore::DEFAULT_PRESET,
             tuning: None,
         }
@@ -312,6 +317,7 @@ impl Setup {
         if let Some(noise) = spec.laser_noise {
             run.mission.laser.noise_fraction = noise;
         }
+        run.laser_range_sigma_m = spec.laser_noise_m.unwrap_or(0.0);
         if !world.start_is_clear(run.body.radius_m) {
             let s = world.start();
             return Err(format!(

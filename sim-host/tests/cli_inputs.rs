@@ -564,3 +564,20 @@ fn fixed_choices_are_listed_and_a_near_miss_gets_a_suggestion() {
         assert!(help.contains(values), "{values} not in:\n{help}");
     }
 }
+
+/// `--laser-noise-m` (`serve`, `mission`) takes a standard deviation in metres from 0 to 0.5;
+/// anything else is refused naming the flag, before a server starts or a mission runs.
+#[test]
+fn laser_noise_m_refuses_what_no_laser_has() {
+    for value in ["-0.01", "0.6", "NaN", "inf", "12mm"] {
+        let mut args = SERVE.to_vec();
+        args.extend(["--laser-noise-m", value]);
+        let out = sim(&args, Duration::from_secs(10));
+        assert_refused(&out, &["--laser-noise-m"]);
+        let out = sim(
+            &["mission", "--map", "lab", "--laser-noise-m", value],
+            Duration::from_secs(10),
+        );
+        assert_refused(&out, &["--laser-noise-m"]);
+    }
+}

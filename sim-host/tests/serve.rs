@@ -678,6 +678,64 @@ fn laser_noise_perturbs_each_scan_afresh_around_the_true_ranges() {
     assert!((0.7..1.3).contains(&variance), "scaled variance {variance}");
 }
 
+/// `--laser-noise-m S`: each range gets Gaussian noise of S metres whatever the range (a real
+/// laser's statistical error), drawn afresh for every scan.
+#[test]
+fn laser_noise_m_perturbs_near_and_far_ranges_alike() {
+    let sigma_m = 0.012;
+    let server = Server::start(&["--laser-noise-m", "0.012"]);
+    let addr = server.endpoint("laser lms1xx tcp");
+    let world = World::load("empty", MAP_RESOLUTION_M).unwrap();
+    let truth =
+        LaserSim::new(laser_config(ScanConfig::DEFAULT_50HZ), 1).scan(&world, world.start(), &[]);
+    let scans = laser_scans(&addr, 20, Duration::from_secs(3));
+    assert_eq!(scans.len(), 20, "scans received");
+    let values: Vec<&[u16]> = scans
+        .iter()
+        .map(|t| &t.distance_channel().expect("DIST1").values[..])
+        .collect();
+    // Per range bin: (beams, sum of each beam's sample variance over the scans / σ²), for
+    // ranges under 2 m and over 3 m. Each beam's spread around its own mean: what is
+    // compared is the noise, not how the test's noise-free scan rounds against serve's.
+    let mut near = (0usize, 0.0f64);
+    let mut far = (0usize, 0.0f64);
+    for (i, beam) in truth.beams().iter().enumerate() {
+        let Some(r) = beam.range_m.filter(|&r| r > 0.5 && r < 10.0) else {
+            continue;
+        };
+        let ranges: Vec<f64> = values.iter().map(|v| f64::from(v[i]) / 1000.0).collect();
+        for x in &ranges {
+            // 6 standard deviations and a centimetre of rounding: never that far out.
+            let err_m = x - f64::from(r);
+            assert!(
+                err_m.abs() < 6.0 * sigma_m + 0.01,
+                "beam {i}: {err_m} m off {r} m"
+            );
+        }
+        let mean = ranges.iter().sum::<f64>() / ranges.len() as f64;
+        let var =
+            ranges.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (ranges.len() - 1) as f64;
+        let bin = if r < 2.0 {
+            &mut near
+        } else if r > 3.0 {
+            &mut far
+        } else {
+            continue;
+        };
+        bin.0 += 1;
+        bin.1 += var / (sigma_m * sigma_m);
+    }
+    for (name, (n, sum)) in [("under 2 m", near), ("over 3 m", far)] {
+        assert!(n > 20, "{name}: {n} beams compared");
+        // The millimetre rounding adds (1/12) mm², under 0.1 % of 12 mm squared.
+        let variance = sum / n as f64;
+        assert!(
+            (0.7..1.3).contains(&variance),
+            "{name}: scaled variance {variance}"
+        );
+    }
+}
+
 #[test]
 fn driving_into_a_wall_sets_the_front_bumper_and_stall_flags() {
     let mut b = Bench::new();

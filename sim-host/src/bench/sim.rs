@@ -34,6 +34,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
         slip: Slip::Thesis,
         localize: false,
         laser_noise: None,
+        laser_noise_m: None,
         preset: preset_from_name(&spec.preset)?,
         tuning: match &spec.params {
             Some(values) => Some(super::params::tuning(

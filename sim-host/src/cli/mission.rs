@@ -80,6 +80,12 @@ pub struct Args {
     /// at 4 m), 0 for noise-free ranges.
     #[arg(long, allow_negative_numbers = true)]
     pub laser_noise: Option<String>,
+    /// Range noise of the simulated laser that does not grow with the range, standard
+    /// deviation in metres, added in quadrature to --laser-noise's (the simulator only: the
+    /// mission's sensor model still knows only the fraction): 0.012 for a SICK LMS1xx's
+    /// typical statistical error (SICK: 12 mm, 1 σ); default 0.
+    #[arg(long, allow_negative_numbers = true)]
+    pub laser_noise_m: Option<String>,
     /// Cell size in metres (the map file's own for .yaml).
     #[arg(long, default_value = "0.1", allow_negative_numbers = true)]
     pub resolution: String,
@@ -184,6 +190,10 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         Some(t) => Some(super::noise_fraction(t).map_err(|e| format!("--laser-noise: {e}"))?),
         None => None,
     };
+    let laser_noise_m = match &args.laser_noise_m {
+        Some(t) => Some(super::range_sigma_m(t).map_err(|e| format!("--laser-noise-m: {e}"))?),
+        None => None,
+    };
     let localize = match args.localize.as_str() {
         "on" => true,
         "off" => false,
@@ -205,6 +215,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         slip,
         localize,
         laser_noise,
+        laser_noise_m,
         preset,
         tuning: None,
     })
@@ -289,6 +300,7 @@ mod tests {
             slip: "thesis".into(),
             localize: "off".into(),
             laser_noise: None,
+            laser_noise_m: None,
             json: false,
             png: None,
             frames: None,
@@ -328,6 +340,16 @@ mod tests {
         })
         .unwrap();
         assert_eq!(sick.run.mission.laser.noise_fraction, 0.003);
+        assert_eq!(m.laser.noise_fraction, 0.05);
+        assert_eq!(s.run.laser_range_sigma_m, 0.0);
+        let sick_m = setup_from_args(&Args {
+            laser_noise_m: Some("0.012".into()),
+            ..args()
+        })
+        .unwrap();
+        // The simulator's laser only: the mission's sensor model keeps its fraction.
+        assert_eq!(sick_m.run.laser_range_sigma_m, 0.012);
+        assert_eq!(sick_m.run.mission.laser.noise_fraction, 0.05);
         assert_eq!(
             m.explore.objective,
             papillon::explore::ObjectiveKind::Efficient
@@ -453,6 +475,27 @@ mod tests {
                     ..args()
                 },
                 "--laser-noise:",
+            ),
+            (
+                Args {
+                    laser_noise_m: Some("-0.01".into()),
+                    ..args()
+                },
+                "--laser-noise-m:",
+            ),
+            (
+                Args {
+                    laser_noise_m: Some("0.6".into()),
+                    ..args()
+                },
+                "--laser-noise-m:",
+            ),
+            (
+                Args {
+                    laser_noise_m: Some("inf".into()),
+                    ..args()
+                },
+                "--laser-noise-m:",
             ),
             (
                 Args {

@@ -46,3 +46,17 @@ pub(crate) fn noise_fraction(s: &str) -> Result<f32, String> {
         _ => Err(format!("{s:?} is not a fraction of the range in [0, 1)")),
     }
 }
+
+/// Largest `--laser-noise-m` \[m\]: a laser whose ranges scatter by more is no rangefinder.
+pub(crate) const MAX_RANGE_SIGMA_M: f32 = 0.5;
+
+/// A `--laser-noise-m` value (`mission`, `serve`): a standard deviation in metres in
+/// [0, [`MAX_RANGE_SIGMA_M`]].
+pub(crate) fn range_sigma_m(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && (0.0..=MAX_RANGE_SIGMA_M).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "{s:?} is not a standard deviation in metres in [0, {MAX_RANGE_SIGMA_M}]"
+        )),
+    }
+}

@@ -74,6 +74,11 @@ pub struct Args {
     /// `boards/sim.json`.
     #[arg(long, default_value_t = 0.0, value_parser = super::noise_fraction)]
     pub laser_noise: f32,
+    /// Range noise of the emulated laser that does not grow with the range, standard deviation
+    /// in metres, added in quadrature to --laser-noise's: 0.012 for a SICK LMS1xx's typical
+    /// statistical error (SICK: 12 mm, 1 σ, over its whole range). Default 0.
+    #[arg(long, default_value_t = 0.0, value_parser = super::range_sigma_m, allow_negative_numbers = true)]
+    pub laser_noise_m: f32,
     /// The serial speed of the emulated microcontroller on `--pty`, in baud: it answers only a
     /// client that set its line to this speed, as a real serial line would (a pty itself
     /// carries bytes at any speed). Default: any speed.
@@ -193,6 +198,7 @@ impl From<Args> for ServeConfig {
                 Subclass::P3dxSh => arcos::Subclass::P3dxSh,
             },
             laser_noise_fraction: a.laser_noise,
+            laser_range_sigma_m: a.laser_noise_m,
             baud: a.baud.and_then(|b| b.parse().ok()),
             wheel_errors: a.wheel_errors,
             start: a.start,

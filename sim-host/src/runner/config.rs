@@ -42,6 +42,10 @@ pub struct RunConfig {
     pub max_sim_time_s: f64,
     /// How the missions are pumped: as the runner always did, or as `papillon run` does.
     pub pump: PumpModel,
+    /// The simulated laser's range noise that does not grow with the range, standard
+    /// deviation \[m\] ([`crate::laser::LaserSim::with_range_sigma_m`]; the mission's laser
+    /// configuration knows only its fraction of the range). 0: none.
+    pub laser_range_sigma_m: f32,
 }
 
 /// What the mission sees of time and of the world beyond its sensors: the runner's ideal
@@ -153,6 +157,7 @@ impl RunConfig {
             starts: None,
             max_sim_time_s,
             pump: PumpModel::ideal(),
+            laser_range_sigma_m: 0.0,
         }
     }
 }

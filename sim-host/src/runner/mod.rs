@@ -296,7 +296,8 @@ impl<const N: usize> Runner<N> {
                     let laser = LaserSim::new(
                         config.mission.laser,
                         derive_seed(world_seed, k, STREAM_LASER),
-                    );
+                    )
+                    .with_range_sigma_m(config.laser_range_sigma_m);
                     match config.pump.laser_reach_m {
                         Some(reach_m) => laser.with_reach_m(reach_m),
                         None => laser,

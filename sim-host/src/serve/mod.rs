@@ -104,6 +104,11 @@ pub struct ServeConfig {
     /// configuration (`boards/sim.json`: 5 %, the thesis's); the binary predicts what the
     /// runner predicts only on the same laser (`scripts/house-check.sh` passes the board's).
     pub laser_noise_fraction: f32,
+    /// Range noise of the emulated laser that does not grow with the range, standard
+    /// deviation \[m\], added in quadrature to [`Self::laser_noise_fraction`]'s
+    /// ([`LaserSim::with_range_sigma_m`]): a real laser's statistical error (a SICK LMS1xx:
+    /// typically 12 mm). 0: none.
+    pub laser_range_sigma_m: f32,
     /// The serial speed of the emulated microcontroller on a pty \[baud\]: it answers only a
     /// client whose line is set to this speed (a pty carries bytes at any speed; a real serial
     /// line at the wrong speed delivers garbage, modelled as lost bytes). `None`: any speed.
@@ -143,6 +148,8 @@ struct Sim {
     subclass: Subclass,
     /// See [`ServeConfig::laser_noise_fraction`].
     laser_noise_fraction: f32,
+    /// See [`ServeConfig::laser_range_sigma_m`].
+    laser_range_sigma_m: f32,
     /// See [`ServeConfig::baud`].
     baud: Option<u32>,
     /// Per robot: whether a client owns its microcontroller (one client at a time, as a
@@ -221,7 +228,9 @@ impl Sim {
         // averaged out in the map and punched the same holes through walls scan after scan).
         let n = self.scans.fetch_add(1, Ordering::Relaxed);
         let seed = crate::runner::derive_seed(self.seed, robot, 16 + n);
-        let scan = LaserSim::new(config, seed).scan(&self.world, pose, &others);
+        let scan = LaserSim::new(config, seed)
+            .with_range_sigma_m(self.laser_range_sigma_m)
+            .scan(&self.world, pose, &others);
         let t_s = self.now_s();
         self.record(|rec| rec.scan(t_s, robot, pose.compose(mount), &scan));
         scan
@@ -285,6 +294,7 @@ impl Server {
             identity: config.identity,
             subclass: config.subclass,
             laser_noise_fraction: config.laser_noise_fraction,
+            laser_range_sigma_m: config.laser_range_sigma_m,
             baud: config.baud,
             owned: (0..n).map(|_| AtomicBool::new(false)).collect(),
             bodies: Mutex::new(bodies),
