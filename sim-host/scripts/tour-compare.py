@@ -8,14 +8,21 @@ Usage (from the repository root, after
         seeds 25..34 of each map (comma-separated: house,empty,lab or gen-00,...) and method
         (comma-separated), one mission at a time under nice; generated plans get the set's
         battery rule, ceil(2 x free area in m²) steps. Writes OUTDIR/LABEL.json and prints
-        medians per map and method.
+        medians per map and method. TOUR_ARGS adds mission options to every run (e.g.
+        TOUR_ARGS="--localize on" or "--slip none"); each row ends with the mission's wall
+        time in seconds (it depends on the machine's load), the end pose error and the map's wall
+        position error (m).
     sim-host/scripts/tour-compare.py pairs A.json:METHOD B.json:METHOD
         per map and over all: runs >= 99 %, mean coverage, medians of steps and metres over the
         seeds where both reach 99 %; and at equal coverage (the lower final coverage of the
         pair, pairs where it is >= 50 %: the first step count and distance at which each
         mission reached it).
+    sim-host/scripts/tour-compare.py summary A.json:METHOD [B.json:METHOD ...]
+        per map, each run's runs >= 99 % and mean coverage side by side; then per run the
+        totals: runs >= 99 %, maps with >= 9 of 10, mean coverage, end reasons, and the sum of
+        the missions' wall times.
 """
-import json, math, os, statistics as st, subprocess, sys
+import json, math, os, shlex, statistics as st, subprocess, sys, time
 
 SEEDS = list(range(25, 35))
 
@@ -35,6 +42,7 @@ def run(outdir, label, binp, maps, methods):
     os.makedirs(outdir, exist_ok=True)
     maps = maps.split(",")
     batt = batteries(binp) if any(m.startswith("gen-") for m in maps) else {}
+    extra = shlex.split(os.environ.get("TOUR_ARGS", ""))
     out = {}
     for m in maps:
         for meth in methods.split(","):
@@ -44,13 +52,18 @@ def run(outdir, label, binp, maps, methods):
                        "--seed", str(s), "--json"]
                 if m in batt:
                     cmd += ["--battery", str(batt[m])]
+                cmd += extra
+                t0 = time.monotonic()
                 d = json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout)
+                wall_s = time.monotonic() - t0
                 rows.append((d["coverage"], d["steps"], d["distance_m"], d["decisions"], d["reason"],
-                             d["coverage_curve"], d["coverage_distance_curve"], d["decision_ms_p50"]))
+                             d["coverage_curve"], d["coverage_distance_curve"], d["decision_ms_p50"], wall_s,
+                             max(r["pose_error_m"] for r in d["per_robot"]),
+                             d["map_accuracy"]["wall_error_m"]))
             ok = sum(r[0] >= 0.99 for r in rows)
             print(f"{label} {m} {meth}: runs >= 99 % {ok}/10, median steps {st.median(r[1] for r in rows):.1f}, "
                   f"metres {st.median(r[2] for r in rows):.1f}, decisions {st.median(r[3] for r in rows):.1f}, "
-                  f"mean coverage {st.mean(r[0] for r in rows):.3f}", flush=True)
+                  f"mean coverage {st.mean(r[0] for r in rows):.3f}, wall {sum(r[8] for r in rows):.1f} s", flush=True)
             out[f"{m}/{meth}"] = rows
     json.dump(out, open(os.path.join(outdir, f"{label}.json"), "w"))
 
@@ -95,10 +108,49 @@ def pairs(spec_a, spec_b):
               f"metres {pct(st.median(e[4] for e in eq), st.median(e[5] for e in eq))}")
 
 
+def med(rows, i):
+    v = [x[i] for x in rows if len(x) > i]
+    return f"{st.median(v):.3f}" if v else "—"
+
+
+def summary(*specs):
+    runs = []
+    for spec in specs:
+        f, m = spec.rsplit(":", 1)
+        d = json.load(open(f))
+        runs.append((spec, {k.split("/")[0]: v for k, v in d.items() if k.endswith("/" + m)}))
+    maps = sorted({p for _, r in runs for p in r})
+    print("| map | " + " | ".join(s for s, _ in runs) + " |")
+    print("|---|" + "---|" * len(runs))
+    for p in maps:
+        cells = []
+        for _, r in runs:
+            rows = r.get(p)
+            cells.append("—" if not rows else
+                         f"{sum(x[0] >= 0.99 for x in rows)}, {100 * st.mean(x[0] for x in rows):.1f} %")
+        print(f"| {p} | " + " | ".join(cells) + " |")
+    print()
+    print("| run | missions | runs >= 99 % | maps >= 9/10 | mean coverage | ends | wall (s) | end pose error (median, m) | wall error (median, m) |")
+    print("|---|--:|--:|--:|--:|---|--:|--:|--:|")
+    for spec, r in runs:
+        rows = [x for v in r.values() for x in v]
+        ends = {}
+        for x in rows:
+            ends[x[4]] = ends.get(x[4], 0) + 1
+        wall = sum(x[8] for x in rows if len(x) > 8)
+        good = sum(sum(x[0] >= 0.99 for x in v) >= 9 for v in r.values())
+        print(f"| {spec} | {len(rows)} | {sum(x[0] >= 0.99 for x in rows)} | {good} | "
+              f"{100 * st.mean(x[0] for x in rows):.1f} % | "
+              + ", ".join(f"{k} {n}" for k, n in sorted(ends.items(), key=lambda kv: -kv[1]))
+              + f" | {wall:.0f} | {med(rows, 9)} | {med(rows, 10)} |")
+
+
 if __name__ == "__main__":
     if len(sys.argv) == 7 and sys.argv[1] == "run":
         run(*sys.argv[2:])
     elif len(sys.argv) == 4 and sys.argv[1] == "pairs":
         pairs(*sys.argv[2:])
+    elif len(sys.argv) >= 3 and sys.argv[1] == "summary":
+        summary(*sys.argv[2:])
     else:
         sys.exit(__doc__)

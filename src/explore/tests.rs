@@ -1373,7 +1373,7 @@ fn shut_mouth_of(grid: &Grid, looked: &[Point2]) -> Option<Cell> {
         )
         .unwrap();
     let mut search = Box::new(MouthSearch::<CELLS>::new());
-    search.find(grid, &trav, &field, looked)
+    search.find(grid, &trav, &field, looked).map(|m| m.stand)
 }
 
 #[test]

@@ -27,7 +27,8 @@
 //! - **Deciding**: a decision by the configured selector ([`SelectorKind`]), computed inside
 //!   [`Mission::step`] from the [`Workspace`]. `Outcome::Done` (no frontier reachable) first
 //!   sends the robot to look from the mouth of a passage open in Free cells but shut in the
-//!   planning layer, once per passage ([`crate::explore::shut_mouth`]); with none left it counts
+//!   planning layer, once per passage, its walls there first lowered to one return's evidence
+//!   so that the look draws them again ([`crate::explore::shut_mouth`]); with none left it counts
 //!   as a failed decision: [`MissionConfig::max_failed_decisions`] of them in a row end the
 //!   mission with [`DoneReason::NothingReachable`] (one look can be cut off for a moment by a
 //!   return the monitor just stopped for, which fresh scans clear). A failed decision is

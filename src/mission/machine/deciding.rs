@@ -223,11 +223,20 @@ impl<const N: usize> Mission<N> {
             return None;
         }
         let (field, search) = ws.mouth_parts();
-        let cell = search.find(&map.grid, &map.trav, field, &self.mouths_looked)?;
-        let mouth = map.grid.geometry().cell_center(cell);
+        let found = search.find(&map.grid, &map.trav, field, &self.mouths_looked)?;
+        let geom = *map.grid.geometry();
+        let mouth = geom.cell_center(found.stand);
         // Remembered whether or not the robot gets there: it is not chosen again.
         let _ = self.mouths_looked.push(mouth);
         let waypoints = self.plan_to(self.senses.pose_map, &[mouth], map, ws).ok()?;
+        // The passage's walls are decided again by the scans of the way there and the look.
+        crate::explore::shut_mouth::doubt_walls(
+            &mut map.grid,
+            geom.cell_center(found.mouth),
+            crate::explore::shut_mouth::DOUBT_RADIUS_M,
+            self.config.sensor.occupied_log_odds,
+            &mut map.trav,
+        );
         let mut targets = heapless::Vec::new();
         let _ = targets.push(mouth);
         let decision = self.errand_decision(targets, waypoints);
