@@ -61,10 +61,8 @@ fn a_drifted_return_to_a_furnished_room_is_closed_at_the_true_pose() {
     let mut local: Box<LocalMap<LOCAL_CELLS>> = bytemuck::zeroed_box();
     let mut m = matcher();
     let c = ClosureConfig::default();
-    // Two drifts at a place the matcher constrains in every direction. (Not every place: with
-    // the point-to-line matcher, a probe of 8 places x 7 headings x these 2 drifts in this
-    // room had 9 closures refused and 20 of 103 accepted more than 0.1 m off the truth;
-    // docs/experiments.md, the pose graph's merge note. The graph stays off by default.)
+    // Two drifts at a place the matcher constrains in every direction (many more places and
+    // headings: `drifted_returns_are_closed_at_the_truth_or_refused`).
     let cases = [
         (Pose2::new(4.0, 3.0, 0.3), (0.3, -0.2, 0.12)),
         (Pose2::new(4.0, 3.0, 0.3), (-0.25, 0.3, -0.15)),
@@ -143,4 +141,74 @@ fn candidates_are_old_and_near() {
     // At 9 m nothing is old enough; far from all, nothing.
     assert_eq!(candidate(&store, pose_of, at(2.4), 9.0, &c), None);
     assert_eq!(candidate(&store, pose_of, at(8.6), 30.0, &c), None);
+}
+
+/// Many drifted returns to the furnished room: 8 places x 7 headings x the two drifts of the
+/// test above, old keyframes from its 6 poses, laser noise 0.3 %. No accepted closure may be
+/// more than 0.1 m off the truth, and most returns to the places the old keyframes saw well
+/// must be closed. (Before the returns layer's `clear` also forgot the per-cell statistics
+/// the point-to-line fit reads, the local map of one attempt kept the surfaces of the
+/// attempts before it, drawn on another lattice: 76 of these 112 were accepted, 29 of them
+/// 0.14-0.84 m and up to 17° off.)
+#[test]
+fn drifted_returns_are_closed_at_the_truth_or_refused() {
+    let (walls, _) = room();
+    let laser = LaserConfig::lms1xx();
+    let old = [
+        Pose2::new(2.0, 2.0, 0.0),
+        Pose2::new(3.5, 2.5, 0.4),
+        Pose2::new(5.0, 3.0, 1.2),
+        Pose2::new(6.5, 2.0, 2.5),
+        Pose2::new(4.5, 5.0, -2.8),
+        Pose2::new(2.0, 4.5, -1.5),
+    ];
+    let store = keep(&walls, &old, &laser);
+    let mut local: Box<LocalMap<LOCAL_CELLS>> = bytemuck::zeroed_box();
+    let mut m = matcher();
+    let c = ClosureConfig::default();
+    // The first five places lie among the old keyframes; the last three (the east end, the
+    // north wall) are seen by them from afar or not at all, and may be refused.
+    let places = [
+        (1.5, 1.5),
+        (2.2, 3.5),
+        (4.0, 1.5),
+        (4.5, 4.0),
+        (5.5, 2.5),
+        (7.3, 1.5),
+        (7.5, 5.5),
+        (3.5, 5.8),
+    ];
+    let drifts = [(0.3, -0.2, 0.12), (-0.25, 0.3, -0.15)];
+    let (mut accepted, mut accepted_near, mut near, mut worst) = (0, 0, 0, (0.0f32, 0.0f32));
+    for (p, &(x, y)) in places.iter().enumerate() {
+        for h in 0..7 {
+            let truth = Pose2::new(x, y, -3.0 + h as f32 * 6.0 / 7.0);
+            for (d, &(dx, dy, dth)) in drifts.iter().enumerate() {
+                let predicted = Pose2::new(truth.x + dx, truth.y + dy, truth.theta + dth);
+                render_old(&mut local, &store, &old, predicted, &laser);
+                let seed = (p * 100 + h * 10 + d) as u64;
+                let scan = scan_at(&walls, truth, &laser, 0.003, seed);
+                let (verdict, q) = local.close(&mut m, &scan, &laser, predicted, &config(), &c);
+                near += usize::from(p < 5);
+                if let Ok(pose) = verdict {
+                    accepted += 1;
+                    accepted_near += usize::from(p < 5);
+                    let err = pose.position().distance(truth.position());
+                    let err_th = normalize_angle(pose.theta - truth.theta).abs();
+                    assert!(
+                        err < 0.1,
+                        "place {p}, heading {h}, drift {d}: closed {err} m, {err_th} rad off the truth ({q:?})"
+                    );
+                    worst = (worst.0.max(err), worst.1.max(err_th));
+                }
+            }
+        }
+    }
+    // Measured: 54 of 112 accepted, all 54 at the first five places (of 70), at most
+    // 5.1 cm and 1.75° off.
+    assert!(
+        accepted_near * 10 >= near * 7,
+        "{accepted_near} of {near} returns among the old keyframes closed ({accepted} of 112 in all)"
+    );
+    assert!(worst.0 < 0.1, "{worst:?}");
 }

@@ -118,6 +118,9 @@ impl<const N: usize> HitMap<N> {
     pub fn clear(&mut self) {
         let n = self.geometry.cell_count().min(N);
         self.weights[..n].fill(0.0);
+        // The per-cell statistics too: the point-to-line refinement reads them
+        // ([`Self::surface_at`]), and a layer drawn again would otherwise keep the old returns.
+        self.stats[..n].fill([0.0; 9]);
     }
 
     /// Weight at a flat cell index (0 outside the grid) \[m of surface\].
