@@ -388,6 +388,27 @@ pub struct LocalizeBoardConfig {
     pub search_theta_deg: Option<f32>,
 }
 
+/// Which scans go into the map (`$.mapping`, an optional section): with `motion_filter` on,
+/// a scan is integrated only once the robot moved or turned enough since the last integrated
+/// scan, or after a time ([`crate::mission::motion_filter`]). Every key is optional; absent
+/// thresholds take [`crate::mission::MotionFilterConfig::standard`]'s.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MappingBoardConfig {
+    /// Filter the scans at all; absent: false (every scan is mapped, as in the thesis).
+    #[serde(default)]
+    pub motion_filter: Option<bool>,
+    /// A scan is mapped once the robot moved this far since the last mapped one \[m\]...
+    #[serde(default)]
+    pub min_travel_m: Option<f32>,
+    /// ...or turned this much \[deg\]...
+    #[serde(default)]
+    pub min_turn_deg: Option<f32>,
+    /// ...or this long has passed \[s\].
+    #[serde(default)]
+    pub max_interval_s: Option<f32>,
+}
+
 /// A whole board file.
 #[derive(Clone, Debug, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -411,6 +432,9 @@ pub struct BoardConfig {
     /// Scan matching (optional; absent: off).
     #[serde(default)]
     pub localize: LocalizeBoardConfig,
+    /// Which scans are mapped (optional; absent: every scan).
+    #[serde(default)]
+    pub mapping: MappingBoardConfig,
 }
 
 fn name(s: &str) -> Name {
@@ -501,6 +525,7 @@ impl Default for BoardConfig {
             },
             persistence: PersistenceConfig { save_every_s: 5.0 },
             localize: LocalizeBoardConfig::default(),
+            mapping: MappingBoardConfig::default(),
         }
     }
 }
@@ -682,6 +707,21 @@ impl BoardConfig {
         c.matcher.search_theta_rad = l
             .search_theta_deg
             .map_or(c.matcher.search_theta_rad, deg_to_rad);
+        c
+    }
+
+    /// The mapping motion filter the board asks for: off unless `$.mapping.motion_filter`
+    /// is true, then [`crate::mission::MotionFilterConfig::standard`] with what `$.mapping`
+    /// gives.
+    pub fn motion_filter_config(&self) -> crate::mission::MotionFilterConfig {
+        let m = &self.mapping;
+        if m.motion_filter != Some(true) {
+            return crate::mission::MotionFilterConfig::off();
+        }
+        let mut c = crate::mission::MotionFilterConfig::standard();
+        c.min_travel_m = m.min_travel_m.unwrap_or(c.min_travel_m);
+        c.min_turn_rad = m.min_turn_deg.map_or(c.min_turn_rad, deg_to_rad);
+        c.max_interval_s = m.max_interval_s.unwrap_or(c.max_interval_s);
         c
     }
 

@@ -22,6 +22,13 @@ pub fn cos(x: f32) -> f32 {
     libm::cosf(x)
 }
 
+/// Sine and cosine of `x` \[rad\] at once: `(sin(x), cos(x))`, bit for bit [`sin`]'s and
+/// [`cos`]'s (the same argument reduction and kernels, done once).
+#[inline]
+pub fn sin_cos(x: f32) -> (f32, f32) {
+    libm::sincosf(x)
+}
+
 /// Four-quadrant arctangent of `y / x` \[rad\], in (-pi, pi].
 #[inline]
 pub fn atan2(y: f32, x: f32) -> f32 {
@@ -136,6 +143,34 @@ mod tests {
         for _ in 0..200_000 {
             same(f32::from_bits(rng.next_u32()));
             same((below(&mut rng, 2_000_001) as f32 - 1_000_000.0) / 64.0);
+        }
+    }
+
+    #[test]
+    fn sin_cos_is_sin_and_cos_bit_for_bit() {
+        let same = |x: f32| {
+            let (s, c) = sin_cos(x);
+            let bits = |v: f32| if v.is_nan() { u32::MAX } else { v.to_bits() };
+            assert_eq!(
+                (bits(s), bits(c)),
+                (bits(sin(x)), bits(cos(x))),
+                "sin_cos({x:e})"
+            );
+        };
+        for x in [0.0, -0.0, f32::INFINITY, f32::NAN, 1e-40, 1e30, -1e30] {
+            same(x);
+        }
+        // Every f32 in [-8, 8] with a step of 2^-16 (the angles of beams and headings, and
+        // every branch of the argument reduction up to 9π/4), and random bit patterns.
+        let mut k = -8 * 65536;
+        while k <= 8 * 65536 {
+            same(k as f32 / 65536.0);
+            k += 1;
+        }
+        let mut rng = seeded(4);
+        for _ in 0..300_000 {
+            same(f32::from_bits(rng.next_u32()));
+            same((below(&mut rng, 1 << 24) as f32 - (1 << 23) as f32) * 1e-6);
         }
     }
 }

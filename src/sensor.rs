@@ -384,9 +384,14 @@ pub fn integrate_scan<const N: usize>(
     // Hits before misses: the cells holding this scan's returns get their Occupied evidence
     // first, and are remembered (sorted) so that no beam of the scan clears them.
     let mut hit_cells: heapless::Vec<usize, MAX_BEAMS> = heapless::Vec::new();
+    // Each beam's ray, worked out once for both passes (its sine and cosine are most of it).
+    let mut rays: heapless::Vec<Option<BeamRay>, MAX_BEAMS> = heapless::Vec::new();
     if model.hits_before_misses {
         for beam in scan.beams() {
-            let Some(ray) = BeamRay::new(beam, pose, laser, hit_depth) else {
+            let ray = BeamRay::new(beam, pose, laser, hit_depth);
+            // A scan has at most MAX_BEAMS beams, so this never overflows.
+            let _ = rays.push(ray);
+            let Some(ray) = ray else {
                 continue;
             };
             if !ray.hit {
@@ -412,8 +417,12 @@ pub fn integrate_scan<const N: usize>(
         hit_cells.sort_unstable();
     }
 
-    for beam in scan.beams() {
-        let Some(ray) = BeamRay::new(beam, pose, laser, hit_depth) else {
+    for (k, beam) in scan.beams().iter().enumerate() {
+        let ray = match rays.get(k) {
+            Some(&ray) => ray,
+            None => BeamRay::new(beam, pose, laser, hit_depth),
+        };
+        let Some(ray) = ray else {
             out.beams_ignored += 1;
             continue;
         };
@@ -457,6 +466,7 @@ pub fn integrate_scan<const N: usize>(
 }
 
 /// One usable beam in the map frame: where its walk ends and whether that end is a return.
+#[derive(Clone, Copy)]
 struct BeamRay {
     dir_x: f32,
     dir_y: f32,
@@ -485,7 +495,7 @@ impl BeamRay {
             return None;
         }
         let angle = laser_pose.theta + beam.angle_rad;
-        let (dir_x, dir_y) = (math::cos(angle), math::sin(angle));
+        let (dir_y, dir_x) = math::sin_cos(angle);
         // A return is a point on a surface: the cell holding the surface is the one the beam
         // enters there. Taken literally, a return on a cell's edge (a wall's face) or short of
         // it by the range noise lands in the free cell in front of the wall; the hit is moved

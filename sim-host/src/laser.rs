@@ -392,7 +392,7 @@ impl LaserSim {
         self.beams.clear();
         for i in 0..count {
             let a = laser.theta + cfg.beam_angle(i);
-            let (dx, dy) = (math::cos(a), math::sin(a));
+            let (dy, dx) = math::sin_cos(a);
             let range = cast_ray_along(world, origin, dx, dy, max);
             self.beams.push(BeamWork { dx, dy, range });
         }

@@ -145,6 +145,27 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
         false,
         Kind::Optional(&Kind::Number),
     ),
+    ("$.mapping", false, Kind::Object),
+    (
+        "$.mapping.motion_filter",
+        false,
+        Kind::Optional(&Kind::Bool),
+    ),
+    (
+        "$.mapping.min_travel_m",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.mapping.min_turn_deg",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.mapping.max_interval_s",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
 ];
 
 // The seen-set is a `u128`.

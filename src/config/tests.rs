@@ -594,3 +594,47 @@ fn a_matcher_window_too_small_for_the_grid_is_refused_when_matching_is_on() {
     };
     assert!(problem.contains("resolution_m"), "{problem}");
 }
+
+/// `$.mapping` is optional: absent, or without `motion_filter: true`, every scan is mapped;
+/// on, its keys set the filter's thresholds (the turn in degrees), the others are standard.
+#[test]
+fn the_mapping_section_is_optional_and_sets_the_motion_filter() {
+    use crate::mission::MotionFilterConfig;
+    let c = BoardConfig::from_json(SIM.as_bytes()).unwrap();
+    assert_eq!(c.motion_filter_config(), MotionFilterConfig::off());
+    let with = |section: &str| {
+        let json = SIM.replacen(
+            "\"persistence\"",
+            &std::format!("\"mapping\": {section}, \"persistence\""),
+            1,
+        );
+        let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+        assert_eq!(paths(&c), Vec::<String>::new());
+        c.motion_filter_config()
+    };
+    let f = with("{\"motion_filter\": true, \"min_turn_deg\": 5, \"max_interval_s\": 3}");
+    let s = MotionFilterConfig::standard();
+    assert!(f.enabled);
+    assert_eq!(f.min_travel_m, s.min_travel_m);
+    assert!((f.min_turn_rad - 5f32.to_radians()).abs() < 1e-6);
+    assert_eq!(f.max_interval_s, 3.0);
+    assert_eq!(with("{\"motion_filter\": true}"), s);
+    assert_eq!(
+        with("{\"min_travel_m\": 0.5}"),
+        MotionFilterConfig::off(),
+        "thresholds alone do not switch it on"
+    );
+}
+
+#[test]
+fn bad_mapping_values_name_their_field() {
+    only_problem_at("$.mapping.min_travel_m", |c| {
+        c.mapping.min_travel_m = Some(-0.1)
+    });
+    only_problem_at("$.mapping.min_turn_deg", |c| {
+        c.mapping.min_turn_deg = Some(f32::NAN)
+    });
+    only_problem_at("$.mapping.max_interval_s", |c| {
+        c.mapping.max_interval_s = Some(1e9)
+    });
+}

@@ -22,6 +22,7 @@ impl BoardConfig {
         self.validate_pid(&mut r);
         self.validate_safety(&mut r);
         self.validate_localize(&mut r);
+        self.validate_mapping(&mut r);
         if !positive(self.persistence.save_every_s) {
             r(
                 "$.persistence.save_every_s",
@@ -310,6 +311,36 @@ impl BoardConfig {
             && !(s.is_finite() && (0.0..=MAX_LOW_VOLTAGE_HOLD_S).contains(&s))
         {
             r("$.mission.low_voltage_hold_s", "must be from 0 to 600 [s]");
+        }
+    }
+
+    fn validate_mapping(&self, r: &mut impl FnMut(&str, &str)) {
+        let m = &self.mapping;
+        for (path, value, max, problem) in [
+            (
+                "$.mapping.min_travel_m",
+                m.min_travel_m,
+                10.0,
+                "must be from 0 to 10 [m]",
+            ),
+            (
+                "$.mapping.min_turn_deg",
+                m.min_turn_deg,
+                180.0,
+                "must be from 0 to 180 [deg]",
+            ),
+            (
+                "$.mapping.max_interval_s",
+                m.max_interval_s,
+                600.0,
+                "must be from 0 to 600 [s]",
+            ),
+        ] {
+            if let Some(v) = value
+                && !(v.is_finite() && (0.0..=max).contains(&v))
+            {
+                r(path, problem);
+            }
         }
     }
 

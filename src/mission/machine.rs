@@ -144,6 +144,10 @@ pub struct Mission<const N: usize> {
     /// The mission has ended for this reason and drives back to the start position
     /// ([`MissionConfig::return_to_start`]).
     homing: Option<DoneReason>,
+    /// Which scans are mapped ([`MissionConfig::motion_filter`]).
+    motion_filter: super::motion_filter::MotionFilter,
+    /// Whether the last scan given to [`Self::on_scan`] was integrated into the map.
+    last_scan_mapped: bool,
 }
 
 impl<const N: usize> core::fmt::Debug for Mission<N> {
@@ -206,6 +210,8 @@ impl<const N: usize> Mission<N> {
             voltage: super::VoltageWatch::new(),
             end_request: None,
             homing: None,
+            motion_filter: super::motion_filter::MotionFilter::new(),
+            last_scan_mapped: false,
             config,
         })
     }
@@ -253,6 +259,15 @@ impl<const N: usize> Mission<N> {
             &mut self.senses.map_from_odom,
             &mut self.senses.pose_map,
         );
+        self.last_scan_mapped =
+            self.motion_filter
+                .admit(&self.config.motion_filter, now, self.senses.pose_map);
+        if !self.last_scan_mapped {
+            // The motion filter holds it back from the map (which this robot then leaves
+            // as it was, so its path needs no new check): the safety monitor still sees it.
+            self.senses.on_scan(now, scan, false);
+            return self.publish(now, map);
+        }
         if self.localizer.grids_scan(&self.config.localize) {
             integrate_scan(
                 &mut map.grid,
@@ -371,6 +386,13 @@ impl<const N: usize> Mission<N> {
             self.senses.pose_map = transform.map_pose(self.senses.pose_odom);
         }
         let pose = transform.map_pose(pose_odom);
+        self.last_scan_mapped = self
+            .motion_filter
+            .admit(&self.config.motion_filter, now, pose);
+        if !self.last_scan_mapped {
+            self.senses.on_scan(now, scan, false);
+            return self.publish(now, map);
+        }
         integrate_scan(
             &mut map.grid,
             scan,
@@ -387,6 +409,13 @@ impl<const N: usize> Mission<N> {
         self.senses.on_scan(now, scan, true);
         self.watch.path_dirty = true;
         self.publish(now, map)
+    }
+
+    /// Whether the last scan given to [`Self::on_scan`] or [`Self::on_late_scan`] went into
+    /// the map: `false` when the
+    /// motion filter ([`MissionConfig::motion_filter`]) held it back.
+    pub fn last_scan_mapped(&self) -> bool {
+        self.last_scan_mapped
     }
 
     /// A scan the caller does not trust for mapping (taken while the robot turned fast, when

@@ -117,6 +117,7 @@
 
 pub mod footprint;
 mod machine;
+pub mod motion_filter;
 mod shared;
 pub mod voltage;
 mod window;
@@ -125,6 +126,7 @@ mod window;
 mod tests;
 
 pub use machine::Mission;
+pub use motion_filter::MotionFilterConfig;
 pub use shared::{
     MAX_FRONTIERS, MAX_ROBOTS, MAX_SHARED_WAYPOINTS, RobotMark, SharedMap, Workspace,
 };
@@ -225,6 +227,11 @@ pub struct MissionConfig {
     /// simulator's default house missions (seeds 25..34) it costs 10 steps on average
     /// (`docs/experiments.md`, issue 26).
     pub look_around: bool,
+    /// Which scans are integrated into the map ([`motion_filter`]): off by default, every
+    /// scan is (the thesis); on, only a scan taken after the robot moved or turned enough
+    /// since the last integrated one, or after a time. The others still feed the safety
+    /// monitor and the localisation.
+    pub motion_filter: MotionFilterConfig,
 }
 
 impl Default for MissionConfig {
@@ -259,6 +266,7 @@ impl Default for MissionConfig {
             voltage: VoltageConfig::default(),
             return_to_start: false,
             look_around: false,
+            motion_filter: MotionFilterConfig::off(),
         }
     }
 }
@@ -302,6 +310,9 @@ impl MissionConfig {
             || self.explore.population > crate::optim::MAX_POP
         {
             return bad("explore.population", self.explore.population as f32);
+        }
+        if let Some((field, value)) = self.motion_filter.invalid_field() {
+            return bad(field, value);
         }
         self.sensor.validate().map_err(MissionError::Sensor)?;
         Ok(())

@@ -1740,3 +1740,101 @@ fn the_look_around_turns_by_the_blind_sector_before_the_first_decision_only_when
         );
     }
 }
+
+/// With the motion filter on, a scan goes into the map only once the robot moved past the
+/// threshold since the last mapped scan: the others leave the map as it was, and the robot
+/// keeps driving on them (the safety monitor sees every scan).
+#[test]
+fn the_motion_filter_maps_a_scan_only_after_the_robot_moved_far_enough() {
+    use super::MotionFilterConfig;
+    let config = MissionConfig {
+        motion_filter: MotionFilterConfig::on(0.3, core::f32::consts::PI, 100.0),
+        ..frontier_config()
+    };
+    let world = World::new(8.0, 5.0);
+    let mut sim = Sim::new(world.clone(), &config, 21);
+    world.reveal(&mut sim.map);
+    sim.add(config, Pose2::new(1.0, 2.5, 0.0), Slip::none());
+    sim.bots[0].mission.go_to(&[Point2::new(7.0, 2.5)]).unwrap();
+    let mut last_mapped: Option<Point2> = None;
+    let (mut mapped, mut held) = (0, 0);
+    for _ in 0..100 {
+        let before = sim.map.grid.log_odds().to_vec();
+        sim.period();
+        let m = &sim.bots[0].mission;
+        assert!(
+            !matches!(m.state(), MissionState::Fault(_)),
+            "{:?}",
+            m.state()
+        );
+        let here = m.pose_map().position();
+        if m.last_scan_mapped() {
+            mapped += 1;
+            if let Some(p) = last_mapped {
+                assert!(
+                    p.distance(here) >= 0.3 - 1e-4,
+                    "mapped after {} m",
+                    p.distance(here)
+                );
+            }
+            last_mapped = Some(here);
+        } else {
+            held += 1;
+            assert!(
+                sim.map.grid.log_odds() == before.as_slice(),
+                "a held-back scan changed the map"
+            );
+            let p = last_mapped.expect("the first scan is mapped");
+            assert!(
+                p.distance(here) < 0.3,
+                "held back after {} m",
+                p.distance(here)
+            );
+        }
+    }
+    let driven = sim.bots[0].mission.stats().distance_m;
+    assert!(driven > 1.5, "drove {driven} m");
+    assert!(held > mapped, "{mapped} mapped, {held} held back");
+    assert!(mapped >= 3, "{mapped} mapped");
+}
+
+/// A mission with the standard motion filter explores the two rooms as one mapping every
+/// scan does.
+#[test]
+fn explores_two_rooms_to_done_with_the_motion_filter() {
+    for seed in [1, 3] {
+        let config = MissionConfig {
+            selector: SelectorKind::Optimized(crate::optim::Method::Xboa),
+            motion_filter: super::MotionFilterConfig::standard(),
+            ..MissionConfig::default()
+        };
+        let sim = explore(config, Slip::thesis(), seed, 1500.0);
+        let bot = &sim.bots[0];
+        assert_eq!(
+            bot.mission.state(),
+            MissionState::Done(DoneReason::NothingReachable),
+            "seed {seed}: {:?} after {} s",
+            bot.mission.stats(),
+            sim.secs()
+        );
+        let known = known_fraction(&sim);
+        assert!(
+            known > 0.97,
+            "seed {seed}: only {known} of the free cells known"
+        );
+    }
+}
+
+#[test]
+fn a_bad_motion_filter_threshold_is_refused_by_name() {
+    let config = MissionConfig {
+        motion_filter: super::MotionFilterConfig::on(0.2, -1.0, 2.0),
+        ..MissionConfig::default()
+    };
+    match Mission::<CELLS>::new(0, config, Pose2::new(1.0, 1.0, 0.0)) {
+        Err(MissionError::BadConfig { field, .. }) => {
+            assert_eq!(field, "motion_filter.min_turn_rad")
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -193,6 +193,7 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     v.hold_s = m.low_voltage_hold_s.unwrap_or(v.hold_s);
     config.return_to_start = m.return_to_start.unwrap_or(false);
     config.localize = board.localize_config();
+    config.motion_filter = board.motion_filter_config();
     config.validate().map_err(|e| format!("$.mission: {e}"))?;
     Ok(config)
 }

@@ -114,10 +114,44 @@ pub struct Args {
     /// return to start, as `papillon run --return-to-start`).
     #[arg(long)]
     pub return_to_start: bool,
+    /// Which scans go into the map: off (every scan, the thesis; the default), on (the motion
+    /// filter with its standard thresholds: a scan is mapped once the robot moved 0.2 m or
+    /// turned 10° since the last mapped scan, or after 2 s), or TRAVEL_M,TURN_DEG,INTERVAL_S.
+    /// Boards: $.mapping.
+    #[arg(long, value_name = "off|on|TRAVEL_M,TURN_DEG,INTERVAL_S", value_parser = motion_filter)]
+    pub motion_filter: Option<papillon::mission::MotionFilterConfig>,
     /// End the run after this many simulated seconds (reason `time-limit`), e.g. to sample
     /// a mission on a big map; default 600 s plus 10 s per step of battery.
     #[arg(long, value_name = "SECONDS", value_parser = max_time)]
     pub max_time: Option<f64>,
+}
+
+/// `--motion-filter`: off, on, or three thresholds.
+fn motion_filter(text: &str) -> Result<papillon::mission::MotionFilterConfig, String> {
+    use papillon::mission::MotionFilterConfig;
+    match text.trim() {
+        "off" => return Ok(MotionFilterConfig::off()),
+        "on" => return Ok(MotionFilterConfig::standard()),
+        _ => {}
+    }
+    let parts: Vec<f32> = text
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected off, on or TRAVEL_M,TURN_DEG,INTERVAL_S, got '{text}'"))?;
+    let [travel_m, turn_deg, interval_s] = parts[..] else {
+        return Err(format!(
+            "expected off, on or three numbers TRAVEL_M,TURN_DEG,INTERVAL_S, got '{text}'"
+        ));
+    };
+    let config =
+        MotionFilterConfig::on(travel_m, papillon::units::deg_to_rad(turn_deg), interval_s);
+    match config.invalid_field() {
+        Some((field, value)) => Err(format!(
+            "{field} must be finite and not negative, got {value}"
+        )),
+        None => Ok(config),
+    }
 }
 
 /// `--max-time`: a positive number of simulated seconds.
@@ -231,6 +265,9 @@ pub fn run(args: Args) -> ExitCode {
     let setup = match setup_from_args(&args) {
         Ok(mut s) => {
             s.run.mission.return_to_start = args.return_to_start;
+            if let Some(filter) = args.motion_filter {
+                s.run.mission.motion_filter = filter;
+            }
             if let Some(limit_s) = args.max_time {
                 s.run.max_sim_time_s = limit_s;
             }
@@ -308,6 +345,7 @@ mod tests {
             live: None,
             live_speed: 1.0,
             return_to_start: false,
+            motion_filter: None,
             max_time: None,
         }
     }

@@ -549,6 +549,10 @@ impl<const N: usize> Runner<N> {
                 continue;
             }
             r.mission.on_scan(now, scan, &mut self.map)?;
+            if !r.mission.last_scan_mapped() {
+                // Held back by the motion filter: the map is as it was.
+                continue;
+            }
             self.coverage.update_after_scan(
                 &self.map.grid,
                 r.mission.pose_map(),
