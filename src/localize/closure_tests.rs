@@ -44,19 +44,23 @@ fn render_old(
         .unwrap();
 }
 
-#[test]
-fn a_drifted_return_to_a_furnished_room_is_closed_at_the_true_pose() {
-    let (walls, _) = room();
-    let laser = LaserConfig::lms1xx();
-    // The first visit went round the room.
-    let old = [
+/// The keyframes of the first visit, which went round the furnished room.
+fn first_visit() -> [Pose2; 6] {
+    [
         Pose2::new(2.0, 2.0, 0.0),
         Pose2::new(3.5, 2.5, 0.4),
         Pose2::new(5.0, 3.0, 1.2),
         Pose2::new(6.5, 2.0, 2.5),
         Pose2::new(4.5, 5.0, -2.8),
         Pose2::new(2.0, 4.5, -1.5),
-    ];
+    ]
+}
+
+#[test]
+fn a_drifted_return_to_a_furnished_room_is_closed_at_the_true_pose() {
+    let (walls, _) = room();
+    let laser = LaserConfig::lms1xx();
+    let old = first_visit();
     let store = keep(&walls, &old, &laser);
     let mut local: Box<LocalMap<LOCAL_CELLS>> = bytemuck::zeroed_box();
     let mut m = matcher();
@@ -154,14 +158,7 @@ fn candidates_are_old_and_near() {
 fn drifted_returns_are_closed_at_the_truth_or_refused() {
     let (walls, _) = room();
     let laser = LaserConfig::lms1xx();
-    let old = [
-        Pose2::new(2.0, 2.0, 0.0),
-        Pose2::new(3.5, 2.5, 0.4),
-        Pose2::new(5.0, 3.0, 1.2),
-        Pose2::new(6.5, 2.0, 2.5),
-        Pose2::new(4.5, 5.0, -2.8),
-        Pose2::new(2.0, 4.5, -1.5),
-    ];
+    let old = first_visit();
     let store = keep(&walls, &old, &laser);
     let mut local: Box<LocalMap<LOCAL_CELLS>> = bytemuck::zeroed_box();
     let mut m = matcher();
