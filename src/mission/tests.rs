@@ -374,6 +374,23 @@ fn known_fraction<P: Planner<CELLS>>(sim: &Sim<P>) -> f32 {
     known as f32 / total as f32
 }
 
+/// The two-room mission ended with nothing left to reach, nearly every free cell known.
+fn assert_two_rooms_explored(sim: &Sim, seed: u64) {
+    let bot = &sim.bots[0];
+    assert_eq!(
+        bot.mission.state(),
+        MissionState::Done(DoneReason::NothingReachable),
+        "seed {seed}: {:?} after {} s",
+        bot.mission.stats(),
+        sim.secs()
+    );
+    let known = known_fraction(sim);
+    assert!(
+        known > 0.97,
+        "seed {seed}: only {known} of the free cells known"
+    );
+}
+
 /// (a) A two-room world is explored to Done under slip; every waypoint is reached within
 /// tolerance and the heading does not oscillate.
 #[test]
@@ -388,19 +405,8 @@ fn explores_two_rooms_to_done_under_slip() {
             ..MissionConfig::default()
         };
         let sim = explore(config, Slip::thesis(), seed, 1500.0);
+        assert_two_rooms_explored(&sim, seed);
         let bot = &sim.bots[0];
-        assert_eq!(
-            bot.mission.state(),
-            MissionState::Done(DoneReason::NothingReachable),
-            "seed {seed}: {:?} after {} s",
-            bot.mission.stats(),
-            sim.secs()
-        );
-        let known = known_fraction(&sim);
-        assert!(
-            known > 0.97,
-            "seed {seed}: only {known} of the free cells known"
-        );
         let stats = bot.mission.stats();
         assert!(stats.decisions >= 1, "{stats:?}");
         // Every decision ends with its target reached or given up.
@@ -1809,19 +1815,7 @@ fn explores_two_rooms_to_done_with_the_motion_filter() {
             ..MissionConfig::default()
         };
         let sim = explore(config, Slip::thesis(), seed, 1500.0);
-        let bot = &sim.bots[0];
-        assert_eq!(
-            bot.mission.state(),
-            MissionState::Done(DoneReason::NothingReachable),
-            "seed {seed}: {:?} after {} s",
-            bot.mission.stats(),
-            sim.secs()
-        );
-        let known = known_fraction(&sim);
-        assert!(
-            known > 0.97,
-            "seed {seed}: only {known} of the free cells known"
-        );
+        assert_two_rooms_explored(&sim, seed);
     }
 }
 
