@@ -23,7 +23,10 @@
 //! final map (a mission that ended "nothing reachable" with `reached` frontier cells was cut
 //! off by something not in its final map); with `GAPS_LOGODDS=X,Y` the log-odds of the cells
 //! around a point (a door's cells, say); with `GAPS_SPAN=ROWS,COLS` larger map prints; with `GAPS_TRACK=T0,T1` the robot's true and estimated
-//! pose, the planning layer at its cell and the mission's state every 0.5 s from T0 to T1 \[s\].
+//! pose, the planning layer at its cell and the mission's state every 0.5 s from T0 to T1 \[s\];
+//! with `GAPS_KIND=1` a `missing_kind` line: the missing cells that are walls in truth, those
+//! free in truth, and the wall cells next to a free-in-truth cell the map holds Occupied (the
+//! wall's face drawn a cell in front of where it is).
 //! Results are in docs/experiments.md ("Generated world set after the obstacle-mark change").
 
 use clap::Parser;
@@ -525,6 +528,30 @@ fn main() {
         } else {
             shut += 1;
         }
+    }
+    if std::env::var_os("GAPS_KIND").is_some() {
+        // The missing cells by what they are in truth: wall cells (blocked) and free cells,
+        // and of the wall cells those next to a free-in-truth cell the map holds Occupied (the
+        // wall drawn a cell in front of where it is).
+        let (mut wall, mut free, mut wall_behind_drawn) = (0, 0, 0);
+        for &i in truth.cells() {
+            if map.class(i).is_known() {
+                continue;
+            }
+            if world.is_blocked_index(i) {
+                wall += 1;
+                let c = g.cell(i);
+                let drawn_in_front = [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|&(dc, dr)| {
+                    g.index(Cell::new(c.col + dc, c.row + dr)).is_some_and(|j| {
+                        !world.is_blocked_index(j) && map.class(j) == CellClass::Occupied
+                    })
+                });
+                wall_behind_drawn += usize::from(drawn_in_front);
+            } else {
+                free += 1;
+            }
+        }
+        eprintln!("missing_kind wall {wall} free {free} wall_behind_drawn {wall_behind_drawn}");
     }
     if std::env::var_os("GAPS_MAP").is_some() {
         // The whole map, one character per 2 x 2 cells: 'M' holds an observable cell the map
