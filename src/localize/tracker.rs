@@ -237,14 +237,8 @@ impl Tracker {
         {
             // The increment corrected by the estimate; the pose and the parameters predicted
             // together, with the random part of the odometry's noise.
-            let d = prev.position().distance(pose_odom.position()) as f64;
-            let turn = math::abs(normalize_angle(pose_odom.theta - prev.theta)) as f64;
             let scale = config.calibration.random_scale.max(0.0) as f64;
-            let q_m2 = config.odometry_var_m2_per_m as f64 * d * scale;
-            let q_rad2 = (config.odometry_var_rad2_per_rad as f64 * turn
-                + config.odometry_var_rad2_per_m as f64 * d)
-                * scale;
-            let q = Matrix3::from_diagonal(&Vector3::new(q_m2, q_m2, q_rad2));
+            let q = odometry_noise(config, prev, pose_odom, scale);
             let to = self.calibration.predict(
                 &config.calibration,
                 map_from_odom.map_pose(prev),
@@ -257,8 +251,6 @@ impl Tracker {
             // The motion in the map frame, and its Jacobian with respect to the heading.
             let from = map_from_odom.map_pose(prev);
             let to = map_from_odom.map_pose(pose_odom);
-            let d = prev.position().distance(pose_odom.position()) as f64;
-            let turn = math::abs(normalize_angle(pose_odom.theta - prev.theta)) as f64;
             let f = Matrix3::new(
                 1.0,
                 0.0,
@@ -270,11 +262,7 @@ impl Tracker {
                 0.0,
                 1.0,
             );
-            let q_m2 = config.odometry_var_m2_per_m as f64 * d;
-            let q_rad2 = config.odometry_var_rad2_per_rad as f64 * turn
-                + config.odometry_var_rad2_per_m as f64 * d;
-            self.cov = f * self.cov * f.transpose()
-                + Matrix3::from_diagonal(&Vector3::new(q_m2, q_m2, q_rad2));
+            self.cov = f * self.cov * f.transpose() + odometry_noise(config, prev, pose_odom, 1.0);
         }
         if self.last_odom.is_some() {
             if at_rest && self.moving {
@@ -437,4 +425,17 @@ impl Tracker {
     pub fn last(&self) -> Option<&MatchQuality> {
         self.last.as_ref()
     }
+}
+
+/// The odometry's noise over its step from `prev` to `now` (odometry frame), as a covariance in
+/// `(x, y, θ)`: the model's variances per metre driven and per radian turned
+/// ([`LocalizeConfig::odometry_var_m2_per_m`] and the two heading terms), times `scale`.
+fn odometry_noise(config: &LocalizeConfig, prev: Pose2, now: Pose2, scale: f64) -> Matrix3<f64> {
+    let d = prev.position().distance(now.position()) as f64;
+    let turn = math::abs(normalize_angle(now.theta - prev.theta)) as f64;
+    let q_m2 = config.odometry_var_m2_per_m as f64 * d * scale;
+    let q_rad2 = (config.odometry_var_rad2_per_rad as f64 * turn
+        + config.odometry_var_rad2_per_m as f64 * d)
+        * scale;
+    Matrix3::from_diagonal(&Vector3::new(q_m2, q_m2, q_rad2))
 }
