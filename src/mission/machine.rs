@@ -259,13 +259,7 @@ impl<const N: usize> Mission<N> {
             &mut self.senses.map_from_odom,
             &mut self.senses.pose_map,
         );
-        self.last_scan_mapped =
-            self.motion_filter
-                .admit(&self.config.motion_filter, now, self.senses.pose_map);
-        if !self.last_scan_mapped {
-            // The motion filter holds it back from the map (which this robot then leaves
-            // as it was, so its path needs no new check): the safety monitor still sees it.
-            self.senses.on_scan(now, scan, false);
+        if !self.admit_to_map(now, self.senses.pose_map, scan) {
             return self.publish(now, map);
         }
         if self.localizer.grids_scan(&self.config.localize) {
@@ -386,11 +380,7 @@ impl<const N: usize> Mission<N> {
             self.senses.pose_map = transform.map_pose(self.senses.pose_odom);
         }
         let pose = transform.map_pose(pose_odom);
-        self.last_scan_mapped = self
-            .motion_filter
-            .admit(&self.config.motion_filter, now, pose);
-        if !self.last_scan_mapped {
-            self.senses.on_scan(now, scan, false);
+        if !self.admit_to_map(now, pose, scan) {
             return self.publish(now, map);
         }
         integrate_scan(
@@ -409,6 +399,20 @@ impl<const N: usize> Mission<N> {
         self.senses.on_scan(now, scan, true);
         self.watch.path_dirty = true;
         self.publish(now, map)
+    }
+
+    /// Whether a scan taken at `now` from `pose` goes into the map
+    /// ([`MissionConfig::motion_filter`]), remembered for [`Self::last_scan_mapped`]. A scan
+    /// held back leaves the map (and so this robot's path) as it was; the safety monitor still
+    /// sees it.
+    fn admit_to_map(&mut self, now: Time, pose: Pose2, scan: &Scan) -> bool {
+        self.last_scan_mapped = self
+            .motion_filter
+            .admit(&self.config.motion_filter, now, pose);
+        if !self.last_scan_mapped {
+            self.senses.on_scan(now, scan, false);
+        }
+        self.last_scan_mapped
     }
 
     /// Whether the last scan given to [`Self::on_scan`] or [`Self::on_late_scan`] went into
