@@ -279,6 +279,19 @@ impl GridGeometry {
     pub fn contains_point(&self, p: Point2) -> bool {
         self.cell_at(p).is_some()
     }
+
+    /// Flat indices of the grid's cells whose centres lie within `radius_m` of `centre`
+    /// (inclusive), row by row from the south-west; `centre` itself may lie off the grid.
+    pub fn indices_within(self, centre: Point2, radius_m: f32) -> impl Iterator<Item = usize> {
+        let c = self.cell_at_unchecked(centre);
+        let span = math::ceil(radius_m / self.resolution_m) as i32 + 1;
+        (c.row - span..=c.row + span)
+            .flat_map(move |row| (c.col - span..=c.col + span).map(move |col| Cell::new(col, row)))
+            .filter_map(move |cell| {
+                self.index(cell)
+                    .filter(|_| self.cell_center(cell).distance(centre) <= radius_m)
+            })
+    }
 }
 
 /// Saturation bounds of the log-odds.

@@ -213,25 +213,14 @@ pub fn doubt_walls<const N: usize>(
     observer: &mut impl crate::grid::CellObserver,
 ) -> usize {
     let geom = *grid.geometry();
-    let Some(middle) = geom.cell_at(centre) else {
-        return 0;
-    };
-    if !(radius_m >= 0.0 && occupied_log_odds > 0.0) {
+    if !(geom.contains_point(centre) && radius_m >= 0.0 && occupied_log_odds > 0.0) {
         return 0;
     }
-    let span = (radius_m / geom.resolution_m) as i32 + 1;
     let mut lowered = 0;
-    for dr in -span..=span {
-        for dc in -span..=span {
-            let c = Cell::new(middle.col + dc, middle.row + dr);
-            let Some(i) = geom.index(c) else { continue };
-            if geom.cell_center(c).distance(centre) > radius_m {
-                continue;
-            }
-            if grid.log_odds_at(i) > occupied_log_odds {
-                grid.set_log_odds(i, occupied_log_odds, observer);
-                lowered += 1;
-            }
+    for i in geom.indices_within(centre, radius_m) {
+        if grid.log_odds_at(i) > occupied_log_odds {
+            grid.set_log_odds(i, occupied_log_odds, observer);
+            lowered += 1;
         }
     }
     lowered

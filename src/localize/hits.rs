@@ -355,18 +355,10 @@ impl<const N: usize> HitMap<N> {
     /// Forgets every return within `radius_m` of `centre` (cell centres), e.g. where a robot
     /// stood that another robot's laser saw.
     pub fn clear_disc(&mut self, centre: Point2, radius_m: f32) {
-        let g = self.geometry;
-        let c = g.cell_at_unchecked(centre);
-        let span = math::ceil(radius_m / g.resolution_m) as i32 + 1;
-        for row in c.row - span..=c.row + span {
-            for col in c.col - span..=c.col + span {
-                let cell = crate::grid::Cell::new(col, row);
-                if let Some(i) = g.index(cell).filter(|&i| i < N)
-                    && g.cell_center(cell).distance(centre) <= radius_m
-                {
-                    self.weights[i] = 0.0;
-                    self.stats[i] = [0.0; 9];
-                }
+        for i in self.geometry.indices_within(centre, radius_m) {
+            if i < N {
+                self.weights[i] = 0.0;
+                self.stats[i] = [0.0; 9];
             }
         }
     }
