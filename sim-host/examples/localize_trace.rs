@@ -7,7 +7,9 @@
 //! The environment sets the matcher's and the tracker's settings (`NOISE`, `MAP`, `LOC_*`,
 //! read at the top of `main`; docs/experiments.md, seventh measurement, lists them);
 //! `QUIET=1` prints only the last line: final error, coverage, map accuracy, and the run's
-//! mean and largest position error. `ODOCHECK=1` also prints the raw odometry's largest error
+//! mean and largest position error. `WINDOW=FROM,TO` prints every scan between FROM and TO
+//! seconds of simulated time; `LOC_BLOCK` (the refinement's block half-width, cells) and
+//! `LOC_POINTS` (returns used at most) set two more of the matcher's settings. `ODOCHECK=1` also prints the raw odometry's largest error
 //! against the truth over the run (0 with `none`: the scans and the odometry are taken at the
 //! same instant and pose).
 //!
@@ -107,6 +109,12 @@ fn main() {
     if let Some(v) = env("LOC_ANNEAL") {
         m.localize.matcher.fine.anneal_gate_m = v;
     }
+    if let Some(v) = env("LOC_BLOCK") {
+        m.localize.matcher.fine.block_half_cells = v as i32;
+    }
+    if let Some(v) = env("LOC_POINTS") {
+        m.localize.matcher.max_points = v as usize;
+    }
     if let Some(v) = env("LOC_GATE") {
         m.localize.matcher.fine.gate = v;
     }
@@ -174,6 +182,14 @@ fn main() {
         m.localize.calibration.curvature_sigma_rad_per_m = v;
     }
     let quiet = std::env::var("QUIET").is_ok();
+    // WINDOW=FROM,TO: every scan between FROM and TO s of simulated time.
+    let window = std::env::var("WINDOW")
+        .ok()
+        .and_then(|v| {
+            let (a, b) = v.split_once(',')?;
+            Some((a.parse::<f64>().ok()?, b.parse::<f64>().ok()?))
+        })
+        .unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
     let m_cal = m.localize.calibration.enabled;
     let mut cfg = RunConfig::new(m, 1, seed);
     let track_m = cfg.body.track_m;
@@ -273,7 +289,7 @@ fn main() {
             }
             prev = Some((t, tp, ep, eh));
         }
-        if !quiet && (t - last >= 5.0 || t < 3.0) {
+        if !quiet && (t - last >= 5.0 || t < 3.0 || (t >= window.0 && t <= window.1)) {
             last = t;
             let b = r.body(0);
             let ms = r.mission(0);
