@@ -16,7 +16,9 @@
 //! cell edge, or a return just short of it, marks the wall and not the free cell in front. As in the
 //! thesis (Bendahmane 2023), each piece of evidence is weighted by how close the beam passes to
 //! the cell centre, `w = exp(-d² / 2σ²)` with `d` the perpendicular distance \[m\], and the
-//! evidence of all beams crossing a cell accumulates.
+//! evidence of all beams crossing a cell accumulates. [`integrate_scan_banded`] widens the
+//! Occupied evidence past the return by a band for a pose known only to a few centimetres
+//! (the scan-matched missions, [`crate::localize::LocalizeConfig::wall_band_floor_m`]).
 
 use core::f32::consts::PI;
 use core::ops::ControlFlow;
