@@ -16,7 +16,9 @@
 //! cell edge, or a return just short of it, marks the wall and not the free cell in front. As in the
 //! thesis (Bendahmane 2023), each piece of evidence is weighted by how close the beam passes to
 //! the cell centre, `w = exp(-d² / 2σ²)` with `d` the perpendicular distance \[m\], and the
-//! evidence of all beams crossing a cell accumulates.
+//! evidence of all beams crossing a cell accumulates. [`integrate_scan_banded`] widens the
+//! Occupied evidence past the return by a band for a pose known only to a few centimetres
+//! (the scan-matched missions, [`crate::localize::LocalizeConfig::wall_band_floor_m`]).
 
 use core::f32::consts::PI;
 use core::ops::ControlFlow;
@@ -274,6 +276,8 @@ pub enum IntegrationError {
     },
     /// The robot pose or the laser mount is not finite.
     BadPose,
+    /// The wall band must be a finite number of metres, at least 0.
+    BadBand(f32),
 }
 
 impl core::fmt::Display for IntegrationError {
@@ -300,6 +304,10 @@ impl core::fmt::Display for IntegrationError {
                 "laser ranges must satisfy 0 <= blind zone < usable range, got {min_range_m} m and {max_range_m} m"
             ),
             IntegrationError::BadPose => write!(f, "robot pose or laser mount is not finite"),
+            IntegrationError::BadBand(b) => write!(
+                f,
+                "the wall band past a return must be a finite number of metres >= 0, got {b}"
+            ),
         }
     }
 }
@@ -360,7 +368,42 @@ pub fn integrate_scan<const N: usize>(
     model: &SensorModel,
     observer: &mut impl CellObserver,
 ) -> Result<ScanIntegration, IntegrationError> {
+    integrate_scan_banded(grid, scan, robot_pose_map, 0.0, laser, model, observer)
+}
+
+/// [`integrate_scan`] for a scan whose pose is uncertain along each beam by up to `band_m`
+/// \[m\] (at most half a cell is used): every cell between the return's point (taken
+/// [`hit_depth_m`] past the measured range) and `band_m` further along the beam gets the
+/// return's Occupied evidence too, not only the cell holding the point. The cells before the
+/// point get Free evidence as in [`integrate_scan`], so a wall is never drawn thicker on the
+/// side the laser saw it from; it may be drawn a cell thicker behind its face.
+///
+/// Why: a scan drawn at a pose a few centimetres short of the truth along a beam puts the
+/// return of a wall's face in the free cell in front of it, and the wall's own cell, behind
+/// the return, is then never reached by any beam: it stays Unknown for ever
+/// (docs/experiments.md, issue 18, branches `stall18` and `wall18`). The surface lies
+/// anywhere within the pose's uncertainty of the point, so each cell of that interval may
+/// hold it: the inverse sensor model's obstacle region `|r - z| < α/2` (Thrun, Burgard & Fox,
+/// *Probabilistic Robotics*, 2005, §9.2, Table 9.2) widened by the uncertainty of where the
+/// beam started, as Elfes (*Using occupancy grids for mobile robot perception and
+/// navigation*, IEEE Computer 22(6), 1989) widens the occupied region of a sonar return by its
+/// range uncertainty. Only the far side is widened: the near side is seen through.
+///
+/// Errors: as [`integrate_scan`], and [`IntegrationError::BadBand`] for a negative or
+/// non-finite `band_m`.
+pub fn integrate_scan_banded<const N: usize>(
+    grid: &mut OccupancyGrid<N>,
+    scan: &Scan,
+    robot_pose_map: Pose2,
+    band_m: f32,
+    laser: &LaserConfig,
+    model: &SensorModel,
+    observer: &mut impl CellObserver,
+) -> Result<ScanIntegration, IntegrationError> {
     model.validate()?;
+    if !(band_m >= 0.0 && band_m.is_finite()) {
+        return Err(IntegrationError::BadBand(band_m));
+    }
     if !(laser.min_range_m >= 0.0
         && laser.max_range_m > laser.min_range_m
         && laser.max_range_m.is_finite())
@@ -380,6 +423,7 @@ pub fn integrate_scan<const N: usize>(
     let mut out = ScanIntegration::default();
     let geom = *grid.geometry();
     let hit_depth = |range_m: f32| hit_depth_m(range_m, laser.noise_fraction, geom.resolution_m);
+    let band_m = band_m.min(0.5 * geom.resolution_m);
 
     // Hits before misses: the cells holding this scan's returns get their Occupied evidence
     // first, and are remembered (sorted) so that no beam of the scan clears them.
@@ -411,6 +455,19 @@ pub fn integrate_scan<const N: usize>(
                     &mut out,
                 );
             }
+            // The band's cells past it are not protected from the scan's other beams (a
+            // beam reaching them sees through where this one stopped).
+            ray.occupy_band(
+                &geom,
+                band_m,
+                index,
+                grid,
+                origin,
+                inv_two_sigma_sq,
+                model,
+                observer,
+                &mut out,
+            );
             // A scan has at most MAX_BEAMS beams, so this never overflows.
             let _ = hit_cells.push(index);
         }
@@ -461,6 +518,19 @@ pub fn integrate_scan<const N: usize>(
             ControlFlow::Continue(())
         });
         out.updates += walk.visited;
+        if ray.hit && !model.hits_before_misses {
+            ray.occupy_band(
+                &geom,
+                band_m,
+                hit_index,
+                grid,
+                origin,
+                inv_two_sigma_sq,
+                model,
+                observer,
+                &mut out,
+            );
+        }
     }
     Ok(out)
 }
@@ -523,6 +593,40 @@ impl BeamRay {
             dir_y: self.dir_y,
             inv_two_sigma_sq,
         }
+    }
+
+    /// Occupied evidence to the cells from the return's point to `band_m` past it along the
+    /// beam, but the cell holding the point (`hit_index`, which has its evidence): see
+    /// [`integrate_scan_banded`]. Nothing for a beam with no return or an empty band.
+    #[allow(clippy::too_many_arguments)]
+    fn occupy_band<const N: usize>(
+        &self,
+        geom: &crate::grid::GridGeometry,
+        band_m: f32,
+        hit_index: usize,
+        grid: &mut OccupancyGrid<N>,
+        origin: Point2,
+        inv_two_sigma_sq: f32,
+        model: &SensorModel,
+        observer: &mut impl CellObserver,
+        out: &mut ScanIntegration,
+    ) {
+        if !self.hit || band_m <= 0.0 {
+            return;
+        }
+        let far = Point2::new(
+            self.end.x + self.dir_x * band_m,
+            self.end.y + self.dir_y * band_m,
+        );
+        let evidence = self.evidence(origin, inv_two_sigma_sq);
+        let max = grid.bounds().max;
+        let walk = raycast::traverse(geom, self.end, far, |cell, index| {
+            if index != hit_index && grid.log_odds_at(index) < max {
+                evidence.add(grid, cell, index, model.occupied_log_odds, observer, out);
+            }
+            ControlFlow::Continue(())
+        });
+        out.updates += walk.visited;
     }
 }
 
@@ -789,6 +893,74 @@ mod tests {
         assert!((hit_depth_m(2.0, 0.003, 0.1) - 0.017).abs() < 1e-6);
         assert!((hit_depth_m(2.0, 0.05, 0.1) - 0.025).abs() < 1e-6);
         assert!((hit_depth_m(2.0, f32::NAN, 0.1) - 0.005).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_wall_band_marks_the_wall_cell_behind_a_return_drawn_short() {
+        // The wall of the test above (column 10, east face x = 1.1 m), seen from the east with
+        // a precise laser, the scan drawn 3 cm short along the beam (the pose 3 cm east of
+        // where the robot stood). Without a band the return marks column 11 (free in truth)
+        // and column 10 is never reached; with a 5 cm band column 10 is Occupied too. Only the
+        // far side is widened: the cells before the return stay Free, and a band longer than
+        // half a cell reaches no further than half a cell.
+        let model = SensorModel::default();
+        let mut laser = LaserConfig::thesis();
+        laser.noise_fraction = 0.003;
+        let beam = |range_m: f32| {
+            let mut s = Scan::new();
+            s.push(Beam {
+                angle_rad: 0.0,
+                range_m: Some(range_m),
+            })
+            .unwrap();
+            s
+        };
+        let short = Pose2::new(3.05 + 0.03, 3.05, PI);
+        let run = |pose: Pose2, range_m: f32, band_m: f32| {
+            let mut g = grid();
+            for _ in 0..3 {
+                integrate_scan_banded(
+                    &mut g,
+                    &beam(range_m),
+                    pose,
+                    band_m,
+                    &laser,
+                    &model,
+                    &mut (),
+                )
+                .unwrap();
+            }
+            g
+        };
+        let g = run(short, 1.95, 0.0);
+        let at = |g: &Grid, col| g.class_of(Cell::new(col, 30));
+        assert_eq!(at(&g, 11), Some(CellClass::Occupied));
+        assert_eq!(at(&g, 10), Some(CellClass::Unknown));
+        let g = run(short, 1.95, 0.05);
+        assert_eq!(at(&g, 10), Some(CellClass::Occupied));
+        assert_eq!(at(&g, 11), Some(CellClass::Occupied));
+        assert_eq!(at(&g, 12), Some(CellClass::Free));
+        assert_eq!(at(&g, 9), Some(CellClass::Unknown));
+        // At the true pose the return's point (1.95 m plus the 1.7 cm depth) lies 1.7 cm into
+        // column 10, and a 5 cm band ends 6.7 cm into it: the same cells as without a band.
+        let g = run(Pose2::new(3.05, 3.05, PI), 1.95, 0.05);
+        assert_eq!(at(&g, 10), Some(CellClass::Occupied));
+        assert_eq!(at(&g, 11), Some(CellClass::Free));
+        assert_eq!(at(&g, 9), Some(CellClass::Unknown));
+        // A return in the middle of column 10 (x = 1.05 m) and a band of 1 m: column 9 too,
+        // column 8 never (half a cell at most).
+        let g = run(Pose2::new(3.05, 3.05, PI), 2.0, 1.0);
+        assert_eq!(at(&g, 10), Some(CellClass::Occupied));
+        assert_eq!(at(&g, 9), Some(CellClass::Occupied));
+        assert_eq!(at(&g, 8), Some(CellClass::Unknown));
+        assert_eq!(at(&g, 11), Some(CellClass::Free));
+        // A bad band is an error naming it, and leaves the grid untouched.
+        let mut g = grid();
+        for bad in [-0.01, f32::NAN, f32::INFINITY] {
+            let e = integrate_scan_banded(&mut g, &beam(1.95), short, bad, &laser, &model, &mut ());
+            assert!(matches!(e, Err(IntegrationError::BadBand(_))), "{e:?}");
+        }
+        assert_eq!(g.counts(), CellCounts::default());
     }
 
     #[test]

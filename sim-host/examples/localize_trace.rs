@@ -181,6 +181,12 @@ fn main() {
     if let Some(v) = env("CAL_SK") {
         m.localize.calibration.curvature_sigma_rad_per_m = v;
     }
+    if let Some(v) = env("WALL_FLOOR") {
+        m.localize.wall_band_floor_m = v;
+    }
+    if let Some(v) = env("WALL_SIGMAS") {
+        m.localize.wall_band_sigmas = v;
+    }
     let quiet = std::env::var("QUIET").is_ok();
     // WINDOW=FROM,TO: every scan between FROM and TO s of simulated time.
     let window = std::env::var("WINDOW")
@@ -221,6 +227,8 @@ fn main() {
     let mut sums: std::collections::BTreeMap<&str, (u32, f64, f64, f64)> = Default::default();
     let mut jumps: Vec<(f64, f32, f32, &str)> = Vec::new();
     let (mut err_sum, mut err_n, mut err_max) = (0.0f64, 0u64, 0.0f32);
+    // The tracker's own position σ (larger axis), summed like the error for its mean.
+    let mut sigma_sum = 0.0f64;
     // The raw odometry's largest error against the truth over the run (0 with `none`).
     let (mut odo_max_m, mut odo_max_rad) = (0.0f32, 0.0f32);
     while !r.finished() {
@@ -245,6 +253,7 @@ fn main() {
             err_sum += ep as f64;
             err_n += 1;
             err_max = err_max.max(ep);
+            sigma_sum += f64::from(r.mission(0).localizer().position_sigma_m());
             let o = r.body(0).odometry_in_map();
             odo_max_m = odo_max_m.max(o.position().distance(tp.position()));
             odo_max_rad = odo_max_rad.max(normalize_angle(o.theta - tp.theta).abs());
@@ -417,7 +426,7 @@ fn main() {
         );
     }
     println!(
-        "seed {seed} final err {:.3} m {:.2} deg coverage {:.1} % map acc {:.1} % t {:.0} run mean {:.3} max {:.3} m | keyframes {} closures {}/{} refused {:?} redraws {} ({:.1} ms mean, {:.1} max) wall {:.1} s",
+        "seed {seed} final err {:.3} m {:.2} deg coverage {:.1} % map acc {:.1} % t {:.0} run mean {:.3} max {:.3} m sigma mean {:.3} m | keyframes {} closures {}/{} refused {:?} redraws {} ({:.1} ms mean, {:.1} max) wall {:.1} s",
         e.position().distance(tp.position()),
         normalize_angle(e.theta - tp.theta).to_degrees(),
         100.0 * rep.coverage,
@@ -425,6 +434,7 @@ fn main() {
         r.sim_time_s(),
         err_sum / err_n.max(1) as f64,
         err_max,
+        sigma_sum / err_n.max(1) as f64,
         g.keyframes,
         g.closures,
         g.attempts,

@@ -13,7 +13,7 @@
 
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{LogOddsBounds, OccupancyGrid};
-use crate::sensor::{IntegrationError, LaserConfig, Scan, SensorModel, integrate_scan};
+use crate::sensor::{IntegrationError, LaserConfig, Scan, SensorModel, integrate_scan_banded};
 
 use super::keyframes::{KeyframeStore, is_keyframe};
 use super::loop_closure::{ClosureConfig, LOCAL_CELLS, LocalMap, Refusal, candidate};
@@ -351,11 +351,13 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
     }
 
     /// Draws `grid` and `hits` again from the keyframes at their graph poses (everything else
-    /// they held is forgotten). `observer` sees the grid's cells change class as usual.
+    /// they held is forgotten), the grid with the wall band `band_m`
+    /// ([`crate::sensor::integrate_scan_banded`]). `observer` sees the grid's cells change class as usual.
     pub fn redraw<const N: usize>(
         &mut self,
         grid: &mut OccupancyGrid<N>,
         hits: &mut HitMap<N>,
+        band_m: f32,
         laser: &LaserConfig,
         sensor: &SensorModel,
     ) -> Result<(), IntegrationError> {
@@ -369,7 +371,7 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
                 break;
             };
             k.scan_into(laser, &mut scan);
-            integrate_scan(grid, &scan, pose, laser, sensor, &mut ())?;
+            integrate_scan_banded(grid, &scan, pose, band_m, laser, sensor, &mut ())?;
             hits.add_scan(&scan, laser, pose);
         }
         Ok(())

@@ -114,6 +114,19 @@ pub struct LocalizeConfig {
     /// reported, as before). While on, [`Self::innovation_gate`]'s fading memory (> 0) is not
     /// applied; its validation gate (< 0) is.
     pub calibration: super::odometry_calibration::CalibrationConfig,
+    /// How far past each return the grid's Occupied evidence reaches, for the pose's own
+    /// error ([`crate::sensor::integrate_scan_banded`]; at most half a cell is used): this
+    /// floor \[m\] plus [`Self::wall_band_sigmas`] times the tracker's position σ
+    /// ([`Tracker::position_sigma_m`]). 0 and 0: each return marks the one cell holding it.
+    /// Default 5 cm and 0: the pose the localisation leaves is 2-3 cm off the truth even with
+    /// exact odometry (median; the filter's own σ says 6 mm), and with a band of half a cell
+    /// the house missions with the matcher and the graph on reach 99 % coverage in 16 of 20
+    /// seeds instead of 7 (a band of 3 σ: 13); docs/experiments.md, branch `wall18`. The cost:
+    /// an obstacle thinner than a cell is drawn a cell deeper on the side away from the laser
+    /// when the band crosses a cell edge. With the localisation off there is no band.
+    pub wall_band_floor_m: f32,
+    /// See [`Self::wall_band_floor_m`].
+    pub wall_band_sigmas: f32,
 }
 
 impl Default for LocalizeConfig {
@@ -145,6 +158,8 @@ impl Default for LocalizeConfig {
             stop_var_rad2: 0.5f32.to_radians() * 0.5f32.to_radians(),
             graph: super::graph::GraphConfig::default(),
             calibration: super::odometry_calibration::CalibrationConfig::default(),
+            wall_band_floor_m: 0.05,
+            wall_band_sigmas: 0.0,
         }
     }
 }
@@ -424,6 +439,33 @@ impl Tracker {
     /// The last match's quality.
     pub fn last(&self) -> Option<&MatchQuality> {
         self.last.as_ref()
+    }
+
+    /// The band past each return that the grid's Occupied evidence reaches under `config`
+    /// \[m\] ([`LocalizeConfig::wall_band_floor_m`]; 0 with the localisation off).
+    pub fn wall_band_m(&self, config: &LocalizeConfig) -> f32 {
+        if !config.enabled {
+            return 0.0;
+        }
+        let band = config.wall_band_floor_m + config.wall_band_sigmas * self.position_sigma_m();
+        if band.is_finite() { band.max(0.0) } else { 0.0 }
+    }
+
+    /// The standard deviation \[m\] of the position estimate along its least certain
+    /// direction: the square root of the larger eigenvalue of the covariance's `x, y` block
+    /// (0 before the first odometry reading; the filter's own figure, not the true error).
+    pub fn position_sigma_m(&self) -> f32 {
+        let (a, b, c) = (
+            self.cov[(0, 0)] as f32,
+            self.cov[(0, 1)] as f32,
+            self.cov[(1, 1)] as f32,
+        );
+        let largest = 0.5 * (a + c) + math::sqrt(0.25 * (a - c) * (a - c) + b * b);
+        if largest.is_finite() && largest > 0.0 {
+            math::sqrt(largest)
+        } else {
+            0.0
+        }
     }
 }
 

@@ -20,7 +20,7 @@ use crate::control::safety::{RobotFlags, SafetyInputs, SafetyMonitor, SafetyStat
 use crate::explore::{Blacklist, Decision, MAX_DECISION_HISTORY, MAX_MOUTHS, MAX_TARGETS};
 use crate::geometry::{Point2, Pose2};
 use crate::planner::Planner;
-use crate::sensor::{Scan, integrate_scan};
+use crate::sensor::{Scan, integrate_scan_banded};
 
 use super::shared::{SharedMap, Workspace};
 use super::{
@@ -263,10 +263,11 @@ impl<const N: usize> Mission<N> {
             return self.publish(now, map);
         }
         if self.localizer.grids_scan(&self.config.localize) {
-            integrate_scan(
+            integrate_scan_banded(
                 &mut map.grid,
                 scan,
                 self.senses.pose_map,
+                self.localizer.wall_band_m(&self.config.localize),
                 &self.config.laser,
                 &self.config.sensor,
                 &mut map.trav,
@@ -323,6 +324,7 @@ impl<const N: usize> Mission<N> {
             .redraw(
                 &mut map.grid,
                 &mut map.hits,
+                self.localizer.wall_band_m(&self.config.localize),
                 &self.config.laser,
                 &self.config.sensor,
             )
@@ -383,10 +385,11 @@ impl<const N: usize> Mission<N> {
         if !self.admit_to_map(now, pose, scan) {
             return self.publish(now, map);
         }
-        integrate_scan(
+        integrate_scan_banded(
             &mut map.grid,
             scan,
             pose,
+            self.localizer.wall_band_m(&self.config.localize),
             &self.config.laser,
             &self.config.sensor,
             &mut map.trav,
