@@ -163,7 +163,7 @@ fn a_forty_centimetre_door_is_never_planned_through() {
 #[test]
 fn a_half_metre_door_approached_askew_is_driven_through_without_contact() {
     // Each of these fails on the planner before the approach point (commit 26c8184): the robot
-    // is stopped in front of the door about ten times and ends "nothing reachable" at 53-56 %.
+    // re-plans about 40 times in front of the door and ends "nothing reachable" at 53-57 %.
     let starts = [
         (Pose2::new(5.7, 3.45, 0.0), 25),
         (Pose2::new(5.7, 2.55, 0.0), 26),
