@@ -4,6 +4,7 @@ use super::*;
 use crate::geometry::Point2;
 use crate::grid::{CellClass, GridGeometry, LogOddsBounds, OccupancyGrid};
 use crate::random;
+use core::f32::consts::FRAC_PI_2;
 
 const CAP: usize = 32 * 24;
 
@@ -696,6 +697,58 @@ fn the_leg_through_a_narrow_door_runs_along_its_axis() {
             (20, 20),
             "{a:?} -> {b:?}: leg {crossing:?}"
         );
+    }
+}
+
+#[test]
+fn a_leg_into_a_narrow_door_from_the_side_comes_along_its_axis() {
+    // The same 0.5 m door (axis: column 20), the robot to the side of it and close (issue 17:
+    // it drove at the last cell before the door at a slant, its front corner towards the
+    // jamb, and the safety monitor stopped it there again and again). The waypoint before the
+    // leg through the door is reached along the door's axis, from an approach point on that
+    // axis where the robot can turn; every leg stays in sight.
+    let mut astar = AStar::<CAP>::new();
+    let mut path = [Cell::default(); CAP];
+    let mut out = [Point2::default(); CAP];
+    let (_, trav) = wall_with_door(5);
+    let g = *trav.geometry();
+    for (a, b) in [
+        (Cell::new(23, 10), Cell::new(20, 21)),
+        (Cell::new(17, 9), Cell::new(20, 21)),
+        (Cell::new(24, 21), Cell::new(20, 8)),
+        (Cell::new(4, 4), Cell::new(28, 20)),
+        (Cell::new(30, 3), Cell::new(2, 22)),
+    ] {
+        let p = astar.find_path(&trav, a, b, &mut path).unwrap();
+        let n = prune_to_waypoints(&trav, &path[..p.len], &mut out).unwrap();
+        let w = &out[..n];
+        let i = w
+            .windows(2)
+            .position(|s| (s[0].y - 1.55) * (s[1].y - 1.55) < 0.0)
+            .expect("a leg crosses the wall");
+        assert!(
+            i >= 1,
+            "{a:?} -> {b:?}: the first leg crosses the door: {w:?}"
+        );
+        let (before, at) = (w[i - 1], w[i]);
+        let axis = if w[i + 1].y > at.y {
+            FRAC_PI_2
+        } else {
+            -FRAC_PI_2
+        };
+        let skew = crate::geometry::normalize_angle(before.bearing_to(at) - axis);
+        assert!(
+            skew.abs() <= 0.1,
+            "{a:?} -> {b:?}: the leg into {at:?} comes {skew} rad off the door's axis: {w:?}"
+        );
+        assert!(
+            trav.can_turn(g.cell_at(before).unwrap()),
+            "{a:?} -> {b:?}: {w:?}"
+        );
+        for s in w.windows(2) {
+            let (c0, c1) = (g.cell_at(s[0]).unwrap(), g.cell_at(s[1]).unwrap());
+            assert!(has_line_of_sight(&trav, c0, c1), "{a:?} -> {b:?}: {w:?}");
+        }
     }
 }
 

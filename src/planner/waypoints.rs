@@ -23,8 +23,15 @@
 //! door, entering it 6° off its axis, brings a front corner 2 cm nearer one frame (the safety
 //! monitor stops it). The path's cells through a narrow place run along its axis, and the
 //! waypoint before it is then the last cell, where the robot can still turn, on that line.
+//!
+//! A leg that would reach that last cell askew to the passage's axis gets an approach point
+//! first: a cell on the axis, back from the passage, where the swing circle fits (clear of
+//! the wall bands where there is room). The robot turns there and drives in along the axis;
+//! coming at the last cell at a slant, its front corner and the safety monitor's corridor ahead
+//! pointed at the passage's jamb and the monitor stopped it in front of the door again and
+//! again (issue 17; see [`approach_point`]).
 
-use super::traversability::BAND_NO_TURN;
+use super::traversability::{BAND_NEAR, BAND_NO_TURN};
 use super::{BlockedBoxes, PlanError, Traversability};
 use crate::geometry::Point2;
 use crate::grid::Cell;
@@ -191,6 +198,12 @@ fn prune_with<const N: usize>(
             .rev()
             .find(|&j| trav.can_turn(path[j]))
             .unwrap_or(k - 1);
+        // Into a narrow passage at a slant: first the approach point on its axis.
+        if step_band(k) >= BAND_NO_TURN
+            && let Some(dock) = approach_point(trav, path, anchor, turn, &along_path, &sees)
+        {
+            push(dock, &mut count)?;
+        }
         anchor = turn;
         push(path[anchor], &mut count)?;
         band = band_at(path[anchor]);
@@ -200,4 +213,95 @@ fn prune_with<const N: usize>(
         push(path[path.len() - 1], &mut count)?;
     }
     Ok(count)
+}
+
+/// Farthest the approach point before a narrow passage lies back along the passage's axis,
+/// from the last cell of the path where the robot can turn \[m\].
+const APPROACH_MAX_M: f32 = 1.0;
+
+/// Most cells of the path's straight run into a narrow passage that give its axis.
+const AXIS_CELLS: usize = 12;
+
+/// A leg that comes at a narrow passage more askew than this to its axis gets an approach
+/// point \[rad\] (the follower's default heading tolerance: less is driven straight anyway).
+const APPROACH_SKEW_RAD: f32 = 0.1;
+
+/// The approach point before a narrow passage the path enters at `turn` (the last cell before
+/// the no-turn band where the robot can turn, a waypoint): a cell on the passage's axis (the
+/// path's straight run from `turn` into the band) back from `turn`, the first clear of both
+/// wall bands, else the farthest where the robot can still turn, at most [`APPROACH_MAX_M`]
+/// back, in sight of `turn` and of the previous waypoint `path[anchor]` without crossing the
+/// no-turn band. `None` when the leg from the anchor already runs along the axis, when the
+/// run is too short to give an axis, or when no such cell exists.
+///
+/// Why: a robot that reaches `turn` askew turns there, but on the way its front corner and
+/// the safety monitor's corridor ahead point at the passage's jamb, not into the passage; a
+/// 0.455 m x 0.381 m body 0.34 rad off a 0.5 m door's axis spans 0.51 m across it, and the
+/// monitor stops it in front of the door again and again (gen-10, seed 25, exact odometry).
+/// From the approach point the robot turns where its swing circle fits and then drives
+/// straight along the axis, the way a robot docks: a staging pose on the dock's axis first,
+/// then straight in (the staging pose of the ROS 2 Navigation docking server,
+/// `opennav_docking`; here for the turn-then-drive motions of the follower).
+fn approach_point<const N: usize>(
+    trav: &Traversability<N>,
+    path: &[Cell],
+    anchor: usize,
+    turn: usize,
+    along_path: &impl Fn(usize, usize) -> bool,
+    sees: &impl Fn(Cell, Cell, u8) -> bool,
+) -> Option<Cell> {
+    if !trav.can_turn(path[turn]) {
+        return None;
+    }
+    // The axis: the path's straight run from `turn` into the passage.
+    let last = (turn + AXIS_CELLS).min(path.len() - 1);
+    let mut end = turn;
+    while end < last && along_path(turn, end + 1) {
+        end += 1;
+    }
+    if end < turn + 2 {
+        return None;
+    }
+    let geometry = trav.geometry();
+    let from = geometry.cell_center(path[turn]);
+    let to = geometry.cell_center(path[end]);
+    let run_m = from.distance(to);
+    let (ux, uy) = ((to.x - from.x) / run_m, (to.y - from.y) / run_m);
+    // Already coming along the axis: nothing to add.
+    let a = geometry.cell_center(path[anchor]);
+    let leg_m = a.distance(from);
+    if leg_m > 1e-6 {
+        let (dx, dy) = ((from.x - a.x) / leg_m, (from.y - a.y) / leg_m);
+        let sin_skew = dx * uy - dy * ux;
+        if dx * ux + dy * uy > 0.0 && sin_skew.abs() <= crate::math::sin(APPROACH_SKEW_RAD) {
+            return None;
+        }
+    }
+    let step_m = 0.5 * geometry.resolution_m;
+    let mut best = None;
+    let mut seen = path[turn];
+    let mut back_m = step_m;
+    while back_m <= APPROACH_MAX_M {
+        let p = Point2::new(from.x - ux * back_m, from.y - uy * back_m);
+        let Some(c) = geometry.cell_at(p) else {
+            break;
+        };
+        if c != seen {
+            if !trav.can_turn(c) || !sees(c, path[turn], BAND_NEAR) {
+                break;
+            }
+            seen = c;
+            best = Some(c);
+            if trav.wall_band(c) == Some(0) {
+                break;
+            }
+        }
+        back_m += step_m;
+    }
+    let q = best?;
+    let band = trav
+        .wall_band(path[anchor])
+        .unwrap_or(u8::MAX)
+        .max(BAND_NEAR);
+    (q != path[anchor] && sees(path[anchor], q, band)).then_some(q)
 }
