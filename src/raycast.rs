@@ -37,7 +37,7 @@
 use core::ops::ControlFlow;
 
 use crate::geometry::Point2;
-use crate::grid::{Cell, GridGeometry};
+use crate::grid::{Cell, CellBox, GridGeometry};
 use crate::math;
 
 /// How a traversal ended.
@@ -95,6 +95,104 @@ pub fn traverse(
             TraversalEnd::Clipped
         },
     }
+}
+
+/// What the visitor of [`traverse_skipping`] asks for after a cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// Go on to the next cell.
+    Next,
+    /// Stop the walk.
+    Stop,
+    /// Every cell of this box (which holds the cell just visited) is of no interest: the walk
+    /// may pass over the cells it would visit next inside the box without handing them over.
+    Skip(CellBox),
+}
+
+/// [`traverse`] for a visitor that can say a box of cells around the cell it was handed is of
+/// no interest ([`Step::Skip`]): the walk then moves on to the last cell it would visit in the
+/// box and hands over that one, passing over the cells in between. The cells handed over are a
+/// subsequence of the ones [`traverse`] visits, in the same order, and the walk's state after a
+/// skip is bit for bit the one the cell-by-cell walk reaches: the skip works out how many grid
+/// lines of each axis the segment crosses before it leaves the box, from the same crossing
+/// times the walk adds up one by one, and does so only for a segment whose crossing times are
+/// all exact in `f64` (then a product equals the sum; otherwise, and for a segment that leaves
+/// the grid, nothing is skipped). `visited` counts the cells passed over as well, so it is the
+/// count [`traverse`] gives.
+#[inline]
+pub fn traverse_skipping(
+    geom: &GridGeometry,
+    from: Point2,
+    to: Point2,
+    mut visit: impl FnMut(Cell, usize) -> Step,
+) -> Traversal {
+    let mut ray = RayCells::new(geom, from, to);
+    if ray.stays_inside() {
+        return ray.walk_inside_skipping(visit);
+    }
+    let mut visited = 0;
+    for (cell, index) in ray.by_ref() {
+        visited += 1;
+        if visit(cell, index) == Step::Stop {
+            return Traversal {
+                visited,
+                end: TraversalEnd::Stopped,
+            };
+        }
+    }
+    Traversal {
+        visited,
+        end: if ray.reached_end() {
+            TraversalEnd::Reached
+        } else {
+            TraversalEnd::Clipped
+        },
+    }
+}
+
+/// Whether `area` holds `cell`.
+#[inline(always)]
+fn box_holds(area: &CellBox, cell: Cell) -> bool {
+    usize::try_from(cell.col).is_ok_and(|c| (area.col_min..area.col_end).contains(&c))
+        && usize::try_from(cell.row).is_ok_and(|r| (area.row_min..area.row_end).contains(&r))
+}
+
+/// The exponent of the lowest set bit of a finite `v >= 0` (`v = m · 2^e`, `m` odd); `i32::MAX`
+/// for zero, `i32::MIN` for a subnormal, infinite or negative value (never exact here).
+fn lowest_bit_exponent(v: f64) -> i32 {
+    if v == 0.0 {
+        return i32::MAX;
+    }
+    let bits = v.to_bits();
+    let exponent = ((bits >> 52) & 0x7ff) as i32;
+    if v.is_nan() || v < 0.0 || exponent == 0 || exponent == 0x7ff {
+        return i32::MIN;
+    }
+    let mantissa = (bits & ((1u64 << 52) - 1)) | (1u64 << 52);
+    exponent - 1075 + mantissa.trailing_zeros() as i32
+}
+
+/// The exponent `e` of a finite `v > 0` with `2^e <= v < 2^(e+1)`.
+fn top_bit_exponent(v: f64) -> i32 {
+    ((v.to_bits() >> 52) & 0x7ff) as i32 - 1023
+}
+
+/// Crossing times `next + k · inc` (`k` from 0) below `t`, at most `most`; exact arithmetic
+/// (see [`RayCells::sums_are_exact`]), the division only gives a first guess.
+#[inline(always)]
+fn crossings_below(next: f64, inc: f64, t: f64, most: i64) -> i64 {
+    if next >= t || most <= 0 {
+        return 0;
+    }
+    // The quotient rounded down, plus one: the ceiling, or one above it.
+    let mut n = (((t - next) / inc) as i64).saturating_add(1).clamp(1, most);
+    while n > 1 && next + (n - 1) as f64 * inc >= t {
+        n -= 1;
+    }
+    while n < most && next + n as f64 * inc < t {
+        n += 1;
+    }
+    n
 }
 
 /// Iterator over the grid cells a segment crosses, as `(cell, flat index)`; the allocation-free
@@ -360,6 +458,210 @@ impl RayCells {
         }
     }
 
+    /// Whether every crossing time the walk from here can reach, `next_x + k · inc_x` for
+    /// `k <= left_col` and likewise along y (and sums and differences of two of them), is
+    /// exactly representable in `f64`: all are multiples of the smallest power of two that
+    /// divides the four inputs, and all stay below that power times 2^52. Then adding the
+    /// increment one step at a time (as the walk does) and multiplying it give the same bits,
+    /// and crossing times compare as the real numbers they stand for.
+    fn sums_are_exact(&self) -> bool {
+        let (nx, ny, ix, iy) = (self.next_x, self.next_y, self.inc_x, self.inc_y);
+        let lowest = lowest_bit_exponent(nx)
+            .min(lowest_bit_exponent(ny))
+            .min(lowest_bit_exponent(ix))
+            .min(lowest_bit_exponent(iy));
+        if lowest == i32::MIN || lowest == i32::MAX {
+            return false;
+        }
+        // Twice the largest time reached, one increment more on each axis: room for sums and
+        // differences of two of them.
+        let top = 2.0
+            * ((nx + (self.left_col + 1) as f64 * ix).max(ny + (self.left_row + 1) as f64 * iy)
+                + ix
+                + iy);
+        top.is_finite() && top > 0.0 && top_bit_exponent(top) <= lowest + 51
+    }
+
+    /// [`Self::walk_inside`] for [`traverse_skipping`]: the same cells in the same order, but
+    /// a visitor's [`Step::Skip`] moves the walk to the last cell it would visit in the box
+    /// (see [`traverse_skipping`]). No skip right after a skip: the cell reached is handed
+    /// over and the walk steps on from it.
+    #[inline(always)]
+    fn walk_inside_skipping(&mut self, mut visit: impl FnMut(Cell, usize) -> Step) -> Traversal {
+        let exact = self.sums_are_exact();
+        let width = self.width;
+        let (step_col, step_row) = (self.step_col, self.step_row);
+        let (mut left_col, mut left_row) = (self.left_col, self.left_row);
+        let (end_col, end_row) = (
+            self.col + step_col * left_col,
+            self.row + step_row * left_row,
+        );
+        let cell = |left_col: i64, left_row: i64| {
+            Cell::new(
+                (end_col - step_col * left_col) as i32,
+                (end_row - step_row * left_row) as i32,
+            )
+        };
+        let mut index = (self.row * width + self.col) as usize;
+        let (index_step_x, index_step_y) = (step_col as isize, (step_row * width) as isize);
+        let (inc_x, inc_y) = (self.inc_x, self.inc_y);
+        let (mut next_x, mut next_y) = (self.next_x, self.next_y);
+        let (corner_x, corner_y) = (
+            step_col == step_row || step_col > 0,
+            step_col == step_row || step_col < 0,
+        );
+        let diagonal_corners = step_col == step_row;
+        let stopped = |visited| Traversal {
+            visited,
+            end: TraversalEnd::Stopped,
+        };
+        // Grid lines to cross along an axis before the walk leaves the box's span `lo..end`
+        // from `at` (moving by `step`); `i64::MAX` when it never does before `left` steps.
+        let to_leave = |at: i64, step: i64, lo: usize, end: usize, left: i64| {
+            let k = if step > 0 {
+                end as i64 - at
+            } else {
+                at - lo as i64 + 1
+            };
+            if k >= 1 && k <= left { k } else { i64::MAX }
+        };
+        let mut visited = 0;
+        let mut skipped = false;
+        self.finished = true;
+        while left_col > 0 && left_row > 0 {
+            visited += 1;
+            let here = cell(left_col, left_row);
+            match visit(here, index) {
+                Step::Stop => return stopped(visited),
+                Step::Skip(area) if exact && !skipped && box_holds(&area, here) => {
+                    // The first crossing that leaves the box, at time `t`: every crossing
+                    // before it stays in the box, so the walk passes over the cells they lead
+                    // into and stops at the last one.
+                    let (col, row) = (i64::from(here.col), i64::from(here.row));
+                    let kx = to_leave(col, step_col, area.col_min, area.col_end, left_col);
+                    let ky = to_leave(row, step_row, area.row_min, area.row_end, left_row);
+                    let t = match (kx, ky) {
+                        (i64::MAX, i64::MAX) => f64::INFINITY,
+                        (i64::MAX, ky) => next_y + (ky - 1) as f64 * inc_y,
+                        (kx, i64::MAX) => next_x + (kx - 1) as f64 * inc_x,
+                        (kx, ky) => {
+                            (next_x + (kx - 1) as f64 * inc_x).min(next_y + (ky - 1) as f64 * inc_y)
+                        }
+                    };
+                    if t.is_finite() {
+                        let nx = crossings_below(next_x, inc_x, t, left_col);
+                        let ny = crossings_below(next_y, inc_y, t, left_row);
+                        // Moving north-east or south-west, a crossing of both lines at once
+                        // (a grid corner) is one diagonal step.
+                        let mut corners = 0;
+                        if diagonal_corners {
+                            for k in 0..nx {
+                                let d = next_x + k as f64 * inc_x - next_y;
+                                if d >= 0.0 {
+                                    let j = (d / inc_y + 0.5) as i64;
+                                    corners += i64::from(j < ny && j as f64 * inc_y == d);
+                                }
+                            }
+                        }
+                        let steps = nx + ny - corners;
+                        if steps > 0 {
+                            index = index
+                                .wrapping_add_signed(nx as isize * index_step_x)
+                                .wrapping_add_signed(ny as isize * index_step_y);
+                            left_col -= nx;
+                            left_row -= ny;
+                            next_x += nx as f64 * inc_x;
+                            next_y += ny as f64 * inc_y;
+                            // The cells passed over; the last one is handed over next.
+                            visited += steps as usize - 1;
+                            skipped = true;
+                            continue;
+                        }
+                    }
+                }
+                _ => {}
+            }
+            skipped = false;
+            let (step_x, step_y) = if next_x < next_y {
+                (true, false)
+            } else if next_y < next_x {
+                (false, true)
+            } else {
+                (corner_x, corner_y)
+            };
+            if step_x {
+                index = index.wrapping_add_signed(index_step_x);
+                left_col -= 1;
+                next_x += inc_x;
+            }
+            if step_y {
+                index = index.wrapping_add_signed(index_step_y);
+                left_row -= 1;
+                next_y += inc_y;
+            }
+        }
+        // At most one axis has steps left: a straight run, where a skip is a count of cells.
+        let (mut left, index_step, along_x) = if left_col > 0 {
+            (left_col, index_step_x, true)
+        } else {
+            (left_row, index_step_y, false)
+        };
+        loop {
+            visited += 1;
+            let here = if along_x {
+                cell(left, 0)
+            } else {
+                cell(0, left)
+            };
+            let step = visit(here, index);
+            if step == Step::Stop {
+                return stopped(visited);
+            }
+            if left == 0 {
+                break;
+            }
+            if let Step::Skip(area) = step
+                && !skipped
+                && box_holds(&area, here)
+            {
+                let k = if along_x {
+                    to_leave(
+                        i64::from(here.col),
+                        step_col,
+                        area.col_min,
+                        area.col_end,
+                        left,
+                    )
+                } else {
+                    to_leave(
+                        i64::from(here.row),
+                        step_row,
+                        area.row_min,
+                        area.row_end,
+                        left,
+                    )
+                };
+                // Cells still in the box ahead: `k - 1` before it is left, or all `left`.
+                let ahead = if k == i64::MAX { left } else { k - 1 };
+                if ahead > 1 {
+                    index = index.wrapping_add_signed(ahead as isize * index_step);
+                    left -= ahead;
+                    visited += ahead as usize - 1;
+                    skipped = true;
+                    continue;
+                }
+            }
+            skipped = false;
+            index = index.wrapping_add_signed(index_step);
+            left -= 1;
+        }
+        self.reached = true;
+        Traversal {
+            visited,
+            end: TraversalEnd::Reached,
+        }
+    }
+
     /// Whether the current (outside) cell can no longer lead into the grid.
     #[inline(always)]
     fn beyond_grid(&self) -> bool {
@@ -572,6 +874,117 @@ mod tests {
             corner_cases > 50,
             "only {corner_cases} diagonal steps exercised"
         );
+    }
+
+    #[test]
+    fn skipping_walks_hand_over_the_same_cells_but_the_boxes_passed_over() {
+        // Cells are "plain" or not (a random pattern with whole blocks plain); the visitor
+        // asks to pass over its cell's block when the block is all plain. The cells handed
+        // over must be the plain walk's, in its order, less cells of such blocks only; the
+        // count and the end must be the plain walk's. End points: fine ones, and ones on the
+        // quarter-cell lattice (exact corners, both directions' ties, lines along grid lines).
+        let geom = GridGeometry::new(64, 48, 0.25, Point2::new(-2.0, 1.5)).unwrap();
+        let mut rng = seeded(11);
+        let (mut passed_over, mut diagonal_skips) = (0usize, 0usize);
+        for case in 0..6000 {
+            let side = 2 + below(&mut rng, 7) as i32;
+            let plain: Vec<bool> = {
+                let blocks: Vec<bool> = (0..64 * 48).map(|_| below(&mut rng, 3) != 0).collect();
+                (0..64 * 48)
+                    .map(|i| {
+                        let (c, r) = ((i % 64) as i32, (i / 64) as i32);
+                        blocks[((r / side) * 64 + c / side) as usize] || below(&mut rng, 8) != 0
+                    })
+                    .collect()
+            };
+            let block_of = |c: Cell| {
+                let (c0, r0) = ((c.col / side) * side, (c.row / side) * side);
+                CellBox {
+                    col_min: c0 as usize,
+                    col_end: ((c0 + side) as usize).min(64),
+                    row_min: r0 as usize,
+                    row_end: ((r0 + side) as usize).min(48),
+                }
+            };
+            let all_plain = |b: &CellBox| {
+                (b.row_min..b.row_end).all(|r| (b.col_min..b.col_end).all(|c| plain[r * 64 + c]))
+            };
+            let point = |rng: &mut _| {
+                if case % 2 == 0 {
+                    Point2::new(range_f32(rng, -2.5, 14.5), range_f32(rng, 1.0, 13.5))
+                } else {
+                    Point2::new(
+                        -2.0 + below(rng, 64 * 4) as f32 * 0.0625,
+                        1.5 + below(rng, 48 * 4) as f32 * 0.0625,
+                    )
+                }
+            };
+            let (a, b) = (point(&mut rng), point(&mut rng));
+            let (want, plain_walk) = walk(&geom, a, b);
+            let mut handed = Vec::new();
+            let t = traverse_skipping(&geom, a, b, |c, i| {
+                assert_eq!(geom.index(c), Some(i));
+                handed.push(c);
+                let area = block_of(c);
+                if plain[i] && all_plain(&area) {
+                    Step::Skip(area)
+                } else {
+                    Step::Next
+                }
+            });
+            assert_eq!(t, plain_walk, "case {case}: {a:?} -> {b:?}");
+            // `handed` is `want` with cells of all-plain blocks left out.
+            let mut k = 0;
+            for (n, c) in want.iter().enumerate() {
+                if handed.get(k) == Some(c) {
+                    k += 1;
+                    continue;
+                }
+                assert!(
+                    plain[geom.index(*c).unwrap()] && all_plain(&block_of(*c)),
+                    "case {case}: {a:?} -> {b:?}: cell {n} {c:?} passed over, not in a plain block"
+                );
+                passed_over += 1;
+                if n > 0 && want[n - 1].col != c.col && want[n - 1].row != c.row {
+                    diagonal_skips += 1;
+                }
+            }
+            assert_eq!(
+                k,
+                handed.len(),
+                "case {case}: {a:?} -> {b:?}: {handed:?} vs {want:?}"
+            );
+            // The last cell is always handed over.
+            assert_eq!(handed.last(), want.last(), "case {case}");
+        }
+        assert!(passed_over > 20_000, "only {passed_over} cells passed over");
+        assert!(
+            diagonal_skips > 20,
+            "only {diagonal_skips} diagonal steps passed over"
+        );
+    }
+
+    #[test]
+    fn crossing_times_are_exact_only_when_their_bits_fit() {
+        assert_eq!(lowest_bit_exponent(1.0), 0);
+        assert_eq!(lowest_bit_exponent(0.75), -2);
+        assert_eq!(lowest_bit_exponent(96.0), 5);
+        assert_eq!(lowest_bit_exponent(0.0), i32::MAX);
+        assert_eq!(lowest_bit_exponent(-1.0), i32::MIN);
+        assert_eq!(top_bit_exponent(96.0), 6);
+        assert_eq!(top_bit_exponent(0.75), -1);
+        assert_eq!(crossings_below(0.5, 1.0, 3.0, 10), 3);
+        assert_eq!(crossings_below(0.5, 1.0, 2.5, 10), 2);
+        assert_eq!(crossings_below(0.5, 1.0, 0.5, 10), 0);
+        assert_eq!(crossings_below(0.5, 1.0, 30.0, 10), 10);
+        let geom = GridGeometry::new(64, 64, 0.125, Point2::new(0.0, 0.0)).unwrap();
+        // Grid-aligned points: few bits, exact.
+        assert!(
+            RayCells::new(&geom, Point2::new(1.25, 1.5), Point2::new(3.5, 2.75)).sums_are_exact()
+        );
+        // Tiny coordinates next to large ones: too many bits.
+        let ray = RayCells::new(&geom, Point2::new(1e-6, 3e-7), Point2::new(5.9, 4.7));
+        assert!(!ray.sums_are_exact());
     }
 
     #[test]
