@@ -890,7 +890,7 @@ mod tests {
             let side = 2 + below(&mut rng, 7) as i32;
             let plain: Vec<bool> = {
                 let blocks: Vec<bool> = (0..64 * 48).map(|_| below(&mut rng, 3) != 0).collect();
-                (0..64 * 48)
+                (0..64 * 48usize)
                     .map(|i| {
                         let (c, r) = ((i % 64) as i32, (i / 64) as i32);
                         blocks[((r / side) * 64 + c / side) as usize] || below(&mut rng, 8) != 0
