@@ -19,11 +19,12 @@
 //! evidence of all beams crossing a cell accumulates.
 
 use core::f32::consts::PI;
+use core::ops::ControlFlow;
 
 use crate::geometry::{Point2, Pose2};
-use crate::grid::{Cell, CellBox, CellClass, CellObserver, OccupancyGrid};
+use crate::grid::{Cell, CellClass, CellObserver, OccupancyGrid};
 use crate::math;
-use crate::raycast::{self, Step};
+use crate::raycast;
 use crate::units::deg_to_rad;
 
 pub mod telegram;
@@ -416,9 +417,6 @@ pub fn integrate_scan<const N: usize>(
         hit_cells.sort_unstable();
     }
 
-    // Blocks of cells around the laser found saturated Free through and through: the walks
-    // pass over them (checked when a walk first meets one, after the hits above).
-    let mut blocks = SaturatedBlocks::around(geom.cell_at_unchecked(origin));
     for (k, beam) in scan.beams().iter().enumerate() {
         let ray = match rays.get(k) {
             Some(&ray) => ray,
@@ -436,161 +434,35 @@ pub fn integrate_scan<const N: usize>(
             .filter(|_| ray.hit)
             .unwrap_or(usize::MAX);
         let evidence = ray.evidence(origin, inv_two_sigma_sq);
-        let walk = raycast::traverse_skipping(&geom, origin, ray.end, |cell, index| {
+        let walk = raycast::traverse(&geom, origin, ray.end, |cell, index| {
             let occupied = index == hit_index;
             if model.hits_before_misses && occupied {
                 // Its Occupied evidence is in already; no Free evidence from this scan.
-                return Step::Next;
+                return ControlFlow::Continue(());
             }
             // A cell saturated at the bound this evidence pushes towards stays there whatever
             // the weight (the sum is clamped back to the bound), so the weight is not needed.
             // Tested before the search among the scan's returns: most cells a beam crosses
             // are saturated Free, and a skipped cell is skipped either way.
             let current = grid.log_odds_at(index);
-            if occupied && current >= bounds.max {
-                return Step::Next;
-            }
-            if !occupied && current <= bounds.min {
-                // So is every cell of a block saturated Free through and through (but the
-                // return's cell, which the walk always hands over: it ends there).
-                return match blocks.saturated_block(grid, cell) {
-                    Some(area) => Step::Skip(area),
-                    None => Step::Next,
-                };
+            if (occupied && current >= bounds.max) || (!occupied && current <= bounds.min) {
+                return ControlFlow::Continue(());
             }
             if model.hits_before_misses && hit_cells.binary_search(&index).is_ok() {
                 // Another beam's return: no Free evidence from this scan.
-                return Step::Next;
+                return ControlFlow::Continue(());
             }
             let delta = if occupied {
-                // The cell leaves the Free bound, if it was there.
-                blocks.forget(cell);
                 model.occupied_log_odds
             } else {
                 model.free_log_odds
             };
             evidence.add(grid, cell, index, delta, observer, &mut out);
-            Step::Next
+            ControlFlow::Continue(())
         });
         out.updates += walk.visited;
     }
     Ok(out)
-}
-
-/// Side of the blocks of [`SaturatedBlocks`] \[cells\]: `1 << BLOCK_SHIFT`.
-const BLOCK_SHIFT: u32 = 3;
-
-/// Blocks per side of the window [`SaturatedBlocks`] keeps (64: one bit per block in a `u64`
-/// per row of blocks; 512 cells, 51.2 m at 0.1 m).
-const WINDOW_BLOCKS: usize = 64;
-
-/// Which square blocks of 8 x 8 cells around the laser are saturated Free in every cell (at the
-/// lower log-odds bound), for one scan's walks: Free evidence leaves such a cell where it is,
-/// so a walk may pass over the block ([`raycast::traverse_skipping`]). A block is checked when
-/// a walk first asks about it and remembered for the rest of the scan; Free evidence keeps a
-/// saturated cell saturated, and a cell that gets Occupied evidence drops its block
-/// ([`Self::forget`]). Blocks outside the window are never passed over.
-struct SaturatedBlocks {
-    /// Block column and row of the window's south-west block.
-    col0: i64,
-    row0: i64,
-    /// Per row of blocks in the window, a bit per block: checked, and found saturated.
-    checked: [u64; WINDOW_BLOCKS],
-    saturated: [u64; WINDOW_BLOCKS],
-    /// The last block asked about (block column, row) and its answer: walks ask about the same
-    /// block cell after cell.
-    last: (i64, i64),
-    last_area: Option<CellBox>,
-}
-
-impl SaturatedBlocks {
-    /// The window centred on the block of `centre` (the laser's cell).
-    fn around(centre: Cell) -> Self {
-        let half = (WINDOW_BLOCKS / 2) as i64;
-        Self {
-            col0: (i64::from(centre.col) >> BLOCK_SHIFT) - half,
-            row0: (i64::from(centre.row) >> BLOCK_SHIFT) - half,
-            checked: [0; WINDOW_BLOCKS],
-            saturated: [0; WINDOW_BLOCKS],
-            last: (i64::MIN, i64::MIN),
-            last_area: None,
-        }
-    }
-
-    /// The block's place in the window, if it is in it.
-    #[inline(always)]
-    fn slot(&self, block_col: i64, block_row: i64) -> Option<(usize, u64)> {
-        let (c, r) = (block_col - self.col0, block_row - self.row0);
-        let n = WINDOW_BLOCKS as i64;
-        ((0..n).contains(&c) && (0..n).contains(&r)).then(|| (r as usize, 1u64 << c))
-    }
-
-    /// The block holding `cell` (a cell of the grid), clipped to the grid, if every one of its
-    /// cells is saturated Free.
-    #[inline(always)]
-    fn saturated_block<const N: usize>(
-        &mut self,
-        grid: &OccupancyGrid<N>,
-        cell: Cell,
-    ) -> Option<CellBox> {
-        let block = (
-            i64::from(cell.col) >> BLOCK_SHIFT,
-            i64::from(cell.row) >> BLOCK_SHIFT,
-        );
-        if block != self.last {
-            self.last = block;
-            self.last_area = self.check(grid, block);
-        }
-        self.last_area
-    }
-
-    fn check<const N: usize>(
-        &mut self,
-        grid: &OccupancyGrid<N>,
-        (block_col, block_row): (i64, i64),
-    ) -> Option<CellBox> {
-        let (row, bit) = self.slot(block_col, block_row)?;
-        let geom = grid.geometry();
-        let side = 1usize << BLOCK_SHIFT;
-        let (col_min, row_min) = (block_col as usize * side, block_row as usize * side);
-        let area = CellBox {
-            col_min,
-            col_end: (col_min + side).min(geom.width),
-            row_min,
-            row_end: (row_min + side).min(geom.height),
-        };
-        if self.checked[row] & bit == 0 {
-            self.checked[row] |= bit;
-            let min = grid.bounds().min;
-            let log_odds = grid.log_odds();
-            let full = (area.row_min..area.row_end).all(|r| {
-                let from = r * geom.width;
-                log_odds[from + area.col_min..from + area.col_end]
-                    .iter()
-                    .all(|&l| l <= min)
-            });
-            if full {
-                self.saturated[row] |= bit;
-            }
-        }
-        (self.saturated[row] & bit != 0).then_some(area)
-    }
-
-    /// `cell` may no longer be saturated Free: its block is not passed over any more.
-    #[inline]
-    fn forget(&mut self, cell: Cell) {
-        let block = (
-            i64::from(cell.col) >> BLOCK_SHIFT,
-            i64::from(cell.row) >> BLOCK_SHIFT,
-        );
-        if let Some((row, bit)) = self.slot(block.0, block.1) {
-            self.checked[row] |= bit;
-            self.saturated[row] &= !bit;
-        }
-        if block == self.last {
-            self.last_area = None;
-        }
-    }
 }
 
 /// One usable beam in the map frame: where its walk ends and whether that end is a return.
@@ -718,7 +590,6 @@ impl BeamEvidence {
 mod tests {
     use super::*;
     use crate::grid::{Cell, CellCounts, GridGeometry, LogOddsBounds};
-    use core::ops::ControlFlow;
 
     type Grid = OccupancyGrid<{ 60 * 60 }>;
 
