@@ -23,6 +23,7 @@ use std::sync::OnceLock;
 use papillon::geometry::{Point2, Pose2};
 use papillon::grid::{Cell, CellClass, GridError, GridGeometry, LogOddsBounds, OccupancyGrid};
 use papillon::mapfile::MapImage;
+use papillon::math;
 
 use self::clearance::Clearance;
 
@@ -476,17 +477,17 @@ impl World {
     pub fn wall_penetration(&self, p: Point2, radius_m: f32) -> f32 {
         let g = self.geometry();
         let r = g.resolution_m;
-        let c0 = ((p.x - radius_m - g.origin.x) / r).floor() as i32;
-        let c1 = ((p.x + radius_m - g.origin.x) / r).floor() as i32;
-        let r0 = ((p.y - radius_m - g.origin.y) / r).floor() as i32;
-        let r1 = ((p.y + radius_m - g.origin.y) / r).floor() as i32;
+        let c0 = math::floor((p.x - radius_m - g.origin.x) / r) as i32;
+        let c1 = math::floor((p.x + radius_m - g.origin.x) / r) as i32;
+        let r0 = math::floor((p.y - radius_m - g.origin.y) / r) as i32;
+        let r1 = math::floor((p.y + radius_m - g.origin.y) / r) as i32;
         // Open space: when the cell holding `p` is farther from every blocked cell (and the
         // grid's edge) than from any cell of the box, no cell of the box is blocked and the
         // loop below would find nothing.
         if p.x.is_finite() && p.y.is_finite() && radius_m >= 0.0 {
             let (col, row) = (
-                ((p.x - g.origin.x) / r).floor() as i32,
-                ((p.y - g.origin.y) / r).floor() as i32,
+                math::floor((p.x - g.origin.x) / r) as i32,
+                math::floor((p.y - g.origin.y) / r) as i32,
             );
             if let Some(i) = g.index(Cell::new(col, row)) {
                 let (col, row) = (i64::from(col), i64::from(row));
