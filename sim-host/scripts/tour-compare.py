@@ -6,7 +6,7 @@ Usage (from the repository root, after
 `cargo build --release -p papillon-sim --bin papillon-sim --example world_set`):
     sim-host/scripts/tour-compare.py run OUTDIR LABEL BIN MAPS METHODS
         seeds 25..34 of each map (comma-separated: house,empty,lab or gen-00,...) and method
-        (comma-separated), one mission at a time under nice; generated plans get the set's
+        (comma-separated; TOUR_SEEDS=25,26 runs those seeds instead), one mission at a time under nice; generated plans get the set's
         battery rule, ceil(2 x free area in m²) steps. Writes OUTDIR/LABEL.json and prints
         medians per map and method. TOUR_ARGS adds mission options to every run (e.g.
         TOUR_ARGS="--localize on" or "--slip none"); each row ends with the mission's wall
@@ -26,7 +26,8 @@ Usage (from the repository root, after
 """
 import json, math, os, shlex, statistics as st, subprocess, sys, time
 
-SEEDS = list(range(25, 35))
+SEEDS = ([int(x) for x in os.environ["TOUR_SEEDS"].split(",")] if os.environ.get("TOUR_SEEDS")
+         else list(range(25, 35)))
 
 
 def batteries(binp):
@@ -64,7 +65,7 @@ def run(outdir, label, binp, maps, methods):
                              d["map_accuracy"]["wall_error_m"], d["map_accuracy"]["accuracy"],
                              max(abs(r["localization"]["heading_error_rad"]) for r in d["per_robot"])))
             ok = sum(r[0] >= 0.99 for r in rows)
-            print(f"{label} {m} {meth}: runs >= 99 % {ok}/10, median steps {st.median(r[1] for r in rows):.1f}, "
+            print(f"{label} {m} {meth}: runs >= 99 % {ok}/{len(rows)}, median steps {st.median(r[1] for r in rows):.1f}, "
                   f"metres {st.median(r[2] for r in rows):.1f}, decisions {st.median(r[3] for r in rows):.1f}, "
                   f"mean coverage {st.mean(r[0] for r in rows):.3f}, wall {sum(r[8] for r in rows):.1f} s", flush=True)
             out[f"{m}/{meth}"] = rows
