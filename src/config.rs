@@ -386,6 +386,10 @@ pub struct LocalizeBoardConfig {
     /// Rotation searched around the prediction, each way \[deg\]; absent: 5.7 (0.1 rad).
     #[serde(default)]
     pub search_theta_deg: Option<f32>,
+    /// Keyframes in a pose graph with loop closures behind the matcher
+    /// ([`crate::localize::graph`]); absent: false. Needs `enabled`.
+    #[serde(default)]
+    pub pose_graph: Option<bool>,
 }
 
 /// Which scans go into the map (`$.mapping`, an optional section): with `motion_filter` on,
@@ -707,6 +711,7 @@ impl BoardConfig {
         c.matcher.search_theta_rad = l
             .search_theta_deg
             .map_or(c.matcher.search_theta_rad, deg_to_rad);
+        c.graph.enabled = l.pose_graph.unwrap_or(c.graph.enabled);
         c
     }
 

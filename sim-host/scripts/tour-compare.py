@@ -6,12 +6,12 @@ Usage (from the repository root, after
 `cargo build --release -p papillon-sim --bin papillon-sim --example world_set`):
     sim-host/scripts/tour-compare.py run OUTDIR LABEL BIN MAPS METHODS
         seeds 25..34 of each map (comma-separated: house,empty,lab or gen-00,...) and method
-        (comma-separated), one mission at a time under nice; generated plans get the set's
+        (comma-separated; TOUR_SEEDS=25,26 runs those seeds instead), one mission at a time under nice; generated plans get the set's
         battery rule, ceil(2 x free area in m²) steps. Writes OUTDIR/LABEL.json and prints
         medians per map and method. TOUR_ARGS adds mission options to every run (e.g.
         TOUR_ARGS="--localize on" or "--slip none"); each row ends with the mission's wall
         time in seconds (it depends on the machine's load), the end pose error and the map's wall
-        position error (m).
+        position error (m), the map accuracy (fraction) and the end heading error (rad).
     sim-host/scripts/tour-compare.py pairs A.json:METHOD B.json:METHOD
         per map and over all: runs >= 99 %, mean coverage, medians of steps and metres over the
         seeds where both reach 99 %; and at equal coverage (the lower final coverage of the
@@ -19,12 +19,15 @@ Usage (from the repository root, after
         mission reached it).
     sim-host/scripts/tour-compare.py summary A.json:METHOD [B.json:METHOD ...]
         per map, each run's runs >= 99 % and mean coverage side by side; then per run the
-        totals: runs >= 99 %, maps with >= 9 of 10, mean coverage, end reasons, and the sum of
-        the missions' wall times.
+        totals: runs >= 99 %, maps with >= 9 of 10, mean coverage, end reasons, the sum of
+        the missions' wall times; then per run the medians: steps and metres, wall time per
+        mission, end pose and heading error, wall position error, map accuracy (and its
+        minimum, and the missions at >= 97 %).
 """
 import json, math, os, shlex, statistics as st, subprocess, sys, time
 
-SEEDS = list(range(25, 35))
+SEEDS = ([int(x) for x in os.environ["TOUR_SEEDS"].split(",")] if os.environ.get("TOUR_SEEDS")
+         else list(range(25, 35)))
 
 
 def batteries(binp):
@@ -59,9 +62,10 @@ def run(outdir, label, binp, maps, methods):
                 rows.append((d["coverage"], d["steps"], d["distance_m"], d["decisions"], d["reason"],
                              d["coverage_curve"], d["coverage_distance_curve"], d["decision_ms_p50"], wall_s,
                              max(r["pose_error_m"] for r in d["per_robot"]),
-                             d["map_accuracy"]["wall_error_m"]))
+                             d["map_accuracy"]["wall_error_m"], d["map_accuracy"]["accuracy"],
+                             max(abs(r["localization"]["heading_error_rad"]) for r in d["per_robot"])))
             ok = sum(r[0] >= 0.99 for r in rows)
-            print(f"{label} {m} {meth}: runs >= 99 % {ok}/10, median steps {st.median(r[1] for r in rows):.1f}, "
+            print(f"{label} {m} {meth}: runs >= 99 % {ok}/{len(rows)}, median steps {st.median(r[1] for r in rows):.1f}, "
                   f"metres {st.median(r[2] for r in rows):.1f}, decisions {st.median(r[3] for r in rows):.1f}, "
                   f"mean coverage {st.mean(r[0] for r in rows):.3f}, wall {sum(r[8] for r in rows):.1f} s", flush=True)
             out[f"{m}/{meth}"] = rows
@@ -143,6 +147,21 @@ def summary(*specs):
               f"{100 * st.mean(x[0] for x in rows):.1f} % | "
               + ", ".join(f"{k} {n}" for k, n in sorted(ends.items(), key=lambda kv: -kv[1]))
               + f" | {wall:.0f} | {med(rows, 9)} | {med(rows, 10)} |")
+    print()
+    print("| run | median steps / metres | wall per mission (median, s) | end pose error (median / max, m) "
+          "| end heading error (median / max, °) | wall error (median, m) | map accuracy (median / min; runs >= 97 %) |")
+    print("|---|---|--:|---|---|--:|---|")
+    for spec, r in runs:
+        rows = [x for v in r.values() for x in v]
+        acc = [x[11] for x in rows if len(x) > 11]
+        hdg = [math.degrees(x[12]) for x in rows if len(x) > 12]
+        pos = [x[9] for x in rows if len(x) > 9]
+        print(f"| {spec} | {st.median(x[1] for x in rows):.1f} / {st.median(x[2] for x in rows):.1f} | "
+              f"{st.median(x[8] for x in rows if len(x) > 8):.1f} | "
+              + (f"{st.median(pos):.3f} / {max(pos):.3f}" if pos else "—") + " | "
+              + (f"{st.median(hdg):.2f} / {max(hdg):.2f}" if hdg else "—") + f" | {med(rows, 10)} | "
+              + (f"{100 * st.median(acc):.1f} / {100 * min(acc):.1f} %; {sum(a >= 0.97 for a in acc)}" if acc else "—")
+              + " |")
 
 
 if __name__ == "__main__":

@@ -54,6 +54,7 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
         "battery_steps": m.battery_steps,
         "slip": setup.slip.name(),
         "localize": m.localize.enabled,
+        "pose_graph": m.localize.graph.enabled,
         "coverage": report.coverage,
         "map_accuracy": report.map_accuracy,
         "observable_cells": report.observable_cells,

@@ -164,6 +164,9 @@ pub struct ScenarioSpec {
     pub slip: Slip,
     /// Scan-to-map matching before each scan is integrated ([`papillon::localize`]).
     pub localize: bool,
+    /// Keyframes in a pose graph with loop closures behind the matcher
+    /// ([`papillon::localize::graph`]); only with `localize`.
+    pub pose_graph: bool,
     /// Range noise of the simulated laser, a fraction of the range (standard deviation);
     /// `None`: the mission's laser's (the thesis's 5 %). A SICK LMS1xx is nearer 0.3 %
     /// (about 12 mm at 4 m).
@@ -197,6 +200,7 @@ impl Default for ScenarioSpec {
             start: None,
             slip: Slip::Thesis,
             localize: false,
+            pose_graph: false,
             laser_noise: None,
             laser_noise_m: None,
             preset: papillon::explore::DEFAULT_PRESET,
@@ -314,6 +318,10 @@ impl Setup {
         let mut run = RunConfig::new(mission, robots, spec.seed);
         run.body.slip = spec.slip.config();
         run.mission.localize.enabled = spec.localize;
+        if spec.pose_graph && !spec.localize {
+            return Err("--pose-graph: on needs the scan matcher, --localize on".into());
+        }
+        run.mission.localize.graph.enabled = spec.pose_graph;
         if let Some(noise) = spec.laser_noise {
             run.mission.laser.noise_fraction = noise;
         }

@@ -145,6 +145,7 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
         false,
         Kind::Optional(&Kind::Number),
     ),
+    ("$.localize.pose_graph", false, Kind::Optional(&Kind::Bool)),
     ("$.mapping", false, Kind::Object),
     (
         "$.mapping.motion_filter",

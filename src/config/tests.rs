@@ -507,6 +507,7 @@ fn the_localize_section_is_optional_and_sets_the_matcher() {
     assert!((l.min_turn_rad - 10f32.to_radians()).abs() < 1e-6);
     assert_eq!(l.matcher.search_xy_m, 0.4);
     assert!((l.matcher.search_theta_rad - 8f32.to_radians()).abs() < 1e-6);
+    assert!(!l.graph.enabled);
     // What the board does not give stays the core's.
     let d = LocalizeConfig::default();
     assert_eq!(l.information_scale, d.information_scale);
@@ -525,6 +526,17 @@ fn the_localize_section_is_optional_and_sets_the_matcher() {
             ..LocalizeConfig::default()
         }
     );
+    // The pose graph behind it.
+    let json = SIM.replacen(
+        "\"persistence\"",
+        "\"localize\": {\"enabled\": true, \"pose_graph\": true}, \"persistence\"",
+        1,
+    );
+    let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+    assert_eq!(paths(&c), Vec::<String>::new());
+    let l = c.localize_config();
+    assert!(l.enabled && l.graph.enabled);
+    assert_eq!(l.matcher, LocalizeConfig::default().matcher);
 }
 
 /// Each bad `$.localize` value is one problem naming its key; a misspelt key and a wrong type
@@ -550,6 +562,10 @@ fn bad_localize_values_name_their_field() {
     });
     only_problem_at("$.localize.search_theta_deg", |c| {
         c.localize.search_theta_deg = Some(90.0)
+    });
+    // The pose graph without the matcher it sits behind.
+    only_problem_at("$.localize.pose_graph", |c| {
+        c.localize.pose_graph = Some(true)
     });
     let typo = SIM.replacen(
         "\"persistence\"",

@@ -371,6 +371,12 @@ impl BoardConfig {
         {
             r("$.localize.search_theta_deg", "must be in (0, 45] deg");
         }
+        if l.pose_graph == Some(true) && l.enabled != Some(true) {
+            r(
+                "$.localize.pose_graph",
+                "needs the scan matcher: $.localize.enabled true",
+            );
+        }
         // The matcher's window must hold a whole scan with the search around it, or every
         // match would be refused and the map drawn at the odometry pose without a word.
         let laser = &self.laser;

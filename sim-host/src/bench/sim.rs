@@ -33,6 +33,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
         start: None,
         slip: Slip::Thesis,
         localize: false,
+        pose_graph: false,
         laser_noise: None,
         laser_noise_m: None,
         preset: preset_from_name(&spec.preset)?,

@@ -75,6 +75,11 @@ pub struct Args {
     /// Scan-to-map matching before each scan is integrated: on or off.
     #[arg(long, default_value = "off", value_parser = ["on", "off"])]
     pub localize: String,
+    /// Keyframes in a pose graph with loop closures behind the scan matcher
+    /// (`src/localize/graph.rs`): on or off; on needs --localize on. Boards:
+    /// $.localize.pose_graph.
+    #[arg(long, default_value = "off", value_parser = ["on", "off"])]
+    pub pose_graph: String,
     /// Range noise of the simulated laser, as a fraction of the range (standard deviation of
     /// Gaussian noise): default the thesis's 0.05; a SICK LMS1xx is nearer 0.003 (about 12 mm
     /// at 4 m), 0 for noise-free ranges.
@@ -233,6 +238,17 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         "off" => false,
         other => return Err(format!("--localize: expected on or off, got '{other}'")),
     };
+    let pose_graph = match args.pose_graph.as_str() {
+        "on" if !localize => {
+            return Err(
+                "--pose-graph: on needs the scan matcher, --localize on (the graph's keyframes are its matched scans)"
+                    .into(),
+            );
+        }
+        "on" => true,
+        "off" => false,
+        other => return Err(format!("--pose-graph: expected on or off, got '{other}'")),
+    };
     Ok(ScenarioSpec {
         map: args.map.clone(),
         resolution_m,
@@ -248,6 +264,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         start,
         slip,
         localize,
+        pose_graph,
         laser_noise,
         laser_noise_m,
         preset,
@@ -336,6 +353,7 @@ mod tests {
             resolution: "0.1".into(),
             slip: "thesis".into(),
             localize: "off".into(),
+            pose_graph: "off".into(),
             laser_noise: None,
             laser_noise_m: None,
             json: false,
@@ -372,6 +390,20 @@ mod tests {
         assert_eq!(m.battery_steps, MissionConfig::default().battery_steps);
         assert_eq!(s.run.body.slip, SlipConfig::thesis());
         assert_eq!(m.laser.noise_fraction, 0.05);
+        assert!(!m.localize.enabled && !m.localize.graph.enabled);
+        let graph = setup_from_args(&Args {
+            localize: "on".into(),
+            pose_graph: "on".into(),
+            ..args()
+        })
+        .unwrap();
+        assert!(graph.run.mission.localize.enabled && graph.run.mission.localize.graph.enabled);
+        let matcher = setup_from_args(&Args {
+            localize: "on".into(),
+            ..args()
+        })
+        .unwrap();
+        assert!(!matcher.run.mission.localize.graph.enabled);
         let sick = setup_from_args(&Args {
             laser_noise: Some("0.003".into()),
             ..args()
@@ -555,6 +587,13 @@ mod tests {
                     ..args()
                 },
                 "--start:",
+            ),
+            (
+                Args {
+                    pose_graph: "on".into(),
+                    ..args()
+                },
+                "--pose-graph:",
             ),
             (
                 Args {
