@@ -666,14 +666,21 @@ fn waypoints_through_a_door_turn_outside_the_no_turn_band() {
     }
 }
 
+/// The pruned waypoints of the A* path from `a` to `b` on `trav`.
+fn waypoints_between(trav: &Traversability<CAP>, a: Cell, b: Cell) -> Vec<Point2> {
+    let mut astar = AStar::<CAP>::new();
+    let mut path = [Cell::default(); CAP];
+    let mut out = [Point2::default(); CAP];
+    let p = astar.find_path(trav, a, b, &mut path).unwrap();
+    let n = prune_to_waypoints(trav, &path[..p.len], &mut out).unwrap();
+    out[..n].to_vec()
+}
+
 #[test]
 fn the_leg_through_a_narrow_door_runs_along_its_axis() {
     // A 0.5 m door in a wall along row 15 (cells 18..22), approached from far to the side on
     // both sides: the leg that crosses the wall runs down the door's middle column, so the
     // robot enters it square, not at a slant.
-    let mut astar = AStar::<CAP>::new();
-    let mut path = [Cell::default(); CAP];
-    let mut out = [Point2::default(); CAP];
     let (_, trav) = wall_with_door(5);
     let g = *trav.geometry();
     for (a, b) in [
@@ -685,9 +692,7 @@ fn the_leg_through_a_narrow_door_runs_along_its_axis() {
         (Cell::new(19, 2), Cell::new(21, 22)),
         (Cell::new(21, 3), Cell::new(19, 23)),
     ] {
-        let p = astar.find_path(&trav, a, b, &mut path).unwrap();
-        let n = prune_to_waypoints(&trav, &path[..p.len], &mut out).unwrap();
-        let crossing = out[..n]
+        let crossing = waypoints_between(&trav, a, b)
             .windows(2)
             .map(|w| (g.cell_at(w[0]).unwrap(), g.cell_at(w[1]).unwrap()))
             .find(|(c0, c1)| c0.row < 15 && c1.row > 15)
@@ -707,9 +712,6 @@ fn a_leg_into_a_narrow_door_from_the_side_comes_along_its_axis() {
     // jamb, and the safety monitor stopped it there again and again). The waypoint before the
     // leg through the door is reached along the door's axis, from an approach point on that
     // axis where the robot can turn; every leg stays in sight.
-    let mut astar = AStar::<CAP>::new();
-    let mut path = [Cell::default(); CAP];
-    let mut out = [Point2::default(); CAP];
     let (_, trav) = wall_with_door(5);
     let g = *trav.geometry();
     for (a, b) in [
@@ -719,9 +721,7 @@ fn a_leg_into_a_narrow_door_from_the_side_comes_along_its_axis() {
         (Cell::new(4, 4), Cell::new(28, 20)),
         (Cell::new(30, 3), Cell::new(2, 22)),
     ] {
-        let p = astar.find_path(&trav, a, b, &mut path).unwrap();
-        let n = prune_to_waypoints(&trav, &path[..p.len], &mut out).unwrap();
-        let w = &out[..n];
+        let w = &waypoints_between(&trav, a, b)[..];
         let i = w
             .windows(2)
             .position(|s| (s[0].y - 1.55) * (s[1].y - 1.55) < 0.0)
