@@ -423,7 +423,13 @@ pub fn integrate_scan_banded<const N: usize>(
     let mut out = ScanIntegration::default();
     let geom = *grid.geometry();
     let hit_depth = |range_m: f32| hit_depth_m(range_m, laser.noise_fraction, geom.resolution_m);
-    let band_m = band_m.min(0.5 * geom.resolution_m);
+    let band = WallBand {
+        geom,
+        band_m: band_m.min(0.5 * geom.resolution_m),
+        origin,
+        inv_two_sigma_sq,
+        occupied_log_odds: model.occupied_log_odds,
+    };
 
     // Hits before misses: the cells holding this scan's returns get their Occupied evidence
     // first, and are remembered (sorted) so that no beam of the scan clears them.
@@ -457,17 +463,7 @@ pub fn integrate_scan_banded<const N: usize>(
             }
             // The band's cells past it are not protected from the scan's other beams (a
             // beam reaching them sees through where this one stopped).
-            ray.occupy_band(
-                &geom,
-                band_m,
-                index,
-                grid,
-                origin,
-                inv_two_sigma_sq,
-                model,
-                observer,
-                &mut out,
-            );
+            band.occupy(&ray, index, grid, observer, &mut out);
             // A scan has at most MAX_BEAMS beams, so this never overflows.
             let _ = hit_cells.push(index);
         }
@@ -519,17 +515,7 @@ pub fn integrate_scan_banded<const N: usize>(
         });
         out.updates += walk.visited;
         if ray.hit && !model.hits_before_misses {
-            ray.occupy_band(
-                &geom,
-                band_m,
-                hit_index,
-                grid,
-                origin,
-                inv_two_sigma_sq,
-                model,
-                observer,
-                &mut out,
-            );
+            band.occupy(&ray, hit_index, grid, observer, &mut out);
         }
     }
     Ok(out)
@@ -594,35 +580,42 @@ impl BeamRay {
             inv_two_sigma_sq,
         }
     }
+}
 
-    /// Occupied evidence to the cells from the return's point to `band_m` past it along the
-    /// beam, but the cell holding the point (`hit_index`, which has its evidence): see
-    /// [`integrate_scan_banded`]. Nothing for a beam with no return or an empty band.
-    #[allow(clippy::too_many_arguments)]
-    fn occupy_band<const N: usize>(
+/// The wall band of one scan: how far past each return its Occupied evidence reaches, and what
+/// weighs it (see [`integrate_scan_banded`]).
+struct WallBand {
+    geom: crate::grid::GridGeometry,
+    band_m: f32,
+    origin: Point2,
+    inv_two_sigma_sq: f32,
+    occupied_log_odds: f32,
+}
+
+impl WallBand {
+    /// Occupied evidence to the cells from `ray`'s return point to `band_m` past it along the
+    /// beam, but the cell holding the point (`hit_index`, which has its evidence). Nothing for
+    /// a beam with no return or an empty band.
+    fn occupy<const N: usize>(
         &self,
-        geom: &crate::grid::GridGeometry,
-        band_m: f32,
+        ray: &BeamRay,
         hit_index: usize,
         grid: &mut OccupancyGrid<N>,
-        origin: Point2,
-        inv_two_sigma_sq: f32,
-        model: &SensorModel,
         observer: &mut impl CellObserver,
         out: &mut ScanIntegration,
     ) {
-        if !self.hit || band_m <= 0.0 {
+        if !ray.hit || self.band_m <= 0.0 {
             return;
         }
         let far = Point2::new(
-            self.end.x + self.dir_x * band_m,
-            self.end.y + self.dir_y * band_m,
+            ray.end.x + ray.dir_x * self.band_m,
+            ray.end.y + ray.dir_y * self.band_m,
         );
-        let evidence = self.evidence(origin, inv_two_sigma_sq);
+        let evidence = ray.evidence(self.origin, self.inv_two_sigma_sq);
         let max = grid.bounds().max;
-        let walk = raycast::traverse(geom, self.end, far, |cell, index| {
+        let walk = raycast::traverse(&self.geom, ray.end, far, |cell, index| {
             if index != hit_index && grid.log_odds_at(index) < max {
-                evidence.add(grid, cell, index, model.occupied_log_odds, observer, out);
+                evidence.add(grid, cell, index, self.occupied_log_odds, observer, out);
             }
             ControlFlow::Continue(())
         });
