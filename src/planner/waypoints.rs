@@ -29,7 +29,7 @@
 //! the wall bands where there is room). The robot turns there and drives in along the axis;
 //! coming at the last cell at a slant, its front corner and the safety monitor's corridor ahead
 //! pointed at the passage's jamb and the monitor stopped it in front of the door again and
-//! again (issue 17; see [`approach_point`]).
+//! again (issue 17; see `approach_point`).
 
 use super::traversability::{BAND_NEAR, BAND_NO_TURN};
 use super::{BlockedBoxes, PlanError, Traversability};
