@@ -119,6 +119,11 @@ pub struct Mission<const N: usize> {
     /// first of them was dropped), and that place: a robot that cannot get anywhere, whatever
     /// it chooses, ends the mission instead of choosing again for ever.
     abandoned_in_row: (u32, Point2),
+    /// Optimizer decisions in a row that chose the place of the one before while the map
+    /// around it stayed the same (nothing gained in between), that place, and the known cells
+    /// around it then: a target whose predicted gain never comes is blacklisted after
+    /// `max_failed_decisions` of them instead of being chosen for ever.
+    idle_repeats: (u32, Point2, u32),
     /// Places this robot failed to reach.
     blacklist: Blacklist,
     /// Mouths of passages shut on the map that this robot went to look through
@@ -198,6 +203,7 @@ impl<const N: usize> Mission<N> {
             failed_in_row: 0,
             decide_at: Time::ZERO,
             abandoned_in_row: (0, start_map.position()),
+            idle_repeats: (0, start_map.position(), 0),
             blacklist: Blacklist::default(),
             mouths_looked: heapless::Vec::new(),
             ahead: None,

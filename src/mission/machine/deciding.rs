@@ -131,6 +131,17 @@ impl<const N: usize> Mission<N> {
                 if listed {
                     return self.failed(now, events);
                 }
+                if let Some(t) = last
+                    && self.gains_nothing_again(map, t)
+                {
+                    // Chosen again and again from a map that its arrival does not change:
+                    // its predicted gain is not to be had (cells seen through a wall's gap
+                    // the laser's noise leaves, say). Listed until the map around it changes.
+                    self.blacklist.push_forgetting_oldest(&map.grid, t);
+                    events.stats.abandoned_targets += 1;
+                    self.idle_repeats.0 = 0;
+                    return self.failed(now, events);
+                }
                 events.stats.fitness_evals += u64::from(d.evaluations);
                 self.adopt(now, &d, events)
             }
@@ -264,6 +275,21 @@ impl<const N: usize> Mission<N> {
             evaluations: 0,
             history: heapless::Vec::new(),
         }
+    }
+
+    /// Whether target `t`, just chosen by the selector, repeats the previous choice with the
+    /// map around it unchanged for the `max_failed_decisions`-th time in a row.
+    fn gains_nothing_again(&mut self, map: &SharedMap<N>, t: Point2) -> bool {
+        let known = crate::explore::blacklist::known_around(&map.grid, t);
+        let (count, place, known_then) = &mut self.idle_repeats;
+        if *count > 0 && place.distance(t) <= self.blacklist.radius_m && *known_then == known {
+            *count += 1;
+        } else {
+            *count = 1;
+            *place = t;
+            *known_then = known;
+        }
+        *count > self.config.max_failed_decisions
     }
 
     /// Too little energy above the reserve to insist on a decision.
