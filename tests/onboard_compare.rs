@@ -18,6 +18,7 @@
 //!
 //! `PAPILLON_COMPARE_DECISIONS=1` prints each runner draw's decisions;
 //! `PAPILLON_COMPARE_STATES=1` prints the energy and time each side spent in each mission state;
+//! `PAPILLON_COMPARE_KEEP=1` keeps (and names) each binary mission's log directory;
 //! `PAPILLON_COMPARE_NEAR_POCKETS=1` turns `ExploreConfig::near_pockets_first` on in the runner
 //! (with `PAPILLON_COMPARE_RUNNER_ONLY`: the binary keeps the board's setting, off);
 //! `PAPILLON_COMPARE_LOOK_AROUND=1` turns `MissionConfig::look_around` on in the runner.
@@ -214,7 +215,12 @@ fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
             .unwrap_or("?")
             .to_string()
     });
-    let _ = std::fs::remove_dir_all(&dir);
+    // PAPILLON_COMPARE_KEEP=1: keep the binary's logs (board, telemetry, map) to trace it.
+    if std::env::var("PAPILLON_COMPARE_KEEP").is_ok() {
+        eprintln!("    {map} seed {seed} binary's logs in {}", dir.display());
+    } else {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
     Outcome {
         coverage: score.coverage,
         time_s: state.mission_time_s,
