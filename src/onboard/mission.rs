@@ -16,7 +16,8 @@
 //!   time is its arrival in the pump, a few milliseconds after the laser took it, and at the
 //!   60 deg/s of a turn in place that is enough to fan the walls out across the map (seen
 //!   end to end under load before the interpolation: phantom walls inside the lab, every
-//!   path then cut, the robot turning in place until the battery ran out);
+//!   path then cut, the robot turning in place until the battery ran out); nor does a scan
+//!   in a gap of the odometry longer than [`MAX_ODOMETRY_GAP_S`] (after a stall);
 //! - the mission steps right after each status packet (at most every [`MIN_STEP_S`], at least
 //!   every [`STEP_FALLBACK_S`]), so a command is computed from the freshest pose; each new
 //!   command is handed to the runtime once; between periods the runtime is told to
