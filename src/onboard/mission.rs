@@ -142,8 +142,10 @@ pub fn grid_geometry(board: &BoardConfig) -> Result<GridGeometry, String> {
 
 /// The core mission configuration of a board: [`MissionConfig::default`] (the runner's set-up)
 /// with what the board says (selector, battery, laser, optimizer budget, limits, PID gains,
-/// safety distances, scan matching); `boards/sim.json` says what the runner's defaults say, so that
-/// `papillon-sim mission` predicts `papillon run` on the simulator.
+/// safety distances, scan matching); `boards/sim-thesis.json` says what the runner's defaults say
+/// (the thesis's laser, no matcher), so that `papillon-sim mission` predicts `papillon run` on
+/// the simulator; `boards/sim.json` is the same robot with its LMS1xx described as it is and
+/// the matcher on (`onboard_compare` gives the runner a board's set-up).
 pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     let m = &board.mission;
     let selector = match m.method.as_str() {
@@ -1087,7 +1089,7 @@ mod tests {
 
     #[test]
     fn shipped_boards_make_valid_missions() {
-        for name in ["sim.json", "p3dx-lms1xx.json", "p3dx-lms200.json"] {
+        for name in ["sim.json", "sim-thesis.json", "p3dx-lms1xx.json", "p3dx-lms200.json"] {
             let path = format!("{}/boards/{name}", env!("CARGO_MANIFEST_DIR"));
             let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
             let config = mission_config(&board).unwrap();
@@ -1135,8 +1137,8 @@ mod tests {
     }
 
     #[test]
-    fn the_simulator_board_is_the_runners_default_mission_with_its_laser() {
-        let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
+    fn the_thesis_simulator_board_is_the_runners_default_mission_with_its_laser() {
+        let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
         let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
         let mut config = mission_config(&board).unwrap();
         // The LMS1xx at 0.5° scans at 50 Hz (`papillon-sim serve`'s emulator too).
@@ -1230,13 +1232,13 @@ mod tests {
         Box::new(scan)
     }
 
-    /// `boards/sim.json` with scan matching on at every scan (no minimum travel) and a laser
-    /// of 1 % range noise. (The board's 5 %, the thesis's laser, gives the point-to-line
+    /// `boards/sim-thesis.json` with scan matching on at every scan (no minimum travel, no pose
+    /// graph) and a laser of 1 % range noise. (The board's 5 %, the thesis's laser, gives the point-to-line
     /// matcher a few centimetres of error a match in this small room, and the pose checks
     /// below are within 2 cm; with the matcher fed the latest packet's pose instead of the
     /// interpolated one, all three tests of this room fail at 1 %, checked.)
     fn matching_board() -> BoardConfig {
-        let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
+        let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
         let mut board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
         board.localize.enabled = Some(true);
         board.localize.min_travel_m = Some(0.0);
@@ -1344,7 +1346,7 @@ mod tests {
     /// x = 1.55 m: checked by raising the gap limit.)
     #[test]
     fn a_scan_in_a_gap_of_the_odometry_is_not_mapped() {
-        let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
+        let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
         let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
         let config = mission_config(&board).unwrap();
         let geometry = grid_geometry(&board).unwrap();
@@ -1375,7 +1377,7 @@ mod tests {
     /// (handed in as odometry, the scan's pose made it 0.3 m).
     #[test]
     fn a_late_scan_is_mapped_at_its_pose_without_charging_the_way_twice() {
-        let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
+        let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
         let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
         let config = mission_config(&board).unwrap();
         let geometry = grid_geometry(&board).unwrap();
