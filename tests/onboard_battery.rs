@@ -13,7 +13,7 @@ use e2e::{Sim, read_truth, run_on_sim_board, temp_dir, wait_bounded};
 
 /// The battery falls from 13.0 V at this rate \[V/min\]: under 11.5 V after about 30 s.
 const DRAIN_V_PER_MIN: f64 = 3.0;
-/// The board's threshold and hold (the defaults: `boards/sim.json` names neither).
+/// The board's threshold and hold (the defaults: `boards/sim-thesis.json` names neither).
 const LOW_V: f64 = 11.5;
 const HOLD_S: f64 = 5.0;
 

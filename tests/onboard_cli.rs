@@ -17,7 +17,7 @@ fn temp_file(name: &str, text: &str) -> std::path::PathBuf {
 
 #[test]
 fn shipped_boards_check_ok() {
-    for name in ["p3dx-lms1xx.json", "p3dx-lms200.json", "sim.json"] {
+    for name in ["p3dx-lms1xx.json", "p3dx-lms200.json", "sim.json", "sim-thesis.json"] {
         let out = Command::new(BIN)
             .args(["check", "--board", &board(name)])
             .output()
@@ -31,7 +31,7 @@ fn shipped_boards_check_ok() {
 
 #[test]
 fn every_problem_is_printed_with_its_path_and_exit_is_1() {
-    let text = std::fs::read_to_string(board("sim.json"))
+    let text = std::fs::read_to_string(board("sim-thesis.json"))
         .unwrap()
         .replace("\"population\": 5", "\"population\": 200")
         .replace("\"baud\": 9600", "\"baud\": 1234");
@@ -57,7 +57,7 @@ fn every_problem_is_printed_with_its_path_and_exit_is_1() {
 /// more is refused with the limit named, and so is a grid beyond the largest capacity.
 #[test]
 fn check_accepts_populations_up_to_the_limit_and_names_it_beyond() {
-    let text = std::fs::read_to_string(board("sim.json")).unwrap();
+    let text = std::fs::read_to_string(board("sim-thesis.json")).unwrap();
     let limit = papillon::config::MAX_POPULATION;
     for (population, ok) in [(50, true), (limit, true), (limit + 1, false)] {
         let p = temp_file(
@@ -188,13 +188,13 @@ fn a_board_file_that_never_ends_or_is_too_large_is_refused() {
     std::fs::remove_file(p).unwrap();
 }
 
-/// `check` on `boards/sim.json` with `from` replaced by `to`: exit 1, and the one problem line
+/// `check` on `boards/sim-thesis.json` with `from` replaced by `to`: exit 1, and the one problem line
 /// on standard output names `path` (before: 10 of 44 bad boards of these kinds gave "a value
 /// has the wrong type or is too long for its field (Invalid number.)" or a misleading
 /// "Expected … ',' or '}'" without any path).
 fn assert_board_error_names(kind: &str, from: &str, to: &str, path: &str, expected: &str) {
-    let text = std::fs::read_to_string(board("sim.json")).unwrap();
-    assert!(text.contains(from), "{kind}: {from:?} not in sim.json");
+    let text = std::fs::read_to_string(board("sim-thesis.json")).unwrap();
+    assert!(text.contains(from), "{kind}: {from:?} not in sim-thesis.json");
     let p = temp_file(
         &format!("kind-{}.json", kind.replace(' ', "-")),
         &text.replacen(from, to, 1),
@@ -340,7 +340,7 @@ fn a_named_pipe_without_a_writer_is_refused_not_waited_for() {
 /// a blank line, the usage and a hint, five lines, the last naming nothing).
 #[test]
 fn a_bad_command_line_is_one_line_naming_the_flag() {
-    let sim = board("sim.json");
+    let sim = board("sim-thesis.json");
     for (args, flag) in [
         (vec!["check", "--bored", "x.json"], "--bored"),
         (vec!["check"], "--board"),
@@ -364,7 +364,7 @@ fn a_bad_command_line_is_one_line_naming_the_flag() {
 /// check`").
 #[test]
 fn a_board_problem_names_the_file_and_the_field_on_the_last_line() {
-    let text = std::fs::read_to_string(board("sim.json")).unwrap();
+    let text = std::fs::read_to_string(board("sim-thesis.json")).unwrap();
     let p = temp_file(
         "radius0.json",
         &text.replacen("\"radius_m\": 0.25", "\"radius_m\": 0.0", 1),
@@ -381,7 +381,7 @@ fn a_board_problem_names_the_file_and_the_field_on_the_last_line() {
         std::time::Duration::from_secs(10),
     );
     assert_last_line_names(&out, &[file, "$.robot.radius_m"]);
-    let sim = board("sim.json");
+    let sim = board("sim-thesis.json");
     let out = bounded(
         &[
             "run",
@@ -423,7 +423,7 @@ fn a_log_dir_that_is_a_file_names_the_flag() {
     let dir = temp_dir("logdir-file");
     let file = dir.join("afile");
     std::fs::write(&file, "not a directory\n").unwrap();
-    let sim = board("sim.json");
+    let sim = board("sim-thesis.json");
     for log in [file.clone(), file.join("sub")] {
         let out = bounded(
             &["run", "--board", &sim, "--log-dir", log.to_str().unwrap()],
@@ -440,7 +440,7 @@ fn a_log_dir_that_is_a_file_names_the_flag() {
 /// "cannot convert float seconds to Duration").
 #[test]
 fn a_damaged_saved_state_names_its_file_and_field() {
-    let sim = board("sim.json");
+    let sim = board("sim-thesis.json");
     let state = |time: &str, x: &str| {
         format!(
             r#"{{"version": 1, "mission_time_s": {time},
@@ -499,7 +499,7 @@ fn live_address_rust_log_and_log_format_are_checked_first() {
     let log = std::env::temp_dir().join(format!("papillon-cli-{}-live", std::process::id()));
     let run = |extra: &[&str], env: Option<&str>| {
         let mut c = Command::new(BIN);
-        c.args(["run", "--board", &board("sim.json"), "--tcp", "127.0.0.1:1"])
+        c.args(["run", "--board", &board("sim-thesis.json"), "--tcp", "127.0.0.1:1"])
             .args(extra)
             .arg("--log-dir")
             .arg(&log);
@@ -551,7 +551,7 @@ fn live_address_rust_log_and_log_format_are_checked_first() {
 /// is connected, naming the flag and the board's field; `check` names the field.
 #[test]
 fn localize_is_checked_on_the_command_line_and_in_the_board() {
-    let sim = board("sim.json");
+    let sim = board("sim-thesis.json");
     let out = Command::new(BIN)
         .args(["run", "--board", &sim, "--localize", "maybe"])
         .output()

@@ -18,9 +18,25 @@
 //!
 //! `PAPILLON_COMPARE_DECISIONS=1` prints each runner draw's decisions;
 //! `PAPILLON_COMPARE_STATES=1` prints the energy and time each side spent in each mission state;
+//! `PAPILLON_COMPARE_KEEP=1` keeps (and names) each binary mission's log directory;
 //! `PAPILLON_COMPARE_NEAR_POCKETS=1` turns `ExploreConfig::near_pockets_first` on in the runner
 //! (with `PAPILLON_COMPARE_RUNNER_ONLY`: the binary keeps the board's setting, off);
 //! `PAPILLON_COMPARE_LOOK_AROUND=1` turns `MissionConfig::look_around` on in the runner.
+//!
+//! The world both sides meet: `PAPILLON_COMPARE_BOARD=FILE` (default `boards/sim.json`; its
+//! mission, its laser's `noise_fraction` and its `$.localize`, the matcher and the pose graph,
+//! on both sides), `PAPILLON_COMPARE_SLIP=NAME` (`serve --slip`, the runner's body slip;
+//! default `thesis`, the default of both) and `PAPILLON_COMPARE_LASER_NOISE_M=M` (`serve
+//! --laser-noise-m`, the runner's `laser_range_sigma_m`; default 0). Issue 26's house check
+//! with an LMS1xx, the realistic odometry and the matcher (the board `boards/sim.json` with
+//! `laser.noise_fraction` 0.003 and `"localize": {"enabled": true}`), the runner alone:
+//!
+//! ```text
+//! PAPILLON_COMPARE_BOARD=/tmp/sim-lms1xx.json PAPILLON_COMPARE_SLIP=realistic \
+//!   PAPILLON_COMPARE_LASER_NOISE_M=0.012 PAPILLON_COMPARE_MAP=house \
+//!   PAPILLON_COMPARE_RUNNER_ONLY=0.006 PAPILLON_COMPARE_SEEDS="1 2 3 4 5" \
+//!   cargo test --release -p papillon --test onboard_compare -- --ignored --nocapture
+//! ```
 //!
 //! `PAPILLON_COMPARE_WORLD_GRID=1` gives the runner its own map (the world's extent) instead of
 //! the board's grid. It prints one line per seed and pump, then checks the targets of issue 26: coverage within
@@ -38,6 +54,7 @@ use papillon::geometry::Pose2;
 use papillon::onboard::mission::mission_config;
 use papillon::onboard::persist::StateStore;
 use papillon_sim::dynamic::Dynamics;
+use papillon_sim::physics::SlipConfig;
 use papillon_sim::runner::{PumpModel, RunConfig, Runner};
 use papillon_sim::world::World;
 
@@ -64,13 +81,47 @@ struct Outcome {
     decision_s: f64,
 }
 
+/// The board both sides run with (`PAPILLON_COMPARE_BOARD`, default `boards/sim.json`), its
+/// mission seed set to `seed`: its mission, laser and `$.localize` (the matcher, the pose
+/// graph) go to the binary as a board file and to the runner as its mission configuration.
 fn board(seed: u64) -> (BoardConfig, String) {
-    let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
-    let mut json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let path = std::env::var("PAPILLON_COMPARE_BOARD")
+        .unwrap_or_else(|_| format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR")));
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("PAPILLON_COMPARE_BOARD: cannot read {path}: {e}"));
+    let mut json: serde_json::Value = serde_json::from_str(&text)
+        .unwrap_or_else(|e| panic!("PAPILLON_COMPARE_BOARD: {path} is not JSON: {e}"));
     json["mission"]["seed"] = serde_json::json!(seed);
     let text = json.to_string();
-    (BoardConfig::from_json(text.as_bytes()).unwrap(), text)
+    let board = BoardConfig::from_json(text.as_bytes())
+        .unwrap_or_else(|e| panic!("PAPILLON_COMPARE_BOARD: {path}: {e}"));
+    (board, text)
+}
+
+/// The simulated odometry error (`PAPILLON_COMPARE_SLIP`: `thesis`, the default of `serve`
+/// and of the runner, `realistic`, `full` or `none`): `serve --slip` on the binary's side,
+/// the runner's body slip on the other.
+fn slip() -> String {
+    let name = std::env::var("PAPILLON_COMPARE_SLIP").unwrap_or_else(|_| "thesis".into());
+    assert!(
+        SlipConfig::named(&name).is_some(),
+        "PAPILLON_COMPARE_SLIP: {name} is not thesis, realistic, full or none"
+    );
+    name
+}
+
+/// The laser's range noise that does not grow with the range, 1 sigma \[m\]
+/// (`PAPILLON_COMPARE_LASER_NOISE_M`, default 0; 0.012 for an LMS1xx): `serve
+/// --laser-noise-m` on the binary's side, `RunConfig::laser_range_sigma_m` on the runner's.
+/// The part growing with the range is the board's `laser.noise_fraction` on both.
+fn laser_noise_m() -> f32 {
+    match std::env::var("PAPILLON_COMPARE_LASER_NOISE_M") {
+        Ok(v) => match v.parse::<f32>() {
+            Ok(m) if m.is_finite() && (0.0..=0.5).contains(&m) => m,
+            _ => panic!("PAPILLON_COMPARE_LASER_NOISE_M: {v} is not metres in 0..=0.5"),
+        },
+        Err(_) => 0.0,
+    }
 }
 
 fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
@@ -81,7 +132,22 @@ fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
     let seed_text = seed.to_string();
     // The laser the board describes (its range noise), as the runner simulates it.
     let noise = board(seed).0.laser.noise_fraction.to_string();
-    let sim = Sim::start(map, None, &["--seed", &seed_text, "--laser-noise", &noise]);
+    let noise_m = laser_noise_m().to_string();
+    let slip = slip();
+    let sim = Sim::start(
+        map,
+        None,
+        &[
+            "--seed",
+            &seed_text,
+            "--laser-noise",
+            &noise,
+            "--laser-noise-m",
+            &noise_m,
+            "--slip",
+            &slip,
+        ],
+    );
     let log = dir.join("log");
     let began = Instant::now();
     let mut child = run_on_board(
@@ -149,7 +215,12 @@ fn binary(map: &str, seed: u64, limit: Duration) -> Outcome {
             .unwrap_or("?")
             .to_string()
     });
-    let _ = std::fs::remove_dir_all(&dir);
+    // PAPILLON_COMPARE_KEEP=1: keep the binary's logs (board, telemetry, map) to trace it.
+    if std::env::var("PAPILLON_COMPARE_KEEP").is_ok() {
+        eprintln!("    {map} seed {seed} binary's logs in {}", dir.display());
+    } else {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
     Outcome {
         coverage: score.coverage,
         time_s: state.mission_time_s,
@@ -208,6 +279,8 @@ fn runner(map: &str, seed: u64, decision_s: f64, draw: u64) -> Outcome {
     let mut config = RunConfig::new(mission_config(&board).unwrap(), 1, seed);
     config.pump = PumpModel::onboard(decision_s);
     config.pump.noise_draw = draw;
+    config.body.slip = SlipConfig::named(&slip()).unwrap();
+    config.laser_range_sigma_m = laser_noise_m();
     // PAPILLON_COMPARE_NEAR_POCKETS=1: the runner with `ExploreConfig::near_pockets_first` on
     // (the binary keeps the board's, off): what the rule would change, runner only.
     if std::env::var("PAPILLON_COMPARE_NEAR_POCKETS").is_ok() {

@@ -11,7 +11,7 @@
 //!
 //! Measured 2026-11-27 (branch `hil18`, release build, docs/experiments.md): seeds 1, 2, 3
 //! pass (map accuracy 98.28 / 98.28 / 98.25 %, final position error 0.035 / 0.018 / 0.030 m,
-//! coverage 100 %). With the thesis's simulated laser of `boards/sim.json`
+//! coverage 100 %). With the thesis's simulated laser of `boards/sim-thesis.json`
 //! (`PAPILLON_LOCALIZE_LASER_NOISE=0.05 PAPILLON_LOCALIZE_LASER_NOISE_M=0`) it fails (seed 1:
 //! 87.77 %, 0.257 m). Ignored in `cargo test`'s default run: a lab mission takes two to three
 //! minutes of real time, and the binary must match every scan in real time, which a debug
@@ -81,7 +81,7 @@ fn env_number(name: &str, range: std::ops::Range<f64>, default: f64) -> f64 {
 /// `serve`'s noise that does not grow with the range (`serve --laser-noise-m`). By default
 /// the real robot's, an LMS1xx: `boards/p3dx-lms1xx.json`'s `noise_fraction` and the
 /// datasheet's 12 mm. `PAPILLON_LOCALIZE_LASER_NOISE=F` and `PAPILLON_LOCALIZE_LASER_NOISE_M=S`
-/// set them (`=0.05` and `=0`: the thesis's simulated laser of `boards/sim.json`).
+/// set them (`=0.05` and `=0`: the thesis's simulated laser of `boards/sim-thesis.json`).
 fn hil_laser() -> (f64, f64) {
     let lms1xx: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(format!(

@@ -25,7 +25,7 @@ fn board() -> String {
     sim_board()
 }
 
-/// `papillon run` on `boards/sim.json` against these endpoints, logging into `log`.
+/// `papillon run` on `boards/sim-thesis.json` against these endpoints, logging into `log`.
 fn run(arcos: &str, laser: &str, log: &Path, resume: bool) -> Child {
     run_on_sim_board(arcos, laser, log, if resume { &["--resume"] } else { &[] })
 }

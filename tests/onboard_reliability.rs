@@ -18,7 +18,7 @@ fn board() -> String {
     sim_board()
 }
 
-/// `papillon run` on `boards/sim.json` against these endpoints, logging into `log`, plus
+/// `papillon run` on `boards/sim-thesis.json` against these endpoints, logging into `log`, plus
 /// `extra` flags.
 fn run(arcos: &str, laser: &str, log: &Path, extra: &[&str]) -> Child {
     run_on_sim_board(arcos, laser, log, extra)

@@ -193,7 +193,7 @@ fn main() {
 
     // Board files: the shipped boards.
     let boards = Path::new(env!("CARGO_MANIFEST_DIR")).join("../boards");
-    for name in ["sim.json", "p3dx-lms1xx.json", "p3dx-lms200.json"] {
+    for name in ["sim.json", "sim-thesis.json", "p3dx-lms1xx.json", "p3dx-lms200.json"] {
         let text = fs::read(boards.join(name)).unwrap();
         write(&root.join("board_json"), name, &text);
     }

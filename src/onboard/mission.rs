@@ -16,7 +16,8 @@
 //!   time is its arrival in the pump, a few milliseconds after the laser took it, and at the
 //!   60 deg/s of a turn in place that is enough to fan the walls out across the map (seen
 //!   end to end under load before the interpolation: phantom walls inside the lab, every
-//!   path then cut, the robot turning in place until the battery ran out);
+//!   path then cut, the robot turning in place until the battery ran out); nor does a scan
+//!   in a gap of the odometry longer than [`MAX_ODOMETRY_GAP_S`] (after a stall);
 //! - the mission steps right after each status packet (at most every [`MIN_STEP_S`], at least
 //!   every [`STEP_FALLBACK_S`]), so a command is computed from the freshest pose; each new
 //!   command is handed to the runtime once; between periods the runtime is told to
@@ -86,6 +87,14 @@ pub const PENDING_SCANS: usize = 8;
 /// A turn between two status packets (100 ms apart) above which a scan between them is not
 /// mapped \[rad\] (2°).
 pub const MAX_MAPPING_TURN_RAD: f32 = 0.035;
+/// A gap between two odometry readings above which a scan in it is not mapped \[s\] (2.5
+/// status periods: one packet lost to a bad checksum still maps). After a stall of the pump or
+/// of the link the queued packets arrive, and are placed, together at its end: a scan taken in
+/// the gap, placed by the laser's own clock, would be interpolated between the reading before
+/// the gap and the first queued one, up to 60° off in a turn in place, at a turn rate that
+/// looks slow (seen on the house with the matcher on at load 16: a 0.8 s stall in a turn, the
+/// pose 54° off for the rest of the mission).
+pub const MAX_ODOMETRY_GAP_S: f64 = 0.25;
 /// The mission ends as explored when this many decisions in a row...
 pub const STALL_DECISIONS: usize = 5;
 /// ...added fewer known cells than this between them...
@@ -133,8 +142,10 @@ pub fn grid_geometry(board: &BoardConfig) -> Result<GridGeometry, String> {
 
 /// The core mission configuration of a board: [`MissionConfig::default`] (the runner's set-up)
 /// with what the board says (selector, battery, laser, optimizer budget, limits, PID gains,
-/// safety distances, scan matching); `boards/sim.json` says what the runner's defaults say, so that
-/// `papillon-sim mission` predicts `papillon run` on the simulator.
+/// safety distances, scan matching); `boards/sim-thesis.json` says what the runner's defaults say
+/// (the thesis's laser, no matcher), so that `papillon-sim mission` predicts `papillon run` on
+/// the simulator; `boards/sim.json` is the same robot with its LMS1xx described as it is and
+/// the matcher on (`onboard_compare` gives the runner a board's set-up).
 pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     let m = &board.mission;
     let selector = match m.method.as_str() {
@@ -524,7 +535,8 @@ struct Worker<const N: usize> {
     trajectory_step_m: f32,
     /// Scans integrated into the map in this run.
     scans_integrated: u64,
-    /// Scans given to the safety monitor only (the robot turning), and scans dropped (older
+    /// Scans given to the safety monitor only (the robot turning, or the scan in a gap of the
+    /// odometry, [`MAX_ODOMETRY_GAP_S`]), and scans dropped (older
     /// than the odometry history, or more than [`PENDING_SCANS`] waiting), in this run.
     scans_unmapped: u64,
     scans_dropped: u64,
@@ -674,8 +686,17 @@ impl<const N: usize> Worker<N> {
                 .history
                 .turn_rate_at(t_scan)
                 .is_some_and(|r| r > max_turn_rate);
-            if turning {
-                tracing::debug!(t_scan, "robot turning: scan not mapped (safety only)");
+            let blind = self
+                .history
+                .span_at(t_scan)
+                .is_some_and(|s| s > MAX_ODOMETRY_GAP_S);
+            if turning || blind {
+                tracing::debug!(
+                    t_scan,
+                    turning,
+                    blind,
+                    "robot turning or odometry gap: scan not mapped (safety only)"
+                );
                 mission.on_scan_unmapped(time(t_scan), &scan);
                 self.scans_unmapped += 1;
             } else if t_scan < self.last_odometry_s {
@@ -1068,7 +1089,7 @@ mod tests {
 
     #[test]
     fn shipped_boards_make_valid_missions() {
-        for name in ["sim.json", "p3dx-lms1xx.json", "p3dx-lms200.json"] {
+        for name in ["sim.json", "sim-thesis.json", "p3dx-lms1xx.json", "p3dx-lms200.json"] {
             let path = format!("{}/boards/{name}", env!("CARGO_MANIFEST_DIR"));
             let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
             let config = mission_config(&board).unwrap();
@@ -1116,8 +1137,8 @@ mod tests {
     }
 
     #[test]
-    fn the_simulator_board_is_the_runners_default_mission_with_its_laser() {
-        let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
+    fn the_thesis_simulator_board_is_the_runners_default_mission_with_its_laser() {
+        let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
         let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
         let mut config = mission_config(&board).unwrap();
         // The LMS1xx at 0.5° scans at 50 Hz (`papillon-sim serve`'s emulator too).
@@ -1211,13 +1232,13 @@ mod tests {
         Box::new(scan)
     }
 
-    /// `boards/sim.json` with scan matching on at every scan (no minimum travel) and a laser
-    /// of 1 % range noise. (The board's 5 %, the thesis's laser, gives the point-to-line
+    /// `boards/sim-thesis.json` with scan matching on at every scan (no minimum travel, no pose
+    /// graph) and a laser of 1 % range noise. (The board's 5 %, the thesis's laser, gives the point-to-line
     /// matcher a few centimetres of error a match in this small room, and the pose checks
     /// below are within 2 cm; with the matcher fed the latest packet's pose instead of the
     /// interpolated one, all three tests of this room fail at 1 %, checked.)
     fn matching_board() -> BoardConfig {
-        let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
+        let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
         let mut board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
         board.localize.enabled = Some(true);
         board.localize.min_travel_m = Some(0.0);
@@ -1318,13 +1339,45 @@ mod tests {
         );
     }
 
+    /// A scan taken in a gap of the odometry (the pump stalled 1 s, the queued status packets
+    /// then all placed at its end) is not mapped: its pose would be interpolated between the
+    /// reading before the gap and the first queued one, anywhere along what the robot did
+    /// meanwhile. (Mapped, its return 1.04 m ahead of the interpolated x = 0.46 m would mark
+    /// x = 1.55 m: checked by raising the gap limit.)
+    #[test]
+    fn a_scan_in_a_gap_of_the_odometry_is_not_mapped() {
+        let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
+        let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
+        let config = mission_config(&board).unwrap();
+        let geometry = grid_geometry(&board).unwrap();
+        let (mut worker, _out) =
+            new_worker::<{ crate::capacity::FIXED_CELLS }>(&board, config, geometry, None, None)
+                .unwrap();
+        worker.handle(Input::Status(1.0, packet_at(0))).unwrap();
+        worker.handle(Input::Status(1.1, packet_at(100))).unwrap();
+        worker.handle(Input::Scan(1.5, beam_ahead(1.04))).unwrap();
+        worker.handle(Input::Status(2.1, packet_at(200))).unwrap();
+        worker.handle(Input::Status(2.1, packet_at(1100))).unwrap();
+        let grid = &worker.map.grid;
+        let class = |x: f32| {
+            let cell = grid.geometry().cell_at(Point2::new(x, 0.05)).unwrap();
+            grid.class_of(cell).unwrap()
+        };
+        assert_eq!(class(1.55), CellClass::Unknown);
+        assert_eq!((worker.scans_integrated, worker.scans_unmapped), (0, 1));
+        // A scan between readings one period apart is mapped as before.
+        worker.handle(Input::Scan(2.15, beam_ahead(1.04))).unwrap();
+        worker.handle(Input::Status(2.2, packet_at(1200))).unwrap();
+        assert_eq!(worker.scans_integrated, 1);
+    }
+
     /// A scan the mission thread reads after a later status packet than its time (the pump
     /// read it late) is mapped at the odometry of its own time, and the robot is not moved
     /// back to it and forward again: the distance counted is the 0.2 m the robot drove
     /// (handed in as odometry, the scan's pose made it 0.3 m).
     #[test]
     fn a_late_scan_is_mapped_at_its_pose_without_charging_the_way_twice() {
-        let path = format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"));
+        let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
         let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
         let config = mission_config(&board).unwrap();
         let geometry = grid_geometry(&board).unwrap();

@@ -99,6 +99,22 @@ impl PoseHistory {
         ))
     }
 
+    /// The time between the two readings around `t_s` \[s\] (`None` outside the history):
+    /// what the interpolation at `t_s` spans. One status period (100 ms) normally; after
+    /// the pump or the link stalled, the gap the robot's motion in it is unknown across
+    /// (status packets queued in the socket all arrive, and are placed, at the gap's end).
+    pub fn span_at(&self, t_s: f64) -> Option<f64> {
+        let last_t = self.readings.back()?.0;
+        if t_s > last_t || t_s < self.readings.front()?.0 || self.readings.len() < 2 {
+            return None;
+        }
+        let after = self
+            .readings
+            .partition_point(|&(t, _)| t < t_s)
+            .clamp(1, self.readings.len() - 1);
+        Some(self.readings[after].0 - self.readings[after - 1].0)
+    }
+
     /// How far the robot turned between the readings around `t_s`, per second \[rad/s\]
     /// (`None` outside the history).
     pub fn turn_rate_at(&self, t_s: f64) -> Option<f32> {
@@ -126,6 +142,20 @@ mod tests {
         (a.x - b.x).abs() < 1e-5
             && (a.y - b.y).abs() < 1e-5
             && normalize_angle(a.theta - b.theta).abs() < 1e-5
+    }
+
+    #[test]
+    fn the_span_at_a_time_is_the_gap_between_the_readings_around_it() {
+        let mut h = PoseHistory::new();
+        assert_eq!(h.span_at(1.0), None);
+        h.push(1.0, Pose2::new(0.0, 0.0, 0.0));
+        h.push(1.1, Pose2::new(0.1, 0.0, 0.0));
+        h.push(2.1, Pose2::new(1.1, 0.0, 0.0));
+        h.push(2.1, Pose2::new(1.2, 0.0, 0.0));
+        assert!((h.span_at(1.05).unwrap() - 0.1).abs() < 1e-9);
+        assert!((h.span_at(1.5).unwrap() - 1.0).abs() < 1e-9);
+        assert_eq!(h.span_at(0.9), None);
+        assert_eq!(h.span_at(2.2), None);
     }
 
     #[test]

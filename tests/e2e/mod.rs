@@ -200,12 +200,15 @@ pub fn papillon(args: &[&str], cwd: &Path) -> Child {
         .expect("start papillon")
 }
 
-/// The project's board for the simulator, `boards/sim.json`.
+/// The board of the pump's end-to-end tests, `boards/sim-thesis.json`: the simulated P3-DX with
+/// the thesis's laser and the matcher off, the runner's defaults. (`boards/sim.json`, the
+/// project's board for the simulator, runs the scan matcher and its pose graph, which a debug
+/// build cannot keep up with in real time; the release house check runs it.)
 pub fn sim_board() -> String {
-    format!("{}/boards/sim.json", env!("CARGO_MANIFEST_DIR"))
+    format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"))
 }
 
-/// The range noise of `boards/sim.json`'s laser (`laser.noise_fraction`), for `serve
+/// The range noise of [`sim_board`]'s laser (`laser.noise_fraction`), for `serve
 /// --laser-noise`: a mission test's simulator serves the laser its board describes (the
 /// house check's and `onboard_compare`'s do). On a noise-free laser under a board that
 /// says 5 % the core maps walls one cell thick with holes, its predicted scans see through
@@ -220,7 +223,7 @@ pub fn sim_board_laser_noise() -> String {
         .to_string()
 }
 
-/// `papillon run` on `boards/sim.json` against these endpoints, logging into `log`, plus
+/// `papillon run` on [`sim_board`] against these endpoints, logging into `log`, plus
 /// `extra` flags. The working directory is the log's parent: nothing may be written there but
 /// the log.
 pub fn run_on_sim_board(arcos: &str, laser: &str, log: &Path, extra: &[&str]) -> Child {
