@@ -18,7 +18,8 @@
 //! closure's σ), `GRAPH_KEYREF=1` (only keyframes into the reference), `GRAPH_GATE` (closure
 //! gate, σ), `GRAPH_FLOOR_M`/`GRAPH_FLOOR_RAD` (a step's least σ), `GRAPH_EVERY` (path between
 //! closures), `GRAPH_RESID` (a
-//! closure's largest residual after the optimisation, σ; 0: none), `DIAG=1` (each closure's
+//! closure's largest residual after the optimisation, σ; 0: none), `GRAPH_AMB=0|1` (the closures'
+//! ambiguity test, on by default; `GRAPH_AMB_D`, `GRAPH_AMB_R`: its distance and inlier ratio), `DIAG=1` (each closure's
 //! and each step's error against the truth).
 //!
 //! Odometry self-calibration (`src/localize/odometry_calibration.rs`): `LOC_CAL=1` (on),
@@ -96,6 +97,15 @@ fn main() {
     }
     if let Some(v) = env("GRAPH_RESID") {
         m.localize.graph.closure.residual_sigmas = v;
+    }
+    if let Some(v) = env("GRAPH_AMB") {
+        m.localize.graph.closure.ambiguity = v != 0.0;
+    }
+    if let Some(v) = env("GRAPH_AMB_D") {
+        m.localize.graph.closure.ambiguity_distance_m = v;
+    }
+    if let Some(v) = env("GRAPH_AMB_R") {
+        m.localize.graph.closure.ambiguity_ratio = v;
     }
     if let Some(v) = env("GRAPH_SM") {
         m.localize.graph.closure.sigma_m = v;

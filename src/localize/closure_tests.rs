@@ -5,9 +5,9 @@
 use super::keyframes::KeyframeStore;
 use super::loop_closure::{ClosureConfig, LOCAL_CELLS, LocalMap, Refusal, candidate};
 use super::tests::{config, corridor, matcher, room, scan_at};
-use crate::geometry::{Pose2, normalize_angle};
+use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::LogOddsBounds;
-use crate::sensor::{LaserConfig, SensorModel};
+use crate::sensor::{LaserConfig, MAX_BEAMS, SensorModel};
 
 type Store = KeyframeStore<8>;
 
@@ -208,4 +208,73 @@ fn drifted_returns_are_closed_at_the_truth_or_refused() {
         "{accepted_near} of {near} returns among the old keyframes closed ({accepted} of 112 in all)"
     );
     assert!(worst.0 < 0.1, "{worst:?}");
+}
+
+/// A corridor 2 m wide (the featureless one's walls) whose walls carry a 0.3 m jamb every
+/// 0.6 m from x = 12 m to 27 m: every scan there is constrained along the corridor, but a pose
+/// 0.6 m further along explains it as well.
+fn jambs() -> [super::tests::Segment; 54] {
+    let mut walls = [super::tests::seg(1.0, 1.0, 41.0, 1.0); 54];
+    walls[1] = super::tests::seg(1.0, 3.0, 41.0, 3.0);
+    for k in 0..26 {
+        let x = 12.0 + 0.6 * k as f32;
+        walls[2 + 2 * k] = super::tests::seg(x, 1.0, x, 1.3);
+        walls[3 + 2 * k] = super::tests::seg(x, 3.0, x, 2.7);
+    }
+    walls
+}
+
+/// The returns of `scan` in the robot frame (the points a match uses).
+fn returns(scan: &crate::sensor::Scan, laser: &LaserConfig) -> ([Point2; MAX_BEAMS], usize) {
+    let mut points = [Point2::new(0.0, 0.0); MAX_BEAMS];
+    let mut n = 0;
+    for b in scan.beams() {
+        if let Some(r) = b.range_m.filter(|r| *r >= laser.min_range_m) {
+            points[n] = laser.mount.transform_point(Point2::new(
+                r * crate::math::cos(b.angle_rad),
+                r * crate::math::sin(b.angle_rad),
+            ));
+            n += 1;
+        }
+    }
+    (points, n)
+}
+
+/// The closures' ambiguity test: in a corridor of evenly spaced jambs, a match the wide search
+/// put one jamb further on (0.6 m) while the prediction lies in the true pose's basin is
+/// refused, the refinement from the prediction pairing as many returns elsewhere; the true
+/// pose from the same prediction is not ambiguous; with the test off nothing is refused.
+#[test]
+fn a_match_the_prediction_explains_as_well_elsewhere_is_ambiguous() {
+    let walls = jambs();
+    let laser = LaserConfig::lms1xx();
+    let old = [
+        Pose2::new(18.0, 2.0, 0.0),
+        Pose2::new(19.0, 2.0, 0.0),
+        Pose2::new(20.0, 2.0, 0.0),
+    ];
+    let store = keep(&walls, &old, &laser);
+    let mut local: Box<LocalMap<LOCAL_CELLS>> = bytemuck::zeroed_box();
+    let truth = Pose2::new(19.5, 2.05, 0.02);
+    let predicted = Pose2::new(19.56, 2.01, 0.03);
+    let alias = Pose2::new(truth.x + 0.6, truth.y, truth.theta);
+    render_old(&mut local, &store, &old, predicted, &laser);
+    let scan = scan_at(&walls, truth, &laser, 0.003, 11);
+    let (points, n) = returns(&scan, &laser);
+    let points = &points[..n];
+    let c = ClosureConfig::default();
+    let ratio = local.ambiguity(points, &laser, predicted, alias, &config(), &c);
+    assert!(ratio.is_some_and(|r| r >= c.ambiguity_ratio), "{ratio:?}");
+    assert_eq!(
+        local.ambiguity(points, &laser, predicted, truth, &config(), &c),
+        None
+    );
+    let off = ClosureConfig {
+        ambiguity: false,
+        ..c
+    };
+    assert_eq!(
+        local.ambiguity(points, &laser, predicted, alias, &config(), &off),
+        None
+    );
 }

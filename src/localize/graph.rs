@@ -109,8 +109,8 @@ pub struct GraphStats {
     /// Whether a full store stopped the graph.
     pub full: bool,
     /// Closures refused: by the matcher's own checks, as unconstrained, for a low score, for
-    /// little known ground, as inconsistent with the graph.
-    pub refused: [u32; 5],
+    /// little known ground, as inconsistent with the graph, as ambiguous.
+    pub refused: [u32; 6],
 }
 
 impl GraphStats {
@@ -121,6 +121,7 @@ impl GraphStats {
             Refusal::LowScore(_) => 2,
             Refusal::LittleKnown(_) => 3,
             Refusal::Inconsistent(_) => 4,
+            Refusal::Ambiguous(_) => 5,
         };
         self.refused[k] += 1;
     }

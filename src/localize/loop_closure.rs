@@ -21,6 +21,8 @@
 //!   range noise and the surface's thickness; [`MatchQuality::score`]);
 //! - at least [`ClosureConfig::min_known_fraction`] of the returns on ground the local map
 //!   knows;
+//! - no second basin: the refinement started again from the prediction must not end elsewhere
+//!   pairing about as many returns ([`ClosureConfig::ambiguity`], Olson's "local uniqueness");
 //! - and, in [`super::graph`], consistency with the graph's prediction over the path between
 //!   the two keyframes ([`ClosureConfig::gate_sigmas`]).
 //!
@@ -76,13 +78,23 @@ pub struct ClosureConfig {
     /// After the optimisation, a closure whose residual exceeds this many of its standard
     /// deviations (on the three axes together) is taken out again (0: kept).
     pub residual_sigmas: f32,
+    /// Ambiguity test ([`LocalMap::close`]): the refinement is started again from the
+    /// prediction; when it ends more than [`Self::ambiguity_distance_m`] from the match pairing
+    /// at least [`Self::ambiguity_ratio`] of its inliers, the closure is refused (off: no test).
+    pub ambiguity: bool,
+    /// See [`Self::ambiguity`] \[m, with rotation as [`MatchConfig::length_scale_m`] times the
+    /// angle\].
+    pub ambiguity_distance_m: f32,
+    /// See [`Self::ambiguity`].
+    pub ambiguity_ratio: f32,
 }
 
 impl Default for ClosureConfig {
     /// Candidates 10 m of path older and within 2.5 m; ±20 keyframes drawn; search ±0.5 m and
     /// ±0.2 rad; accepted when the fit constrains all three directions, pairs half the returns
     /// on known ground with a surface, 70 % of the returns are on known ground, and the match
-    /// is within 3 σ of the graph's prediction; as σ 2 cm and 0.57° (the sixth matcher's
+    /// is within 3 σ of the graph's prediction, unless the refinement from the prediction ends
+    /// more than 10 cm away pairing 90 % as many returns (ambiguous); as σ 2 cm and 0.57° (the sixth matcher's
     /// closures are within 2 cm and 0.6° of the true relative pose but for a few; σ 5 cm and
     /// 1.15°, about the fourth matcher's spread, let the worst of 20 house missions end 47 cm
     /// off against 11.8 cm: docs/experiments.md, tenth measurement).
@@ -99,6 +111,9 @@ impl Default for ClosureConfig {
             sigma_rad: 0.01,
             gate_sigmas: 3.0,
             residual_sigmas: 0.0,
+            ambiguity: true,
+            ambiguity_distance_m: 0.1,
+            ambiguity_ratio: 0.9,
         }
     }
 }
@@ -119,6 +134,9 @@ pub enum Refusal {
     /// The match disagrees with the graph by more than the path between the two keyframes
     /// can have drifted ([`ClosureConfig::gate_sigmas`]); the squared normalised distance.
     Inconsistent(f32),
+    /// Another pose more than [`ClosureConfig::ambiguity_distance_m`] away pairs about as many
+    /// returns ([`ClosureConfig::ambiguity_ratio`]); that pose's fraction of the match's inliers.
+    Ambiguous(f32),
 }
 
 /// The candidate for a closure: the keyframe nearest `pose` among those at least
@@ -235,10 +253,61 @@ impl<const L: usize> LocalMap<L> {
             Err(Refusal::LowScore(q.score))
         } else if q.known_fraction < config.min_known_fraction {
             Err(Refusal::LittleKnown(q.known_fraction))
+        } else if let Some(ratio) = self.ambiguity(
+            &matcher.points[..matcher.len],
+            laser,
+            predicted,
+            result.pose,
+            tracker,
+            config,
+        ) {
+            Err(Refusal::Ambiguous(ratio))
         } else {
             Ok(result.pose)
         };
         (verdict, q)
+    }
+
+    /// The ambiguity test ([`ClosureConfig::ambiguity`]) of a match at `matched` of `points`
+    /// (robot frame, the returns the match used): the refinement ([`super::ndt`]) started
+    /// again from `predicted`; `Some(ratio)` when it ends more than
+    /// [`ClosureConfig::ambiguity_distance_m`] from the refinement at `matched`, pairing at
+    /// least [`ClosureConfig::ambiguity_ratio`] of its inliers (`ratio`: its share). The
+    /// closure's search looks over a window wider than the tracker's; when the basin the
+    /// prediction lies in explains the scan about as well as the one the search jumped to, the
+    /// scan does not tell the two places apart, however confident each fit is. A place match
+    /// must be unique, not only good: Olson (*Recognizing places using spectrally clustered
+    /// local matches*, Robotics and Autonomous Systems 57(12), 2009) accepts a match only when
+    /// no other hypothesis explains the data nearly as well ("local uniqueness"). Only the
+    /// prediction's basin is tried: starts moved ±0.3 m along `x` and `y` as well refused 166
+    /// closures in 20 house missions (up to 17 in one), nearly all true ones
+    /// (docs/experiments.md, branch `loc18`).
+    pub(super) fn ambiguity(
+        &self,
+        points: &[Point2],
+        laser: &LaserConfig,
+        predicted: Pose2,
+        matched: Pose2,
+        tracker: &MatchConfig,
+        config: &ClosureConfig,
+    ) -> Option<f32> {
+        if !config.ambiguity {
+            return None;
+        }
+        let mut fine = tracker.fine;
+        fine.noise_fraction = laser.noise_fraction.max(0.0);
+        fine.length_scale_m = tracker.length_scale_m;
+        let origin = laser.mount.position();
+        let best = super::ndt::refine(&self.hits, points, origin, matched, &fine);
+        let other = super::ndt::refine(&self.hits, points, origin, predicted, &fine);
+        let l = tracker.length_scale_m;
+        let dt = crate::geometry::normalize_angle(other.pose.theta - best.pose.theta) * l;
+        let d = crate::math::hypot(
+            crate::math::hypot(other.pose.x - best.pose.x, other.pose.y - best.pose.y),
+            dt,
+        );
+        let ratio = other.inliers as f32 / best.inliers.max(1) as f32;
+        (d > config.ambiguity_distance_m && ratio >= config.ambiguity_ratio).then_some(ratio)
     }
 
     /// The local grid (for tests and pictures).
