@@ -282,7 +282,10 @@ impl<const N: usize> Mission<N> {
     fn gains_nothing_again(&mut self, map: &SharedMap<N>, t: Point2) -> bool {
         let known = crate::explore::blacklist::known_around(&map.grid, t);
         let (count, place, known_then) = &mut self.idle_repeats;
-        if *count > 0 && place.distance(t) <= self.blacklist.radius_m && *known_then == known {
+        if *count > 0
+            && place.distance(t) <= self.blacklist.radius_m
+            && !crate::explore::blacklist::changed_around(*known_then, known)
+        {
             *count += 1;
         } else {
             *count = 1;
