@@ -388,9 +388,6 @@ pub enum ReplanCause {
     FaultCleared,
     /// Another robot was in the way.
     Robot,
-    /// The robot drove straight out of a place where its body cannot turn, to turn where it
-    /// can (a door's mouth; [`MissionStats::straight_outs`]).
-    TurnRoom,
 }
 
 /// Something the caller may log or count.
@@ -475,9 +472,6 @@ pub struct MissionStats {
     /// Errands to the mouth of a passage shut on the map, to look through it again when no
     /// frontier was reachable ([`crate::explore::shut_mouth`]).
     pub mouth_looks: u32,
-    /// Straight drives out of a place where the body cannot turn, before a turn in place
-    /// (a door's mouth: [`ReplanCause::TurnRoom`]).
-    pub straight_outs: u32,
 }
 
 /// The result of one control period.

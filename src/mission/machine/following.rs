@@ -195,18 +195,7 @@ impl<const N: usize> Mission<N> {
                 self.phase = Phase::Deciding;
                 return None;
             }
-            FollowStatus::Rotating => {
-                // A turn in place where the body's swing circle does not fit: straight out
-                // to where it does first.
-                if cmd.speed_mm_s == 0
-                    && cmd.turn_rate_deg_s != 0
-                    && let Some(w) = self.follower.current_waypoint()
-                    && self.straight_to_turn_room(now, map, w, events)
-                {
-                    return None;
-                }
-                self.phase = Phase::Rotating;
-            }
+            FollowStatus::Rotating => self.phase = Phase::Rotating,
             FollowStatus::Idle => {
                 self.phase = Phase::Deciding;
                 return None;

@@ -60,8 +60,6 @@ pub(super) struct Escape {
     goal: f32,
     start_odom: Pose2,
     until: Time,
-    /// Why the path is planned again once the manoeuvre is over.
-    then: ReplanCause,
 }
 
 /// Obstacle holds in a row without progress, and where the first of them happened.
@@ -300,75 +298,8 @@ impl<const N: usize> Mission<N> {
             goal,
             start_odom: senses.pose_odom,
             until: now + ESCAPE_TIMEOUT,
-            then: ReplanCause::ObstacleAhead,
         });
         events.stats.escapes += 1;
-    }
-
-    /// Before a turn in place where the planning layer says the body cannot turn (its swing
-    /// circle does not fit: a door's mouth, a narrow passage), drives straight, forward or
-    /// back, to the nearest place where it can ([`turn_room_along`]), the way toward the
-    /// path's next waypoint first, checked as the safety monitor will check it; the path is
-    /// then planned again from there. `true` when such a drive started. The rule
-    /// "straight through a door, turning only where the swing circle fits" applied where the
-    /// robot stands: a robot that stopped in a 0.6 m door and turned 100° toward a target
-    /// 0.14 m away was stopped by the jambs half way round, wedged across the door where the
-    /// monitor allows no drive and no turn (gen-02 seed 25 under the precise laser: the
-    /// mission ended "nothing reachable" at 6 % after 44 s).
-    pub(super) fn straight_to_turn_room(
-        &mut self,
-        now: Time,
-        map: &SharedMap<N>,
-        toward: Point2,
-        events: &mut Events<'_>,
-    ) -> bool {
-        let senses = &self.senses;
-        if senses.scan_time.is_none() {
-            return false;
-        }
-        let pose = senses.pose_map;
-        let geom = *map.trav.geometry();
-        let Some(cell) = geom.cell_at(pose.position()) else {
-            return false;
-        };
-        if map.trav.can_turn(cell) {
-            return false;
-        }
-        let laser = &self.config.laser;
-        let remembered = self.remembered_around(map);
-        let limits = *self.monitor.limits();
-        let allowed = |c: MotionCommand| {
-            let v = limits.clamp(c);
-            self.monitor
-                .obstacle_in_path(v, &senses.scan, laser)
-                .is_none()
-                && self.monitor.remembered_in_path(v, &remembered).is_none()
-        };
-        let along = (toward.x - pose.x) * math::cos(pose.theta)
-            + (toward.y - pose.y) * math::sin(pose.theta);
-        let first: i8 = if along >= 0.0 { 1 } else { -1 };
-        for sign in [first, -first] {
-            let command = MotionCommand {
-                speed_mm_s: ESCAPE_SPEED_MM_S * i16::from(sign),
-                turn_rate_deg_s: 0,
-            };
-            let Some(goal) = turn_room_along(map, pose, sign) else {
-                continue;
-            };
-            if !allowed(command) {
-                continue;
-            }
-            self.phase = Phase::Escaping(Escape {
-                command,
-                goal,
-                start_odom: senses.pose_odom,
-                until: now + ESCAPE_TIMEOUT,
-                then: ReplanCause::TurnRoom,
-            });
-            events.stats.straight_outs += 1;
-            return true;
-        }
-        false
     }
 
     /// One period of escape `e`; `None` once it is over (the mission then replans).
@@ -388,7 +319,7 @@ impl<const N: usize> Mission<N> {
         };
         if done || now >= e.until || matches!(self.monitor.state(), SafetyState::BackingOff { .. })
         {
-            self.enter_replanning(e.then);
+            self.enter_replanning(ReplanCause::ObstacleAhead);
             return None;
         }
         // The manoeuvre is a fresh decision of its own, taken after the hold.
