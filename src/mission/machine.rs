@@ -113,6 +113,8 @@ pub struct Mission<const N: usize> {
     goal: GoalRequest,
     /// Decisions in a row that failed.
     failed_in_row: u32,
+    /// The latest decision found frontier to go to (whatever became of it).
+    frontier_left: bool,
     /// After a failed decision, the next one waits until this time (see `failed`).
     decide_at: Time,
     /// Errands dropped in a row while the robot got nowhere (less than 1 m from where the
@@ -201,6 +203,7 @@ impl<const N: usize> Mission<N> {
             errand: Errand::new(),
             goal: GoalRequest::default(),
             failed_in_row: 0,
+            frontier_left: false,
             decide_at: Time::ZERO,
             abandoned_in_row: (0, start_map.position()),
             idle_repeats: (0, start_map.position(), 0),

@@ -349,6 +349,13 @@ pub enum DoneReason {
     BatteryExhausted,
     /// No Unknown cell is reachable any more.
     NothingReachable,
+    /// The robot could not get on while its map still had frontier it could reach: the last
+    /// errands were all dropped where they started, or every target chosen was refused
+    /// (listed, gaining nothing, no path to drive) [`MissionConfig::max_failed_decisions`]
+    /// times in a row. A robot wedged where the safety monitor allows no motion ends here,
+    /// not with [`Self::NothingReachable`] (issue 17: a mission ends "nothing reachable"
+    /// only when no frontier is reachable by the footprint).
+    Stuck,
     /// The battery voltage stayed below [`VoltageConfig::low_v`] for [`VoltageConfig::hold_s`].
     VoltageLow,
     /// The caller ended the mission ([`Mission::end`]).

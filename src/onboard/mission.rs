@@ -1032,6 +1032,7 @@ fn done_name(reason: DoneReason) -> &'static str {
         DoneReason::CoverageReached => "CoverageReached",
         DoneReason::BatteryExhausted => "BatteryExhausted",
         DoneReason::NothingReachable => "NothingReachable",
+        DoneReason::Stuck => "Stuck",
         DoneReason::VoltageLow => "VoltageLow",
         // The onboard program ends a mission itself only when decisions stop adding to the
         // map ([`Stall`]).

@@ -15,6 +15,9 @@ pub enum EndReason {
     BatteryExhausted,
     /// Nothing reachable was left unknown (for the last mission to finish).
     NothingReachable,
+    /// The robot could not get on with frontier still reachable on its map
+    /// ([`DoneReason::Stuck`]).
+    Stuck,
     /// The simulated-time limit was hit with missions still running.
     TimeLimit,
     /// Decisions stopped adding to the map ([`super::PumpModel::nothing_observable_end`],
@@ -25,13 +28,14 @@ pub enum EndReason {
 }
 
 impl EndReason {
-    /// Name in reports: `coverage-reached`, `battery-exhausted`, `nothing-reachable`,
+    /// Name in reports: `coverage-reached`, `battery-exhausted`, `nothing-reachable`, `stuck`,
     /// `time-limit`, `nothing-observable`, `voltage-low`.
     pub fn name(self) -> &'static str {
         match self {
             EndReason::CoverageReached => "coverage-reached",
             EndReason::BatteryExhausted => "battery-exhausted",
             EndReason::NothingReachable => "nothing-reachable",
+            EndReason::Stuck => "stuck",
             EndReason::TimeLimit => "time-limit",
             EndReason::NothingObservable => "nothing-observable",
             EndReason::VoltageLow => "voltage-low",
@@ -45,6 +49,7 @@ impl From<DoneReason> for EndReason {
             DoneReason::CoverageReached => EndReason::CoverageReached,
             DoneReason::BatteryExhausted => EndReason::BatteryExhausted,
             DoneReason::NothingReachable => EndReason::NothingReachable,
+            DoneReason::Stuck => EndReason::Stuck,
             DoneReason::VoltageLow => EndReason::VoltageLow,
             // The runner ends a mission itself only when decisions stop adding to the map.
             DoneReason::Requested => EndReason::NothingObservable,

@@ -123,6 +123,12 @@ impl<const N: usize> Mission<N> {
         }
         self.errand.from_goal = false;
         let outcome = self.run_selector(self.senses.pose_map, map, ws, rng);
+        // Whether this decision saw frontier it could reach (it ends "nothing reachable" only
+        // if not).
+        self.frontier_left = matches!(
+            outcome,
+            Ok(Outcome::Go(_)) | Err(DecideError::AllBlacklisted { .. })
+        );
         match outcome {
             Ok(Outcome::Go(d)) => {
                 let last = d.targets.last().copied();
@@ -165,8 +171,9 @@ impl<const N: usize> Mission<N> {
             Err(DecideError::AllBlacklisted { .. }) => {
                 self.forget_contacts();
                 if self.failed_in_row + 1 >= self.config.max_failed_decisions {
-                    // Every frontier left is one the robot failed to reach.
-                    self.finish(DoneReason::NothingReachable, events);
+                    // Every frontier left is one the robot failed to reach: reachable on
+                    // the map, but the robot does not get there.
+                    self.finish(DoneReason::Stuck, events);
                     return true;
                 }
                 self.failed(now, events)
@@ -282,7 +289,10 @@ impl<const N: usize> Mission<N> {
     fn gains_nothing_again(&mut self, map: &SharedMap<N>, t: Point2) -> bool {
         let known = crate::explore::blacklist::known_around(&map.grid, t);
         let (count, place, known_then) = &mut self.idle_repeats;
-        if *count > 0 && place.distance(t) <= self.blacklist.radius_m && *known_then == known {
+        if *count > 0
+            && place.distance(t) <= self.blacklist.radius_m
+            && !crate::explore::blacklist::changed_around(*known_then, known)
+        {
             *count += 1;
         } else {
             *count = 1;
@@ -309,6 +319,9 @@ impl<const N: usize> Mission<N> {
         if self.failed_in_row >= self.config.max_failed_decisions {
             let reason = if self.battery_low() {
                 DoneReason::BatteryExhausted
+            } else if self.frontier_left {
+                // The last decision had frontier to go to and could not start there.
+                DoneReason::Stuck
             } else {
                 DoneReason::NothingReachable
             };
@@ -378,9 +391,10 @@ impl<const N: usize> Mission<N> {
         }
         *count += 1;
         if *count >= self.config.max_failed_decisions {
-            // Every errand of the last ones was dropped where it started: nothing the robot
-            // chooses is reachable from here.
-            let _ = self.finish(DoneReason::NothingReachable, events);
+            // Every errand of the last ones was dropped where it started: the robot does not
+            // get on from here, though its map has frontier it could reach (the selector chose
+            // each errand), so the end is `Stuck`, not "nothing reachable".
+            let _ = self.finish(DoneReason::Stuck, events);
         }
     }
 
