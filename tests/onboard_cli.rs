@@ -17,7 +17,12 @@ fn temp_file(name: &str, text: &str) -> std::path::PathBuf {
 
 #[test]
 fn shipped_boards_check_ok() {
-    for name in ["p3dx-lms1xx.json", "p3dx-lms200.json", "sim.json", "sim-thesis.json"] {
+    for name in [
+        "p3dx-lms1xx.json",
+        "p3dx-lms200.json",
+        "sim.json",
+        "sim-thesis.json",
+    ] {
         let out = Command::new(BIN)
             .args(["check", "--board", &board(name)])
             .output()
@@ -194,7 +199,10 @@ fn a_board_file_that_never_ends_or_is_too_large_is_refused() {
 /// "Expected … ',' or '}'" without any path).
 fn assert_board_error_names(kind: &str, from: &str, to: &str, path: &str, expected: &str) {
     let text = std::fs::read_to_string(board("sim-thesis.json")).unwrap();
-    assert!(text.contains(from), "{kind}: {from:?} not in sim-thesis.json");
+    assert!(
+        text.contains(from),
+        "{kind}: {from:?} not in sim-thesis.json"
+    );
     let p = temp_file(
         &format!("kind-{}.json", kind.replace(' ', "-")),
         &text.replacen(from, to, 1),
@@ -499,10 +507,16 @@ fn live_address_rust_log_and_log_format_are_checked_first() {
     let log = std::env::temp_dir().join(format!("papillon-cli-{}-live", std::process::id()));
     let run = |extra: &[&str], env: Option<&str>| {
         let mut c = Command::new(BIN);
-        c.args(["run", "--board", &board("sim-thesis.json"), "--tcp", "127.0.0.1:1"])
-            .args(extra)
-            .arg("--log-dir")
-            .arg(&log);
+        c.args([
+            "run",
+            "--board",
+            &board("sim-thesis.json"),
+            "--tcp",
+            "127.0.0.1:1",
+        ])
+        .args(extra)
+        .arg("--log-dir")
+        .arg(&log);
         if let Some(v) = env {
             c.env("RUST_LOG", v);
         }

@@ -16,8 +16,11 @@ fn papillon_run_records_the_mission_as_mcap_in_its_log_directory() {
     let dir = temp_dir("record");
     let log = dir.join("log");
     // boards/sim-thesis.json with a small battery: a short mission with a few decisions.
-    let text =
-        std::fs::read_to_string(format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let text = std::fs::read_to_string(format!(
+        "{}/boards/sim-thesis.json",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
     let mut board: serde_json::Value = serde_json::from_str(&text).unwrap();
     board["mission"]["battery_steps"] = serde_json::json!(8.0);
     let board_path = dir.join("board.json");

@@ -1090,7 +1090,12 @@ mod tests {
 
     #[test]
     fn shipped_boards_make_valid_missions() {
-        for name in ["sim.json", "sim-thesis.json", "p3dx-lms1xx.json", "p3dx-lms200.json"] {
+        for name in [
+            "sim.json",
+            "sim-thesis.json",
+            "p3dx-lms1xx.json",
+            "p3dx-lms200.json",
+        ] {
             let path = format!("{}/boards/{name}", env!("CARGO_MANIFEST_DIR"));
             let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
             let config = mission_config(&board).unwrap();
