@@ -6,7 +6,10 @@ use std::vec::Vec;
 
 const LMS1XX: &str = include_str!("../../boards/p3dx-lms1xx.json");
 const LMS200: &str = include_str!("../../boards/p3dx-lms200.json");
-const SIM: &str = include_str!("../../boards/sim.json");
+/// The simulator's board without a `$.localize` section (the thesis's laser, matcher off).
+const SIM: &str = include_str!("../../boards/sim-thesis.json");
+/// The project's board for the simulator: an LMS1xx described as it is, the matcher on.
+const SIM_MATCHING: &str = include_str!("../../boards/sim.json");
 
 fn problems(c: &BoardConfig) -> Vec<(String, String)> {
     let mut out = Vec::new();
@@ -481,6 +484,21 @@ fn a_lone_surrogate_escape_is_refused_and_a_pair_read() {
     ));
     let pair = SIM.replacen("\"sim-p3dx\"", "\"\\ud83d\\ude00\"", 1);
     assert!(BoardConfig::from_json(pair.as_bytes()).is_ok());
+}
+
+/// `boards/sim.json` runs the matcher with its pose graph, and differs from
+/// `boards/sim-thesis.json` only there and in its laser's range noise.
+#[test]
+fn the_simulator_board_runs_the_matcher_and_its_graph() {
+    let c = BoardConfig::from_json(SIM_MATCHING.as_bytes()).unwrap();
+    assert!(c.localize_config().enabled);
+    assert!(c.localize_config().graph.enabled);
+    assert_eq!(c.laser.noise_fraction, 0.003);
+    let mut thesis = BoardConfig::from_json(SIM.as_bytes()).unwrap();
+    assert_eq!(thesis.laser.noise_fraction, 0.05);
+    thesis.laser.noise_fraction = c.laser.noise_fraction;
+    thesis.localize = c.localize.clone();
+    assert_eq!(thesis, c);
 }
 
 /// `$.localize` is optional: absent, the matcher is off with the core's defaults; present,
