@@ -28,11 +28,11 @@
 //! on both sides), `PAPILLON_COMPARE_SLIP=NAME` (`serve --slip`, the runner's body slip;
 //! default `thesis`, the default of both) and `PAPILLON_COMPARE_LASER_NOISE_M=M` (`serve
 //! --laser-noise-m`, the runner's `laser_range_sigma_m`; default 0). Issue 26's house check
-//! with an LMS1xx, the realistic odometry and the matcher (the board `boards/sim.json` with
-//! `laser.noise_fraction` 0.003 and `"localize": {"enabled": true}`), the runner alone:
+//! with `boards/sim.json`'s LMS1xx (`laser.noise_fraction` 0.003 and serve's 12 mm), the
+//! realistic odometry and the matcher with its graph, the runner alone:
 //!
 //! ```text
-//! PAPILLON_COMPARE_BOARD=/tmp/sim-lms1xx.json PAPILLON_COMPARE_SLIP=realistic \
+//! PAPILLON_COMPARE_SLIP=realistic \
 //!   PAPILLON_COMPARE_LASER_NOISE_M=0.012 PAPILLON_COMPARE_MAP=house \
 //!   PAPILLON_COMPARE_RUNNER_ONLY=0.006 PAPILLON_COMPARE_SEEDS="1 2 3 4 5" \
 //!   cargo test --release -p papillon --test onboard_compare -- --ignored --nocapture

@@ -70,8 +70,9 @@ pub struct Args {
     pub subclass: Subclass,
     /// Range noise of the emulated laser, as a fraction of the range (standard deviation of
     /// Gaussian noise, drawn afresh for every scan; the runner's model): 0 for noise-free
-    /// ranges, 0.05 for the thesis's laser that `papillon-sim mission` simulates with
-    /// `boards/sim.json`.
+    /// ranges, 0.05 for the thesis's laser that `papillon-sim mission` simulates by default
+    /// (`boards/sim-thesis.json`), 0.003 for `boards/sim.json`'s LMS1xx (with --laser-noise-m
+    /// 0.012).
     #[arg(long, default_value_t = 0.0, value_parser = super::noise_fraction)]
     pub laser_noise: f32,
     /// Range noise of the emulated laser that does not grow with the range, standard deviation

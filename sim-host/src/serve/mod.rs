@@ -101,7 +101,8 @@ pub struct ServeConfig {
     /// Range noise of the emulated laser: each range gets Gaussian noise of standard deviation
     /// this fraction of the range ([`LaserSim`]'s model, the runner's), drawn afresh for every
     /// scan. 0: noise-free ranges. The runner simulates the laser of its mission
-    /// configuration (`boards/sim.json`: 5 %, the thesis's); the binary predicts what the
+    /// configuration (`boards/sim-thesis.json`: 5 %, the thesis's; `boards/sim.json`: 0.3 %, an
+    /// LMS1xx, with 12 mm more from `laser_range_sigma_m`); the binary predicts what the
     /// runner predicts only on the same laser (`scripts/house-check.sh` passes the board's).
     pub laser_noise_fraction: f32,
     /// Range noise of the emulated laser that does not grow with the range, standard
