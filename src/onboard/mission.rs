@@ -1345,13 +1345,9 @@ mod tests {
         );
     }
 
-    /// A scan taken in a gap of the odometry (the pump stalled 1 s, the queued status packets
-    /// then all placed at its end) is not mapped: its pose would be interpolated between the
-    /// reading before the gap and the first queued one, anywhere along what the robot did
-    /// meanwhile. (Mapped, its return 1.04 m ahead of the interpolated x = 0.46 m would mark
-    /// x = 1.55 m: checked by raising the gap limit.)
-    #[test]
-    fn a_scan_in_a_gap_of_the_odometry_is_not_mapped() {
+    /// A worker on `boards/sim-thesis.json` after two status packets 100 ms apart, standing at
+    /// the origin.
+    fn worker_after_two_packets() -> Worker<{ crate::capacity::FIXED_CELLS }> {
         let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
         let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
         let config = mission_config(&board).unwrap();
@@ -1361,6 +1357,17 @@ mod tests {
                 .unwrap();
         worker.handle(Input::Status(1.0, packet_at(0))).unwrap();
         worker.handle(Input::Status(1.1, packet_at(100))).unwrap();
+        worker
+    }
+
+    /// A scan taken in a gap of the odometry (the pump stalled 1 s, the queued status packets
+    /// then all placed at its end) is not mapped: its pose would be interpolated between the
+    /// reading before the gap and the first queued one, anywhere along what the robot did
+    /// meanwhile. (Mapped, its return 1.04 m ahead of the interpolated x = 0.46 m would mark
+    /// x = 1.55 m: checked by raising the gap limit.)
+    #[test]
+    fn a_scan_in_a_gap_of_the_odometry_is_not_mapped() {
+        let mut worker = worker_after_two_packets();
         worker.handle(Input::Scan(1.5, beam_ahead(1.04))).unwrap();
         worker.handle(Input::Status(2.1, packet_at(200))).unwrap();
         worker.handle(Input::Status(2.1, packet_at(1100))).unwrap();
@@ -1383,15 +1390,7 @@ mod tests {
     /// (handed in as odometry, the scan's pose made it 0.3 m).
     #[test]
     fn a_late_scan_is_mapped_at_its_pose_without_charging_the_way_twice() {
-        let path = format!("{}/boards/sim-thesis.json", env!("CARGO_MANIFEST_DIR"));
-        let board = BoardConfig::from_json(&std::fs::read(path).unwrap()).unwrap();
-        let config = mission_config(&board).unwrap();
-        let geometry = grid_geometry(&board).unwrap();
-        let (mut worker, _out) =
-            new_worker::<{ crate::capacity::FIXED_CELLS }>(&board, config, geometry, None, None)
-                .unwrap();
-        worker.handle(Input::Status(1.0, packet_at(0))).unwrap();
-        worker.handle(Input::Status(1.1, packet_at(100))).unwrap();
+        let mut worker = worker_after_two_packets();
         // Taken at 1.05 s (x = 0.05 m), read after the packet of 1.1 s.
         worker.handle(Input::Scan(1.05, beam_ahead(1.04))).unwrap();
         worker.handle(Input::Status(1.2, packet_at(200))).unwrap();

@@ -104,20 +104,20 @@ impl PoseHistory {
     /// the pump or the link stalled, the gap the robot's motion in it is unknown across
     /// (status packets queued in the socket all arrive, and are placed, at the gap's end).
     pub fn span_at(&self, t_s: f64) -> Option<f64> {
-        let last_t = self.readings.back()?.0;
-        if t_s > last_t || t_s < self.readings.front()?.0 || self.readings.len() < 2 {
-            return None;
-        }
-        let after = self
-            .readings
-            .partition_point(|&(t, _)| t < t_s)
-            .clamp(1, self.readings.len() - 1);
-        Some(self.readings[after].0 - self.readings[after - 1].0)
+        let ((t0, _), (t1, _)) = self.readings_around(t_s)?;
+        Some(t1 - t0)
     }
 
     /// How far the robot turned between the readings around `t_s`, per second \[rad/s\]
     /// (`None` outside the history).
     pub fn turn_rate_at(&self, t_s: f64) -> Option<f32> {
+        let ((t0, p0), (t1, p1)) = self.readings_around(t_s)?;
+        let span = (t1 - t0) as f32;
+        (span > 0.0).then(|| normalize_angle(p1.theta - p0.theta).abs() / span)
+    }
+
+    /// The two readings around `t_s` (`None` outside the history or with fewer than two).
+    fn readings_around(&self, t_s: f64) -> Option<((f64, Pose2), (f64, Pose2))> {
         let last_t = self.readings.back()?.0;
         if t_s > last_t || t_s < self.readings.front()?.0 || self.readings.len() < 2 {
             return None;
@@ -126,10 +126,7 @@ impl PoseHistory {
             .readings
             .partition_point(|&(t, _)| t < t_s)
             .clamp(1, self.readings.len() - 1);
-        let (t0, p0) = self.readings[after - 1];
-        let (t1, p1) = self.readings[after];
-        let span = (t1 - t0) as f32;
-        (span > 0.0).then(|| normalize_angle(p1.theta - p0.theta).abs() / span)
+        Some((self.readings[after - 1], self.readings[after]))
     }
 }
 
