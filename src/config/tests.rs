@@ -497,7 +497,7 @@ fn the_simulator_board_runs_the_matcher_and_its_graph() {
     let mut thesis = BoardConfig::from_json(SIM.as_bytes()).unwrap();
     assert_eq!(thesis.laser.noise_fraction, 0.05);
     thesis.laser.noise_fraction = c.laser.noise_fraction;
-    thesis.localize = c.localize.clone();
+    thesis.localize = c.localize;
     assert_eq!(thesis, c);
 }
 
