@@ -11,6 +11,11 @@ use crate::sensor::{LaserConfig, MAX_BEAMS, SensorModel};
 
 type Store = KeyframeStore<8>;
 
+/// Three old keyframes a metre apart along a corridor's middle, heading east.
+fn along_the_corridor() -> [Pose2; 3] {
+    [18.0, 19.0, 20.0].map(|x| Pose2::new(x, 2.0, 0.0))
+}
+
 /// Old keyframes at `poses`, taken `path_step` metres of path apart, scans from `walls`.
 fn keep(walls: &[super::tests::Segment], poses: &[Pose2], laser: &LaserConfig) -> Box<Store> {
     let mut store: Box<Store> = bytemuck::zeroed_box();
@@ -93,11 +98,7 @@ fn a_drifted_return_to_a_furnished_room_is_closed_at_the_true_pose() {
 fn a_featureless_corridor_is_not_closed() {
     let (walls, _) = corridor();
     let laser = LaserConfig::lms1xx();
-    let old = [
-        Pose2::new(18.0, 2.0, 0.0),
-        Pose2::new(19.0, 2.0, 0.0),
-        Pose2::new(20.0, 2.0, 0.0),
-    ];
+    let old = along_the_corridor();
     let store = keep(&walls, &old, &laser);
     let mut local: Box<LocalMap<LOCAL_CELLS>> = bytemuck::zeroed_box();
     let mut m = matcher();
@@ -248,11 +249,7 @@ fn returns(scan: &crate::sensor::Scan, laser: &LaserConfig) -> ([Point2; MAX_BEA
 fn a_match_the_prediction_explains_as_well_elsewhere_is_ambiguous() {
     let walls = jambs();
     let laser = LaserConfig::lms1xx();
-    let old = [
-        Pose2::new(18.0, 2.0, 0.0),
-        Pose2::new(19.0, 2.0, 0.0),
-        Pose2::new(20.0, 2.0, 0.0),
-    ];
+    let old = along_the_corridor();
     let store = keep(&walls, &old, &laser);
     let mut local: Box<LocalMap<LOCAL_CELLS>> = bytemuck::zeroed_box();
     let truth = Pose2::new(19.5, 2.05, 0.02);
