@@ -94,7 +94,7 @@ impl Blacklist {
     }
 
     /// Forgets the entries whose surroundings on `grid` changed since they were listed (by
-    /// [`CHANGED_CELLS`] known cells or more).
+    /// `CHANGED_CELLS` known cells or more).
     pub fn forget_changed<const N: usize>(&mut self, grid: &OccupancyGrid<N>) {
         self.entries
             .retain(|e| !changed_around(e.known_around, known_around(grid, e.point)));
