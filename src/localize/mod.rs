@@ -54,6 +54,9 @@ mod tests;
 #[cfg(test)]
 mod closure_tests;
 
+#[cfg(test)]
+mod graph_tests;
+
 use crate::geometry::{Point2, Pose2, normalize_angle};
 use crate::grid::OccupancyGrid;
 use crate::math;

@@ -329,6 +329,10 @@ impl<const N: usize> Mission<N> {
             }
             return Ok(());
         };
+        let keep = loc
+            .graph
+            .redraw_keeps_unseen
+            .then_some(&mut map.known_before_redraw[..]);
         map.graph
             .redraw(
                 &mut map.grid,
@@ -336,6 +340,7 @@ impl<const N: usize> Mission<N> {
                 self.localizer.wall_band_m(&self.config.localize),
                 &self.config.laser,
                 &self.config.sensor,
+                keep,
             )
             .map_err(MissionError::Sensor)?;
         map.rebuild_traversability()?;

@@ -89,6 +89,10 @@ pub struct SharedMap<const N: usize> {
         { crate::localize::graph::GRAPH_KEYFRAMES },
         { crate::localize::graph::GRAPH_EDGES },
     >,
+    /// Each cell's class before the graph redraws the map, one byte a cell (used only with
+    /// the graph on and [`crate::localize::graph::GraphConfig::redraw_keeps_unseen`];
+    /// zeroed and untouched otherwise).
+    pub known_before_redraw: [i8; N],
 }
 
 impl<const N: usize> core::fmt::Debug for SharedMap<N> {
@@ -116,6 +120,7 @@ impl<const N: usize> SharedMap<N> {
             matcher: crate::localize::ScanMatcher::new(),
             hits: crate::localize::HitMap::new(geometry),
             graph: bytemuck::Zeroable::zeroed(),
+            known_before_redraw: [0; N],
         })
     }
 
