@@ -30,7 +30,7 @@
 //! and the end-of-move slide only).
 //!
 //! `LOC_L` sets the matcher's length scale (`MatchConfig::length_scale_m`).
-//! With `WINDOW`, a second line per scan gives the true, odometry and estimated heading
+//! With `WINDOW`, a second line per scan gives the true, odometry and estimated heading (and distance)
 //! changes since the scan before, the filter's heading σ, the fused match's heading σ and its
 //! null direction `(x, y, θ·1 m)` when it constrains two directions.
 
