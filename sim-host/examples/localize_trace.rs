@@ -28,6 +28,11 @@
 //! reports the estimate against the wheels the simulator drew (`Ed`, `Eb`). `SLIP_RANDOM=F`
 //! scales the slip model's random walks and fast-turn slip by `F` (0: systematic wheel errors
 //! and the end-of-move slide only).
+//!
+//! `LOC_L` sets the matcher's length scale (`MatchConfig::length_scale_m`).
+//! With `WINDOW`, a second line per scan gives the true, odometry and estimated heading (and distance)
+//! changes since the scan before, the filter's heading σ, the fused match's heading σ and its
+//! null direction `(x, y, θ·1 m)` when it constrains two directions.
 
 use papillon::geometry::normalize_angle;
 use papillon::localize::odometry_calibration::gain_and_curvature_of;
@@ -137,6 +142,9 @@ fn main() {
     if let Some(v) = env("LOC_SXY") {
         m.localize.matcher.search_xy_m = v;
     }
+    if let Some(v) = env("LOC_L") {
+        m.localize.matcher.length_scale_m = v;
+    }
     if let Some(v) = env("LOC_STH") {
         m.localize.matcher.search_theta_rad = v;
     }
@@ -241,6 +249,12 @@ fn main() {
     let mut sigma_sum = 0.0f64;
     // The raw odometry's largest error against the truth over the run (0 with `none`).
     let (mut odo_max_m, mut odo_max_rad) = (0.0f32, 0.0f32);
+    // The true, odometry and estimated poses at the window's scan before.
+    let mut prev_window: Option<(
+        papillon::geometry::Pose2,
+        papillon::geometry::Pose2,
+        papillon::geometry::Pose2,
+    )> = None;
     while !r.finished() {
         let before = r.map().graph.stats().redraws;
         let keys = r.map().graph.keyframes().len();
@@ -336,6 +350,60 @@ fn main() {
                 ))
             );
             last_trusted = l.trusted();
+            if t >= window.0 && t <= window.1 {
+                // Per scan: the true, odometry and estimated heading changes since the scan
+                // before, the filter's heading σ, the fused match's heading information and
+                // its null direction (x, y, θ·1 m) when it constrains two directions.
+                let (pt, po, pe) = prev_window.unwrap_or((tp, o, e));
+                let d = |a: f32, b: f32| normalize_angle(a - b).to_degrees();
+                let cov = l.covariance();
+                let h = l.last_information();
+                let rows = [
+                    [h[0][0], h[0][1], h[0][2]],
+                    [h[1][0], h[1][1], h[1][2]],
+                    [h[2][0], h[2][1], h[2][2]],
+                ];
+                let cross = |a: [f32; 3], b: [f32; 3]| {
+                    [
+                        a[1] * b[2] - a[2] * b[1],
+                        a[2] * b[0] - a[0] * b[2],
+                        a[0] * b[1] - a[1] * b[0],
+                    ]
+                };
+                let norm = |v: [f32; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                let mut null = [0.0f32; 3];
+                for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+                    let c = cross(rows[i], rows[j]);
+                    if norm(c) > norm(null) {
+                        null = c;
+                    }
+                }
+                let n = norm(null).max(1e-30);
+                // Heading information net of the position (Schur complement), 1/rad².
+                let det2 = h[0][0] * h[1][1] - h[0][1] * h[1][0];
+                let schur = if det2.abs() > 1e-9 {
+                    let (a, b, c) = (h[0][0], h[0][1], h[1][1]);
+                    let (u, v) = (h[0][2], h[1][2]);
+                    h[2][2] - (c * u * u - 2.0 * b * u * v + a * v * v) / det2
+                } else {
+                    h[2][2]
+                };
+                println!(
+                    "  scan dθ true {:+.3} odo {:+.3} est {:+.3} deg ds true {:.4} odo {:.4} m | σθ {:.3} deg σθ(match) {:.3} deg (net of pos {:.3}) | null ({:+.2} {:+.2} {:+.2})",
+                    d(tp.theta, pt.theta),
+                    d(o.theta, po.theta),
+                    d(e.theta, pe.theta),
+                    tp.position().distance(pt.position()),
+                    o.position().distance(po.position()),
+                    cov[2][2].max(0.0).sqrt().to_degrees(),
+                    (1.0 / h[2][2].max(1e-30)).sqrt().to_degrees(),
+                    (1.0 / schur.max(1e-30)).sqrt().to_degrees(),
+                    null[0] / n,
+                    null[1] / n,
+                    null[2] / n,
+                );
+                prev_window = Some((tp, o, e));
+            }
         }
     }
     if attrib {

@@ -185,6 +185,8 @@ pub struct Tracker {
     moving: bool,
     /// The estimate of the odometry's systematic errors ([`LocalizeConfig::calibration`]).
     calibration: OdometryCalibration,
+    /// The last trusted match's information as fused, `(x, y, θ)` (zero before one).
+    last_information: [[f32; 3]; 3],
 }
 
 impl core::fmt::Debug for Tracker {
@@ -219,6 +221,7 @@ impl Tracker {
             keyframe: false,
             moving: false,
             calibration: OdometryCalibration::new(),
+            last_information: [[0.0; 3]; 3],
         }
     }
 
@@ -330,6 +333,8 @@ impl Tracker {
         // Information-form update with the match's information along what it constrains.
         let scale = config.information_scale.max(0.0) as f64;
         let h = Matrix3::from_fn(|a, b| result.information[a][b] as f64 * scale);
+        self.last_information =
+            core::array::from_fn(|a| core::array::from_fn(|b| h[(a, b)] as f32));
         let c = result.quality.correction;
         let delta = Vector3::new(c[0] as f64, c[1] as f64, c[2] as f64);
         let mut prior_info = self.cov.try_inverse()?;
@@ -424,6 +429,18 @@ impl Tracker {
     /// ([`LocalizeConfig::grid_only_agreeing`]).
     pub fn grids_scan(&self, config: &LocalizeConfig) -> bool {
         !(config.grid_only_agreeing && self.disagrees)
+    }
+
+    /// The covariance of the pose estimate, map frame `(x, y, θ)` \[m², m·rad, rad²\] (the
+    /// filter's own figure, not the true error).
+    pub fn covariance(&self) -> [[f32; 3]; 3] {
+        core::array::from_fn(|a| core::array::from_fn(|b| self.cov[(a, b)] as f32))
+    }
+
+    /// The last trusted match's information as it was fused, `(x, y, θ)` \[1/m², 1/(m·rad),
+    /// 1/rad²\] (zero before the first; for diagnostics).
+    pub fn last_information(&self) -> [[f32; 3]; 3] {
+        self.last_information
     }
 
     /// Scans matched so far.
