@@ -377,7 +377,8 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
     /// ([`crate::sensor::integrate_scan_banded`]). With `keep_unseen` (one byte a cell, at
     /// least the grid's cells; [`GraphConfig::redraw_keeps_unseen`]), a cell known before
     /// and Unknown after keeps its old class at one observation's evidence; `None`, or a
-    /// shorter slice, keeps nothing. `observer` sees the grid's cells change class as usual.
+    /// shorter slice, keeps nothing. No observer is told of the cells' changes: the caller
+    /// rebuilds the traversability layer afterwards.
     pub fn redraw<const N: usize>(
         &mut self,
         grid: &mut OccupancyGrid<N>,
