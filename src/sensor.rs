@@ -214,18 +214,50 @@ pub struct SensorModel {
     /// beam's Free and Occupied evidence is added in beam order (the thesis's model).
     #[serde(default)]
     pub hits_before_misses: bool,
+    /// A miss through a cell the map holds Occupied with confidence (log-odds at least
+    /// [`CONFIDENT_OCCUPIED_LOG_ODDS`]) counts only when the beam passes within this distance
+    /// of the cell's centre, in cells; `None` (the thesis's model, the default): every miss
+    /// counts.
+    ///
+    /// Why: a wall's face often lies on a cell boundary (always, in the simulator's worlds),
+    /// and a beam that passes along the face, just clear of it, crosses the face's cells
+    /// whenever the pose estimate is a centimetre off towards the wall. The map takes 50 scans
+    /// a second, nearly all from the same place, so such a beam's misses pile up and wear the
+    /// face away in a fraction of a second: the lab's pillar lost its north face to the scans
+    /// of a robot driving down its east side with its estimate 1.3 cm south of the truth, and
+    /// the inside of the pillar became a frontier the mission drove 5 m back to look into
+    /// (docs/experiments.md, "Issue 26: the pillar's worn face"). A beam through the middle
+    /// of a cell held Occupied is still evidence the cell is free (a door's noise hit, a person
+    /// who walked away), and a cell with one or two hits is cleared by any miss: applied to
+    /// every Occupied cell, the rule kept noise hits in doors and shut passages on the
+    /// generated plans (same section). Only for a pose good to a centimetre or two: with dead
+    /// reckoning's decimetres the misses must clear the walls drawn where the drift put them.
+    /// The mission sets it when the scan matcher is on
+    /// ([`crate::localize::LocalizeConfig::grazing_miss_offset_cells`]).
+    #[serde(default)]
+    pub occupied_miss_offset_cells: Option<f32>,
 }
 
 impl SensorModel {
-    /// The thesis's model (Bendahmane 2023), also the default: free `ln(0.4/0.6) ≈ -0.41`,
-    /// occupied `ln(0.7/0.3) ≈ 0.85` (the textbook values of Thrun et al.), σ = 0.05 m (half a
-    /// 10 cm cell), each beam's evidence added in beam order.
+    /// The thesis's model (Bendahmane 2023): free `ln(0.4/0.6) ≈ -0.41`, occupied
+    /// `ln(0.7/0.3) ≈ 0.85` (the textbook values of Thrun et al.), σ = 0.05 m (half a 10 cm
+    /// cell), each beam's evidence added in beam order, every miss counted.
     pub fn thesis() -> Self {
         Self {
             free_log_odds: -0.405,
             occupied_log_odds: 0.847,
             sigma_m: 0.05,
             hits_before_misses: false,
+            occupied_miss_offset_cells: None,
+        }
+    }
+
+    /// This model with misses through a cell held Occupied with confidence counted only within
+    /// `cells` of its centre ([`SensorModel::occupied_miss_offset_cells`]).
+    pub fn with_occupied_miss_offset(self, cells: f32) -> Self {
+        Self {
+            occupied_miss_offset_cells: Some(cells),
+            ..self
         }
     }
 
@@ -246,6 +278,17 @@ impl SensorModel {
         }
     }
 }
+
+/// How far from an Occupied cell's centre a miss may pass and still count, in cells
+/// ([`SensorModel::occupied_miss_offset_cells`], with the scan matcher on): a quarter of a
+/// cell, half the Gaussian weight's σ at 10 cm cells.
+pub const GRAZING_MISS_OFFSET_CELLS: f32 = 0.25;
+
+/// Log-odds from which the map holds a cell Occupied with confidence: three hits net of the
+/// thesis's model (3 x 0.847). Below it, [`SensorModel::occupied_miss_offset_cells`] does not
+/// apply: a cell one or two noise hits made Occupied (in a door, on a drifted wall) is cleared
+/// by every miss, as before.
+pub const CONFIDENT_OCCUPIED_LOG_ODDS: f32 = 2.5;
 
 impl Default for SensorModel {
     /// [`SensorModel::thesis`].
@@ -278,6 +321,9 @@ pub enum IntegrationError {
     BadPose,
     /// The wall band must be a finite number of metres, at least 0.
     BadBand(f32),
+    /// The distance a miss may pass from an Occupied cell's centre must be a finite number of
+    /// cells, at least 0.
+    BadMissOffset(f32),
 }
 
 impl core::fmt::Display for IntegrationError {
@@ -308,6 +354,10 @@ impl core::fmt::Display for IntegrationError {
                 f,
                 "the wall band past a return must be a finite number of metres >= 0, got {b}"
             ),
+            IntegrationError::BadMissOffset(c) => write!(
+                f,
+                "sensor model occupied_miss_offset_cells must be a finite number of cells >= 0, got {c}"
+            ),
         }
     }
 }
@@ -329,6 +379,11 @@ impl SensorModel {
         }
         if !(self.sigma_m > 0.0 && self.sigma_m.is_finite()) {
             return Err(IntegrationError::BadSigma(self.sigma_m));
+        }
+        if let Some(offset) = self.occupied_miss_offset_cells
+            && !(offset >= 0.0 && offset.is_finite())
+        {
+            return Err(IntegrationError::BadMissOffset(offset));
         }
         Ok(())
     }
@@ -422,6 +477,9 @@ pub fn integrate_scan_banded<const N: usize>(
     let bounds = grid.bounds();
     let mut out = ScanIntegration::default();
     let geom = *grid.geometry();
+    let miss_offset_m = model
+        .occupied_miss_offset_cells
+        .map_or(f32::INFINITY, |cells| cells * geom.resolution_m);
     let hit_depth = |range_m: f32| hit_depth_m(range_m, laser.noise_fraction, geom.resolution_m);
     let band = WallBand {
         geom,
@@ -503,6 +561,13 @@ pub fn integrate_scan_banded<const N: usize>(
             }
             if model.hits_before_misses && hit_cells.binary_search(&index).is_ok() {
                 // Another beam's return: no Free evidence from this scan.
+                return ControlFlow::Continue(());
+            }
+            if !occupied
+                && current >= CONFIDENT_OCCUPIED_LOG_ODDS
+                && evidence.offset_m(&geom, cell) > miss_offset_m
+            {
+                // A miss grazing a cell held Occupied: as likely pose error along its face.
                 return ControlFlow::Continue(());
             }
             let delta = if occupied {
@@ -657,6 +722,13 @@ struct BeamEvidence {
 }
 
 impl BeamEvidence {
+    /// The perpendicular distance from `cell`'s centre to the beam's line \[m\].
+    #[inline]
+    fn offset_m(&self, geom: &crate::grid::GridGeometry, cell: Cell) -> f32 {
+        let centre = geom.cell_center(cell);
+        ((centre.x - self.origin.x) * self.dir_y - (centre.y - self.origin.y) * self.dir_x).abs()
+    }
+
     /// Adds `delta` weighted by `exp(-d² / 2σ²)` to `cell` (flat index `index`), `d` the
     /// perpendicular distance from the cell centre to the beam's line, and books the class
     /// change. Kept out of line: most cells a beam crosses are already saturated and skip it.
@@ -802,6 +874,72 @@ mod tests {
                 assert_eq!(g.class(i), CellClass::Unknown, "{c:?}");
             }
         }
+    }
+
+    /// A wall's face on a cell boundary (row 30's north face, y = 3.1 m) and a robot whose
+    /// estimate is 1 cm off towards it: the beams passing along the face, just clear of it,
+    /// cross its cells 4 cm from their centres. Under the thesis's model fifty scans (one
+    /// second) wear the face away; with misses counted only near a confidently Occupied cell's
+    /// centre the face stays, a beam crossing the cells through the middle still clears them,
+    /// and so do grazing misses a cell with a single hit.
+    #[test]
+    fn beams_grazing_a_wall_face_do_not_wear_it_away() {
+        let laser = LaserConfig::thesis();
+        let face: Vec<usize> = (20..30).map(|col| 30 * 60 + col).collect();
+        let one_second = |model: &SensorModel, y_m: f32| {
+            let mut g = grid();
+            for &i in &face {
+                g.set_log_odds(i, g.bounds().max, &mut ());
+            }
+            let mut s = Scan::new();
+            s.push(Beam {
+                angle_rad: 0.0,
+                range_m: Some(3.5),
+            })
+            .unwrap();
+            for _ in 0..50 {
+                integrate_scan(
+                    &mut g,
+                    &s,
+                    Pose2::new(1.0, y_m, 0.0),
+                    &laser,
+                    model,
+                    &mut (),
+                )
+                .unwrap();
+            }
+            face.iter()
+                .filter(|&&i| g.class(i) == CellClass::Occupied)
+                .count()
+        };
+        // 1 cm inside the face's row (y 3.0..3.1), 4 cm from the cells' centres.
+        assert_eq!(one_second(&SensorModel::thesis(), 3.09), 0);
+        let kept = SensorModel::thesis().with_occupied_miss_offset(GRAZING_MISS_OFFSET_CELLS);
+        assert_eq!(one_second(&kept, 3.09), face.len());
+        // Through the cells' centres: the misses count.
+        assert_eq!(one_second(&kept, 3.05), 0);
+        // A cell with one hit (a noise return in a door) is cleared by grazing misses too.
+        let mut g = grid();
+        let i = 30 * 60 + 25;
+        g.set_log_odds(i, SensorModel::thesis().occupied_log_odds, &mut ());
+        let mut s = Scan::new();
+        s.push(Beam {
+            angle_rad: 0.0,
+            range_m: Some(3.5),
+        })
+        .unwrap();
+        for _ in 0..10 {
+            integrate_scan(
+                &mut g,
+                &s,
+                Pose2::new(1.0, 3.09, 0.0),
+                &laser,
+                &kept,
+                &mut (),
+            )
+            .unwrap();
+        }
+        assert_eq!(g.class(i), CellClass::Free);
     }
 
     #[test]
@@ -1049,7 +1187,14 @@ mod tests {
                 let c = geom.cell_center(cell);
                 let d = (c.x - origin.x) * dy - (c.y - origin.y) * dx;
                 let w = math::exp(-d * d * (1.0 / (2.0 * model.sigma_m * model.sigma_m)));
-                let delta = if hit && cell == hit_cell {
+                let occupied = hit && cell == hit_cell;
+                let grazing = model
+                    .occupied_miss_offset_cells
+                    .is_some_and(|k| d.abs() > k * geom.resolution_m);
+                if !occupied && grazing && grid.log_odds_at(index) >= CONFIDENT_OCCUPIED_LOG_ODDS {
+                    return ControlFlow::Continue(());
+                }
+                let delta = if occupied {
                     model.occupied_log_odds
                 } else {
                     model.free_log_odds
@@ -1065,6 +1210,9 @@ mod tests {
     fn repeated_scans_give_exactly_the_literal_model_including_saturated_cells() {
         literal_model_check(&SensorModel::thesis());
         literal_model_check(&SensorModel::weak_misses());
+        literal_model_check(
+            &SensorModel::thesis().with_occupied_miss_offset(GRAZING_MISS_OFFSET_CELLS),
+        );
     }
 
     /// Many scans from nearby poses saturate most cells at the bounds; walls seen from both
@@ -1160,6 +1308,11 @@ mod tests {
         assert_eq!(
             integrate_scan(&mut g, &s, Pose2::default(), &laser, &bad, &mut ()),
             Err(IntegrationError::BadSigma(0.0))
+        );
+        let bad = SensorModel::thesis().with_occupied_miss_offset(-0.25);
+        assert_eq!(
+            integrate_scan(&mut g, &s, Pose2::default(), &laser, &bad, &mut ()),
+            Err(IntegrationError::BadMissOffset(-0.25))
         );
         let pose = Pose2 {
             x: f32::NAN,

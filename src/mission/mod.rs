@@ -179,7 +179,8 @@ pub struct MissionConfig {
     pub coverage_target: f32,
     /// The laser.
     pub laser: LaserConfig,
-    /// The inverse sensor model.
+    /// The inverse sensor model (default the thesis's; with the localisation on, mapped with
+    /// [`crate::localize::LocalizeConfig::map_sensor`]).
     pub sensor: SensorModel,
     /// Log-odds saturation of the shared grid.
     pub grid_bounds: LogOddsBounds,
