@@ -886,10 +886,12 @@ mod tests {
     fn beams_grazing_a_wall_face_do_not_wear_it_away() {
         let laser = LaserConfig::thesis();
         let face: Vec<usize> = (20..30).map(|col| 30 * 60 + col).collect();
-        let one_second = |model: &SensorModel, y_m: f32| {
+        // The face's cells start at `log_odds`; `scans` scans of one beam along y = `y_m`;
+        // how many of the cells are still Occupied.
+        let occupied_after = |model: &SensorModel, y_m: f32, log_odds: f32, scans: usize| {
             let mut g = grid();
             for &i in &face {
-                g.set_log_odds(i, g.bounds().max, &mut ());
+                g.set_log_odds(i, log_odds, &mut ());
             }
             let mut s = Scan::new();
             s.push(Beam {
@@ -897,49 +899,24 @@ mod tests {
                 range_m: Some(3.5),
             })
             .unwrap();
-            for _ in 0..50 {
-                integrate_scan(
-                    &mut g,
-                    &s,
-                    Pose2::new(1.0, y_m, 0.0),
-                    &laser,
-                    model,
-                    &mut (),
-                )
-                .unwrap();
+            let pose = Pose2::new(1.0, y_m, 0.0);
+            for _ in 0..scans {
+                integrate_scan(&mut g, &s, pose, &laser, model, &mut ()).unwrap();
             }
             face.iter()
                 .filter(|&&i| g.class(i) == CellClass::Occupied)
                 .count()
         };
-        // 1 cm inside the face's row (y 3.0..3.1), 4 cm from the cells' centres.
-        assert_eq!(one_second(&SensorModel::thesis(), 3.09), 0);
+        let wall = grid().bounds().max;
+        // 1 cm inside the face's row (y 3.0..3.1), 4 cm from the cells' centres, one second.
+        assert_eq!(occupied_after(&SensorModel::thesis(), 3.09, wall, 50), 0);
         let kept = SensorModel::thesis().with_occupied_miss_offset(GRAZING_MISS_OFFSET_CELLS);
-        assert_eq!(one_second(&kept, 3.09), face.len());
+        assert_eq!(occupied_after(&kept, 3.09, wall, 50), face.len());
         // Through the cells' centres: the misses count.
-        assert_eq!(one_second(&kept, 3.05), 0);
-        // A cell with one hit (a noise return in a door) is cleared by grazing misses too.
-        let mut g = grid();
-        let i = 30 * 60 + 25;
-        g.set_log_odds(i, SensorModel::thesis().occupied_log_odds, &mut ());
-        let mut s = Scan::new();
-        s.push(Beam {
-            angle_rad: 0.0,
-            range_m: Some(3.5),
-        })
-        .unwrap();
-        for _ in 0..10 {
-            integrate_scan(
-                &mut g,
-                &s,
-                Pose2::new(1.0, 3.09, 0.0),
-                &laser,
-                &kept,
-                &mut (),
-            )
-            .unwrap();
-        }
-        assert_eq!(g.class(i), CellClass::Free);
+        assert_eq!(occupied_after(&kept, 3.05, wall, 50), 0);
+        // Cells with one hit (noise returns in a door) are cleared by grazing misses too.
+        let one_hit = SensorModel::thesis().occupied_log_odds;
+        assert_eq!(occupied_after(&kept, 3.09, one_hit, 10), 0);
     }
 
     #[test]
