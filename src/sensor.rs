@@ -565,7 +565,7 @@ pub fn integrate_scan_banded<const N: usize>(
             }
             if !occupied
                 && current >= CONFIDENT_OCCUPIED_LOG_ODDS
-                && evidence.offset_m(&geom, cell) > miss_offset_m
+                && evidence.offset_m(&geom, cell).abs() > miss_offset_m
             {
                 // A miss grazing a cell held Occupied: as likely pose error along its face.
                 return ControlFlow::Continue(());
@@ -722,11 +722,11 @@ struct BeamEvidence {
 }
 
 impl BeamEvidence {
-    /// The perpendicular distance from `cell`'s centre to the beam's line \[m\].
+    /// The signed perpendicular distance from `cell`'s centre to the beam's line \[m\].
     #[inline]
     fn offset_m(&self, geom: &crate::grid::GridGeometry, cell: Cell) -> f32 {
         let centre = geom.cell_center(cell);
-        ((centre.x - self.origin.x) * self.dir_y - (centre.y - self.origin.y) * self.dir_x).abs()
+        (centre.x - self.origin.x) * self.dir_y - (centre.y - self.origin.y) * self.dir_x
     }
 
     /// Adds `delta` weighted by `exp(-d² / 2σ²)` to `cell` (flat index `index`), `d` the
@@ -742,8 +742,7 @@ impl BeamEvidence {
         observer: &mut impl CellObserver,
         out: &mut ScanIntegration,
     ) {
-        let centre = grid.geometry().cell_center(cell);
-        let d = (centre.x - self.origin.x) * self.dir_y - (centre.y - self.origin.y) * self.dir_x;
+        let d = self.offset_m(grid.geometry(), cell);
         let weight = math::exp(-d * d * self.inv_two_sigma_sq);
         let (old, new) = grid.add_evidence(index, delta * weight, observer);
         if old != new {
