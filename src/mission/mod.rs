@@ -315,6 +315,11 @@ impl MissionConfig {
         if let Some((field, value)) = self.motion_filter.invalid_field() {
             return bad(field, value);
         }
+        if let Some(cells) = self.localize.grazing_miss_offset_cells
+            && !(cells.is_finite() && cells >= 0.0)
+        {
+            return bad("localize.grazing_miss_offset_cells", cells);
+        }
         self.sensor.validate().map_err(MissionError::Sensor)?;
         Ok(())
     }

@@ -1819,6 +1819,21 @@ fn explores_two_rooms_to_done_with_the_motion_filter() {
     }
 }
 
+/// A bad grazing-miss offset is refused when the mission is made, not at its first scan
+/// (where the sensor model would refuse it under another name).
+#[test]
+fn a_bad_grazing_miss_offset_is_refused_by_name() {
+    let mut config = MissionConfig::default();
+    config.localize.enabled = true;
+    config.localize.grazing_miss_offset_cells = Some(f32::NAN);
+    match Mission::<CELLS>::new(0, config, Pose2::new(1.0, 1.0, 0.0)) {
+        Err(MissionError::BadConfig { field, .. }) => {
+            assert_eq!(field, "localize.grazing_miss_offset_cells")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
 #[test]
 fn a_bad_motion_filter_threshold_is_refused_by_name() {
     let config = MissionConfig {
