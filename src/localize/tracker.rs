@@ -25,7 +25,7 @@ use crate::control::odometry::MapFromOdom;
 use crate::geometry::{Pose2, normalize_angle};
 use crate::grid::OccupancyGrid;
 use crate::math;
-use crate::sensor::{LaserConfig, Scan, SensorModel};
+use crate::sensor::{LaserConfig, Scan};
 use nalgebra::{Matrix3, Vector3};
 
 use super::odometry_calibration::OdometryCalibration;
@@ -129,22 +129,11 @@ pub struct LocalizeConfig {
     pub wall_band_sigmas: f32,
     /// With the localisation on, a miss through a cell the map holds Occupied with confidence
     /// counts only within this many cells of its centre
-    /// ([`SensorModel::occupied_miss_offset_cells`]: at a centimetre of pose error, beams
+    /// ([`crate::sensor::SensorModel::occupied_miss_offset_cells`]: at a centimetre of pose error, beams
     /// passing along a wall's face wear it away). Default a quarter of a cell
     /// ([`crate::sensor::GRAZING_MISS_OFFSET_CELLS`]); `None`: the mission's sensor model as
     /// it is.
     pub grazing_miss_offset_cells: Option<f32>,
-}
-
-impl LocalizeConfig {
-    /// The sensor model the mission maps with: `sensor`, with
-    /// [`Self::grazing_miss_offset_cells`] when the localisation is on.
-    pub fn map_sensor(&self, sensor: &SensorModel) -> SensorModel {
-        match self.grazing_miss_offset_cells {
-            Some(cells) if self.enabled => sensor.with_occupied_miss_offset(cells),
-            _ => *sensor,
-        }
-    }
 }
 
 impl Default for LocalizeConfig {

@@ -278,7 +278,7 @@ impl<const N: usize> Mission<N> {
                 self.senses.pose_map,
                 self.localizer.wall_band_m(&self.config.localize),
                 &self.config.laser,
-                &self.config.localize.map_sensor(&self.config.sensor),
+                &self.config.map_sensor(),
                 &mut map.trav,
             )
             .map_err(MissionError::Sensor)?;
@@ -317,7 +317,7 @@ impl<const N: usize> Mission<N> {
             &loc.matcher,
             scan,
             &self.config.laser,
-            &self.config.localize.map_sensor(&self.config.sensor),
+            &self.config.map_sensor(),
             map.grid.bounds(),
             map.grid.geometry().resolution_m,
             self.senses.pose_map,
@@ -339,7 +339,7 @@ impl<const N: usize> Mission<N> {
                 &mut map.hits,
                 self.localizer.wall_band_m(&self.config.localize),
                 &self.config.laser,
-                &self.config.localize.map_sensor(&self.config.sensor),
+                &self.config.map_sensor(),
                 keep,
             )
             .map_err(MissionError::Sensor)?;
@@ -405,7 +405,7 @@ impl<const N: usize> Mission<N> {
             pose,
             self.localizer.wall_band_m(&self.config.localize),
             &self.config.laser,
-            &self.config.localize.map_sensor(&self.config.sensor),
+            &self.config.map_sensor(),
             &mut map.trav,
         )
         .map_err(MissionError::Sensor)?;

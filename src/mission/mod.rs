@@ -179,8 +179,8 @@ pub struct MissionConfig {
     pub coverage_target: f32,
     /// The laser.
     pub laser: LaserConfig,
-    /// The inverse sensor model (default the thesis's; with the localisation on, mapped with
-    /// [`crate::localize::LocalizeConfig::map_sensor`]).
+    /// The inverse sensor model (default the thesis's; the mission maps with
+    /// [`MissionConfig::map_sensor`]).
     pub sensor: SensorModel,
     /// Log-odds saturation of the shared grid.
     pub grid_bounds: LogOddsBounds,
@@ -282,6 +282,10 @@ impl MissionConfig {
             ("low_battery_steps", self.low_battery_steps),
             ("decide_ahead_m", self.decide_ahead_m),
             ("explore.reserve_steps", self.explore.reserve_steps),
+            (
+                "localize.grazing_miss_offset_cells",
+                self.localize.grazing_miss_offset_cells.unwrap_or(0.0),
+            ),
         ];
         for (field, value) in finite_non_negative {
             if !(value.is_finite() && value >= 0.0) {
@@ -315,13 +319,18 @@ impl MissionConfig {
         if let Some((field, value)) = self.motion_filter.invalid_field() {
             return bad(field, value);
         }
-        if let Some(cells) = self.localize.grazing_miss_offset_cells
-            && !(cells.is_finite() && cells >= 0.0)
-        {
-            return bad("localize.grazing_miss_offset_cells", cells);
-        }
         self.sensor.validate().map_err(MissionError::Sensor)?;
         Ok(())
+    }
+
+    /// The sensor model the mission maps with: [`Self::sensor`], with
+    /// [`crate::localize::LocalizeConfig::grazing_miss_offset_cells`] when the localisation
+    /// is on.
+    pub fn map_sensor(&self) -> SensorModel {
+        match self.localize.grazing_miss_offset_cells {
+            Some(cells) if self.localize.enabled => self.sensor.with_occupied_miss_offset(cells),
+            _ => self.sensor,
+        }
     }
 }
 
