@@ -545,37 +545,24 @@ pub fn integrate_scan_banded<const N: usize>(
             .filter(|_| ray.hit)
             .unwrap_or(usize::MAX);
         let evidence = ray.evidence(origin, inv_two_sigma_sq);
+        let mut update = BeamUpdate {
+            grid: &mut *grid,
+            model,
+            evidence,
+            geom: &geom,
+            hit_index,
+            hit_cells: &hit_cells,
+            miss_offset_m,
+            observer: &mut *observer,
+            out: &mut out,
+        };
         let walk = raycast::traverse(&geom, origin, ray.end, |cell, index| {
-            let occupied = index == hit_index;
-            if model.hits_before_misses && occupied {
-                // Its Occupied evidence is in already; no Free evidence from this scan.
+            // Most cells a beam crosses are saturated Free and a miss leaves them so: that test
+            // alone stays in the walk's loop; the rest is out of line (`BeamUpdate::visit`).
+            if index != hit_index && update.grid.log_odds_at(index) <= bounds.min {
                 return ControlFlow::Continue(());
             }
-            // A cell saturated at the bound this evidence pushes towards stays there whatever
-            // the weight (the sum is clamped back to the bound), so the weight is not needed.
-            // Tested before the search among the scan's returns: most cells a beam crosses
-            // are saturated Free, and a skipped cell is skipped either way.
-            let current = grid.log_odds_at(index);
-            if (occupied && current >= bounds.max) || (!occupied && current <= bounds.min) {
-                return ControlFlow::Continue(());
-            }
-            if model.hits_before_misses && hit_cells.binary_search(&index).is_ok() {
-                // Another beam's return: no Free evidence from this scan.
-                return ControlFlow::Continue(());
-            }
-            if !occupied
-                && current >= CONFIDENT_OCCUPIED_LOG_ODDS
-                && evidence.offset_m(&geom, cell).abs() > miss_offset_m
-            {
-                // A miss grazing a cell held Occupied: as likely pose error along its face.
-                return ControlFlow::Continue(());
-            }
-            let delta = if occupied {
-                model.occupied_log_odds
-            } else {
-                model.free_log_odds
-            };
-            evidence.add(grid, cell, index, delta, observer, &mut out);
+            update.visit(cell, index);
             ControlFlow::Continue(())
         });
         out.updates += walk.visited;
@@ -584,6 +571,63 @@ pub fn integrate_scan_banded<const N: usize>(
         }
     }
     Ok(out)
+}
+
+/// One beam's walk through the grid in [`integrate_scan_banded`]: what a cell it crosses gets.
+struct BeamUpdate<'a, const N: usize, O> {
+    grid: &'a mut OccupancyGrid<N>,
+    model: &'a SensorModel,
+    evidence: BeamEvidence,
+    geom: &'a crate::grid::GridGeometry,
+    /// The flat index of the cell holding the return (`usize::MAX` when none).
+    hit_index: usize,
+    /// The scan's returns (sorted), when hits come before misses.
+    hit_cells: &'a [usize],
+    /// How far from a confidently Occupied cell's centre a miss may pass and count \[m\].
+    miss_offset_m: f32,
+    observer: &'a mut O,
+    out: &'a mut ScanIntegration,
+}
+
+impl<const N: usize, O: CellObserver> BeamUpdate<'_, N, O> {
+    /// The evidence for `cell` (flat index `index`). Kept out of line: the walk's loop keeps
+    /// only the test for a saturated Free cell a miss crosses, most of a beam's cells.
+    #[inline(never)]
+    fn visit(&mut self, cell: Cell, index: usize) {
+        let model = self.model;
+        let occupied = index == self.hit_index;
+        if model.hits_before_misses && occupied {
+            // Its Occupied evidence is in already; no Free evidence from this scan.
+            return;
+        }
+        // A cell saturated at the bound this evidence pushes towards stays there whatever
+        // the weight (the sum is clamped back to the bound), so the weight is not needed.
+        // Tested before the search among the scan's returns: most cells a beam crosses
+        // are saturated Free, and a skipped cell is skipped either way.
+        let current = self.grid.log_odds_at(index);
+        let bounds = self.grid.bounds();
+        if (occupied && current >= bounds.max) || (!occupied && current <= bounds.min) {
+            return;
+        }
+        if model.hits_before_misses && self.hit_cells.binary_search(&index).is_ok() {
+            // Another beam's return: no Free evidence from this scan.
+            return;
+        }
+        if !occupied
+            && current >= CONFIDENT_OCCUPIED_LOG_ODDS
+            && self.evidence.offset_m(self.geom, cell).abs() > self.miss_offset_m
+        {
+            // A miss grazing a cell held Occupied: as likely pose error along its face.
+            return;
+        }
+        let delta = if occupied {
+            model.occupied_log_odds
+        } else {
+            model.free_log_odds
+        };
+        self.evidence
+            .add(self.grid, cell, index, delta, self.observer, self.out);
+    }
 }
 
 /// One usable beam in the map frame: where its walk ends and whether that end is a return.
