@@ -26,7 +26,7 @@ use crate::geometry::{Point2, Pose2};
 use crate::math;
 
 use super::constraint::Constraint;
-use super::hits::HitMap;
+use super::hits::{HitMap, Surface};
 
 /// Settings of the refinement.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -145,7 +145,8 @@ pub fn refine<const N: usize>(
     let scale = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 1.0 / l));
     let mut pose = start;
     let mut wide = config.anneal_gate_m.max(0.0);
-    let mut lin = linearise(hits, points, origin, pose, config, wide);
+    let mut memo = SurfaceMemo::new();
+    let mut lin = linearise(hits, &mut memo, points, origin, pose, config, wide);
     let mut taken = 0;
     let min_eig = 1.0 / (config.max_sigma_m.max(1e-6) * config.max_sigma_m.max(1e-6));
     for _ in 0..config.iterations {
@@ -181,13 +182,13 @@ pub fn refine<const N: usize>(
         if wide < 0.01 {
             wide = 0.0;
         }
-        lin = linearise(hits, points, origin, pose, config, wide);
+        lin = linearise(hits, &mut memo, points, origin, pose, config, wide);
         if wide == 0.0 && math::hypot(dx, dy) < 1e-4 && math::abs(dth) < 2e-5 {
             break;
         }
     }
     if wide > 0.0 {
-        lin = linearise(hits, points, origin, pose, config, 0.0);
+        lin = linearise(hits, &mut memo, points, origin, pose, config, 0.0);
     }
     Fitted {
         pose,
@@ -211,6 +212,7 @@ struct Linearised {
 /// about the robot's position).
 fn linearise<const N: usize>(
     hits: &HitMap<N>,
+    memo: &mut SurfaceMemo,
     points: &[Point2],
     origin: Point2,
     pose: Pose2,
@@ -225,8 +227,7 @@ fn linearise<const N: usize>(
     for p in points {
         let (rx, ry) = (c * p.x - s * p.y, s * p.x + c * p.y);
         let q = Point2::new(pose.x + rx, pose.y + ry);
-        let Some(surface) = hits.surface_at(q, config.block_half_cells, config.min_block_weight)
-        else {
+        let Some(surface) = memo.surface_at(hits, q, config) else {
             continue;
         };
         if surface.across_var_m2 > config.max_thickness_ratio * surface.along_var_m2
@@ -288,5 +289,68 @@ fn linearise<const N: usize>(
         fake,
         g: Vector3::new(g0, g1, g2),
         inliers,
+    }
+}
+
+/// Slots of [`SurfaceMemo`]'s table: twice its entries, so that probes stay short.
+const MEMO_SLOTS: usize = 1024;
+/// Blocks [`SurfaceMemo`] remembers; past them it computes each block again.
+const MEMO_ENTRIES: usize = MEMO_SLOTS / 2;
+
+/// The blocks' surfaces of one fit, by the cell at their centre. A block's surface depends
+/// only on that cell (and the fit's settings), and the map does not change during a fit,
+/// while the fit pairs the scan's returns again at every iteration, mostly with the same
+/// cells: each is worked out once (the same arithmetic, so the same surface to the bit).
+/// Open addressing with linear probing, on the stack of the fit.
+struct SurfaceMemo {
+    /// Per slot, 1 + the index in `entries` of the block hashed there; 0: empty.
+    slots: [u16; MEMO_SLOTS],
+    /// The blocks met: the centre cell's flat index and its surface.
+    entries: heapless::Vec<(usize, Option<Surface>), MEMO_ENTRIES>,
+}
+
+impl SurfaceMemo {
+    fn new() -> Self {
+        Self {
+            slots: [0; MEMO_SLOTS],
+            entries: heapless::Vec::new(),
+        }
+    }
+
+    /// [`HitMap::surface_at`] for the block around the cell holding `q`, with `config`'s
+    /// block size and weight.
+    fn surface_at<const N: usize>(
+        &mut self,
+        hits: &HitMap<N>,
+        q: Point2,
+        config: &NdtConfig,
+    ) -> Option<Surface> {
+        let compute = || hits.surface_at(q, config.block_half_cells, config.min_block_weight);
+        let g = hits.geometry();
+        let Some(cell) = g.index(g.cell_at_unchecked(q)) else {
+            // Off the grid: no surface, and nothing to remember.
+            return compute();
+        };
+        // Fibonacci hashing (Knuth, TAOCP vol. 3, §6.4) of the flat index.
+        let mut slot = (cell as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) as usize >> 54;
+        for _ in 0..MEMO_SLOTS {
+            match self.slots[slot] {
+                0 => {
+                    let surface = compute();
+                    if self.entries.push((cell, surface)).is_ok() {
+                        self.slots[slot] = self.entries.len() as u16;
+                    }
+                    return surface;
+                }
+                k => {
+                    let (key, surface) = self.entries[usize::from(k) - 1];
+                    if key == cell {
+                        return surface;
+                    }
+                }
+            }
+            slot = (slot + 1) % MEMO_SLOTS;
+        }
+        compute()
     }
 }
