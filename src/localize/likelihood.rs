@@ -41,6 +41,7 @@
 //! of microseconds.
 
 use crate::geometry::Point2;
+use crate::grid::GridGeometry;
 use crate::math;
 
 use super::hits::HitMap;
@@ -131,6 +132,18 @@ impl<const T: usize> LikelihoodField<T> {
         &self.values[..self.width * self.height]
     }
 
+    /// The columns and rows of a window over the cells covering `lo..=hi` (map frame \[m\])
+    /// of `geom`, or `None` when [`Self::build`] would refuse it: no cell, more than `T`
+    /// cells or a line longer than [`MAX_LINE`].
+    pub fn window_size(geom: &GridGeometry, lo: Point2, hi: Point2) -> Option<(usize, usize)> {
+        let a = geom.cell_at_unchecked(lo);
+        let b = geom.cell_at_unchecked(hi);
+        let width = (b.col - a.col + 1).max(0) as usize;
+        let height = (b.row - a.row + 1).max(0) as usize;
+        (width != 0 && height != 0 && width * height <= T && width.max(height) <= MAX_LINE)
+            .then_some((width, height))
+    }
+
     /// Builds the field over the cells covering `lo..=hi` (map frame \[m\]) from the returns
     /// in `hits`, blurred by `sigma_m`, wall cells at `wall_fraction` of the local peak
     /// ([`WALL_FRACTION`]), by a sum before the normalisation when `smooth` (else by a maximum
@@ -146,15 +159,12 @@ impl<const T: usize> LikelihoodField<T> {
         smooth: bool,
     ) -> bool {
         let geom = *hits.geometry();
-        let a = geom.cell_at_unchecked(lo);
-        let b = geom.cell_at_unchecked(hi);
-        let width = (b.col - a.col + 1).max(0) as usize;
-        let height = (b.row - a.row + 1).max(0) as usize;
         self.width = 0;
         self.height = 0;
-        if width == 0 || height == 0 || width * height > T || width.max(height) > MAX_LINE {
+        let Some((width, height)) = Self::window_size(&geom, lo, hi) else {
             return false;
-        }
+        };
+        let a = geom.cell_at_unchecked(lo);
         self.col0 = a.col;
         self.row0 = a.row;
         self.width = width;

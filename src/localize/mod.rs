@@ -357,16 +357,27 @@ impl<const T: usize> ScanMatcher<T> {
         let margin = window_margin_m(reach, res, config);
         lo = Point2::new(lo.x - margin, lo.y - margin);
         hi = Point2::new(hi.x + margin, hi.y + margin);
-        if !self.field.build(
-            hits,
-            lo,
-            hi,
-            config.sigma_m,
-            config.wall_fraction,
-            config.smooth,
-        ) {
+        if LikelihoodField::<T>::window_size(hits.geometry(), lo, hi).is_none() {
             return refuse(quality, Distrust::WindowTooLarge);
         }
+        // The likelihood field over the window, built on first need: most scans need it
+        // neither for the returns' test below nor for the search (a build is most of a
+        // match's cost when the refinement starts in the basin).
+        let mut field_built = false;
+        let mut build_field = |field: &mut LikelihoodField<T>| {
+            if !field_built {
+                field_built = true;
+                // The window fits (tested above), so the build succeeds.
+                field.build(
+                    hits,
+                    lo,
+                    hi,
+                    config.sigma_m,
+                    config.wall_fraction,
+                    config.smooth,
+                );
+            }
+        };
 
         // Only returns on a part of the world the map has seen take part: the cell the beam
         // crosses just before its return (by a cell and two range-noise σ) must be known, and
@@ -393,7 +404,10 @@ impl<const T: usize> ScanMatcher<T> {
             );
             let q = predicted.transform_point(p);
             if known_at(predicted.transform_point(before))
-                && (known_at(q) || self.field.sample(q).0 > 0.0)
+                && (known_at(q) || {
+                    build_field(&mut self.field);
+                    self.field.sample(q).0 > 0.0
+                })
             {
                 self.points[kept] = self.points[i];
                 self.weights[kept] = self.weights[i];
@@ -426,6 +440,7 @@ impl<const T: usize> ScanMatcher<T> {
                 step_rad: config.theta_step_rad,
                 prior_at_edge: config.prior_at_edge,
             };
+            build_field(&mut self.field);
             let coarse = correlative::search(
                 &self.field,
                 &self.points[..self.len],
