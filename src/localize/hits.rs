@@ -186,7 +186,8 @@ impl<const N: usize> HitMap<N> {
         max_cell_weight: f32,
     ) {
         let at = pose.compose(laser.mount);
-        let point = |i: usize| -> Option<Point2> {
+        // A usable return: its point and the beam's unit direction (map frame).
+        let point = |i: usize| -> Option<(Point2, Point2)> {
             let b = scan.beams().get(i)?;
             let r = b
                 .range_m
@@ -194,17 +195,18 @@ impl<const N: usize> HitMap<N> {
             if !b.angle_rad.is_finite() {
                 return None;
             }
-            let a = at.theta + b.angle_rad;
-            Some(Point2::new(
-                at.x + r * math::cos(a),
-                at.y + r * math::sin(a),
+            let (sin, cos) = math::sin_cos(at.theta + b.angle_rad);
+            Some((
+                Point2::new(at.x + r * cos, at.y + r * sin),
+                Point2::new(cos, sin),
             ))
         };
         let n = scan.beams().len();
         let mut prev: Option<Point2> = None;
-        let mut here = point(0);
+        let mut here_beam = point(0);
         for i in 0..n {
-            let next = point(i + 1);
+            let next_beam = point(i + 1);
+            let (here, next) = (here_beam.map(|(p, _)| p), next_beam.map(|(p, _)| p));
             let full = here.is_some_and(|p| self.cell_weight(p) >= max_cell_weight);
             if let Some(p) = here.filter(|_| !full) {
                 let side = |q: Option<Point2>| {
@@ -222,14 +224,13 @@ impl<const N: usize> HitMap<N> {
                 if w > 0.0 {
                     self.add_point(p, w);
                 }
-                if let Some(r) = scan.beams()[i].range_m {
-                    let a = at.theta + scan.beams()[i].angle_rad;
+                if let (Some(r), Some((_, u))) = (scan.beams()[i].range_m, here_beam) {
                     let sigma = laser.noise_fraction.max(0.0) * r;
-                    self.add_return(p, Point2::new(math::cos(a), math::sin(a)), sigma);
+                    self.add_return(p, u, sigma);
                 }
             }
             prev = here;
-            here = next;
+            here_beam = next_beam;
         }
     }
 

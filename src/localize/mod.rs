@@ -321,10 +321,8 @@ impl<const T: usize> ScanMatcher<T> {
             .step_by(stride)
         {
             let r = usable(b.range_m).unwrap_or(0.0);
-            let p = laser.mount.transform_point(Point2::new(
-                r * math::cos(b.angle_rad),
-                r * math::sin(b.angle_rad),
-            ));
+            let (sin, cos) = math::sin_cos(b.angle_rad);
+            let p = laser.mount.transform_point(Point2::new(r * cos, r * sin));
             reach = reach.max(math::hypot(p.x, p.y));
             // At most MAX_BEAMS points from a scan of at most MAX_BEAMS beams.
             if self.len < MAX_BEAMS {
