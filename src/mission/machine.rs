@@ -31,6 +31,7 @@ use super::{
 mod deciding;
 mod following;
 mod look_around;
+mod progress;
 mod reactions;
 mod robots;
 mod senses;
@@ -38,6 +39,7 @@ mod senses;
 use deciding::{Errand, GoalRequest};
 use following::PathWatch;
 use look_around::LookAround;
+use progress::ProgressWatch;
 use reactions::{Escape, Holds};
 use robots::Yield;
 use senses::Senses;
@@ -155,6 +157,8 @@ pub struct Mission<const N: usize> {
     motion_filter: super::motion_filter::MotionFilter,
     /// Whether the last scan given to [`Self::on_scan`] was integrated into the map.
     last_scan_mapped: bool,
+    /// Where the robot last made progress ([`MissionConfig::progress_timeout_s`]).
+    progress: ProgressWatch,
 }
 
 impl<const N: usize> core::fmt::Debug for Mission<N> {
@@ -221,6 +225,7 @@ impl<const N: usize> Mission<N> {
             homing: None,
             motion_filter: super::motion_filter::MotionFilter::new(),
             last_scan_mapped: false,
+            progress: ProgressWatch::default(),
             config,
         })
     }
@@ -677,6 +682,7 @@ impl<const N: usize> Mission<N> {
             self.follower.clear();
             self.ahead = None;
             self.watch.ack_pending = false;
+            self.progress.reset();
             return MotionCommand::ZERO;
         }
         if let Phase::Fault(_) = self.phase {
@@ -701,6 +707,18 @@ impl<const N: usize> Mission<N> {
             {
                 return self.finish(DoneReason::CoverageReached, events);
             }
+        }
+        // A robot that gets nowhere, whatever it does, ends the mission.
+        if let Phase::Yielding(_) = self.phase {
+            self.progress.reset();
+        } else if self.progress.stalled(
+            now,
+            self.senses.pose_odom.position(),
+            self.config.progress_distance_m,
+            secs(self.config.progress_timeout_s),
+        ) {
+            self.progress.reset();
+            return self.finish(DoneReason::Stuck, events);
         }
         if let Phase::Escaping(escape) = self.phase
             && let Some(cmd) = self.escape_step(now, escape, map)

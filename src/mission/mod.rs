@@ -200,6 +200,12 @@ pub struct MissionConfig {
     /// Without progress toward the current waypoint for this long, the path counts as blocked
     /// \[s\].
     pub stuck_timeout_s: f32,
+    /// The robot must get this far from where it last made progress \[m\] ...
+    pub progress_distance_m: f32,
+    /// ... within this long \[s\] (starts, faults and waits for another robot aside), or the
+    /// mission ends [`DoneReason::Stuck`]: the last line of defence against any loop that
+    /// gets nowhere (`machine/progress.rs`).
+    pub progress_timeout_s: f32,
     /// Decisions in a row that may fail (no feasible target, every frontier blacklisted)
     /// before the mission gives up.
     pub max_failed_decisions: u32,
@@ -259,6 +265,8 @@ impl Default for MissionConfig {
             yield_wait_s: 3.0,
             max_replans_per_decision: 5,
             stuck_timeout_s: 20.0,
+            progress_distance_m: 0.5,
+            progress_timeout_s: 120.0,
             max_failed_decisions: 8,
             low_battery_steps: 10.0,
             decide_while_driving: false,
@@ -307,6 +315,12 @@ impl MissionConfig {
         }
         if !(self.stuck_timeout_s.is_finite() && self.stuck_timeout_s > 0.0) {
             return bad("stuck_timeout_s", self.stuck_timeout_s);
+        }
+        if !(self.progress_distance_m.is_finite() && self.progress_distance_m > 0.0) {
+            return bad("progress_distance_m", self.progress_distance_m);
+        }
+        if !(self.progress_timeout_s.is_finite() && self.progress_timeout_s > 0.0) {
+            return bad("progress_timeout_s", self.progress_timeout_s);
         }
         if self.explore.targets == 0 || self.explore.targets > MAX_TARGETS {
             return bad("explore.targets", self.explore.targets as f32);
@@ -369,7 +383,9 @@ pub enum DoneReason {
     /// (listed, gaining nothing, no path to drive) [`MissionConfig::max_failed_decisions`]
     /// times in a row. A robot wedged where the safety monitor allows no motion ends here,
     /// not with [`Self::NothingReachable`] (issue 17: a mission ends "nothing reachable"
-    /// only when no frontier is reachable by the footprint).
+    /// only when no frontier is reachable by the footprint). Also when the robot stayed
+    /// within [`MissionConfig::progress_distance_m`] of one place for
+    /// [`MissionConfig::progress_timeout_s`] while exploring.
     Stuck,
     /// The battery voltage stayed below [`VoltageConfig::low_v`] for [`VoltageConfig::hold_s`].
     VoltageLow,

@@ -200,6 +200,9 @@ struct Bot {
     flags: RobotFlags,
     feed_odometry: bool,
     feed_scans: bool,
+    /// The wheels turn but the body does not move (and no stall is reported): a robot
+    /// wedged on a threshold, or lifted.
+    wheels_spin: bool,
     log: Vec<(Time, MissionEvent)>,
     last_command: RobotCommand,
 }
@@ -215,6 +218,7 @@ impl Bot {
             flags: RobotFlags::nominal(),
             feed_odometry: true,
             feed_scans: true,
+            wheels_spin: false,
             log: Vec::new(),
             last_command: RobotCommand::Stop,
         }
@@ -296,7 +300,9 @@ impl<P: Planner<CELLS> + bytemuck::Zeroable> Sim<P> {
                 bot.log.push((self.now, e));
             }
             bot.last_command = out.command;
-            bot.body.apply(out.command, PERIOD_MS as f32 * 1e-3);
+            if !bot.wheels_spin {
+                bot.body.apply(out.command, PERIOD_MS as f32 * 1e-3);
+            }
             commands.push(out.command);
         }
         self.now = self.now + Duration::from_millis(PERIOD_MS);
@@ -959,6 +965,29 @@ fn a_small_battery_ends_the_mission() {
     assert!(m.battery_steps() <= 1.0 + 10.0, "{}", m.battery_steps());
 }
 
+/// A robot that cannot move (its wheels spin, no stall reported) gets nowhere; the mission
+/// ends `Stuck` instead of deciding, replanning and escaping for ever.
+#[test]
+fn a_robot_that_gets_nowhere_ends_the_mission_stuck() {
+    for config in [frontier_config(), MissionConfig::default()] {
+        let mut sim = Sim::new(two_rooms(), &config, 4);
+        let timeout_s = config.progress_timeout_s;
+        sim.add(config, Pose2::new(1.0, 1.0, 0.3), Slip::thesis());
+        sim.bots[0].wheels_spin = true;
+        while sim.secs() < 3600.0 && !matches!(sim.bots[0].mission.state(), MissionState::Done(_)) {
+            sim.period();
+        }
+        let m = &sim.bots[0].mission;
+        assert_eq!(
+            m.state(),
+            MissionState::Done(DoneReason::Stuck),
+            "at {} s",
+            sim.secs()
+        );
+        assert!(sim.secs() <= 2.0 * timeout_s, "ended at {} s", sim.secs());
+    }
+}
+
 /// Coverage reported by the caller ends the mission at the target.
 #[test]
 fn reported_coverage_ends_the_mission() {
@@ -1009,10 +1038,35 @@ fn bad_configs_are_refused_with_the_field_named() {
         Mission::<CELLS>::new(0, MissionConfig::default(), Pose2::new(f32::NAN, 0.0, 0.0)),
         Err(MissionError::NotFinite { .. })
     ));
+    for (field, config) in [
+        (
+            "progress_distance_m",
+            MissionConfig {
+                progress_distance_m: 0.0,
+                ..MissionConfig::default()
+            },
+        ),
+        (
+            "progress_timeout_s",
+            MissionConfig {
+                progress_timeout_s: f32::NAN,
+                ..MissionConfig::default()
+            },
+        ),
+    ] {
+        assert!(
+            matches!(
+                Mission::<CELLS>::new(0, config, Pose2::default()),
+                Err(MissionError::BadConfig { field: f, .. }) if f == field
+            ),
+            "{field}"
+        );
+    }
     // A huge wait is no panic: it saturates.
     let config = MissionConfig {
         yield_wait_s: 1e30,
         stuck_timeout_s: 1e30,
+        progress_timeout_s: 1e30,
         ..MissionConfig::default()
     };
     assert!(Mission::<CELLS>::new(0, config, Pose2::default()).is_ok());
