@@ -266,7 +266,7 @@ impl Default for MissionConfig {
             max_replans_per_decision: 5,
             stuck_timeout_s: 20.0,
             progress_distance_m: 0.5,
-            progress_timeout_s: 120.0,
+            progress_timeout_s: 300.0,
             max_failed_decisions: 8,
             low_battery_steps: 10.0,
             decide_while_driving: false,
