@@ -549,7 +549,6 @@ pub fn integrate_scan_banded<const N: usize>(
             grid: &mut *grid,
             model,
             evidence,
-            geom: &geom,
             hit_index,
             hit_cells: &hit_cells,
             miss_offset_m,
@@ -578,7 +577,6 @@ struct BeamUpdate<'a, const N: usize, O> {
     grid: &'a mut OccupancyGrid<N>,
     model: &'a SensorModel,
     evidence: BeamEvidence,
-    geom: &'a crate::grid::GridGeometry,
     /// The flat index of the cell holding the return (`usize::MAX` when none).
     hit_index: usize,
     /// The scan's returns (sorted), when hits come before misses.
@@ -590,8 +588,10 @@ struct BeamUpdate<'a, const N: usize, O> {
 }
 
 impl<const N: usize, O: CellObserver> BeamUpdate<'_, N, O> {
-    /// The evidence for `cell` (flat index `index`). Kept out of line: the walk's loop keeps
-    /// only the test for a saturated Free cell a miss crosses, most of a beam's cells.
+    /// The evidence for `cell` (flat index `index`), a cell the walk's loop did not skip: the
+    /// loop keeps only the test for a saturated Free cell a miss crosses (most of a beam's
+    /// cells, and the weight is not needed there: the sum is clamped back to the bound), the
+    /// rest is here, out of line.
     #[inline(never)]
     fn visit(&mut self, cell: Cell, index: usize) {
         let model = self.model;
@@ -600,13 +600,10 @@ impl<const N: usize, O: CellObserver> BeamUpdate<'_, N, O> {
             // Its Occupied evidence is in already; no Free evidence from this scan.
             return;
         }
-        // A cell saturated at the bound this evidence pushes towards stays there whatever
-        // the weight (the sum is clamped back to the bound), so the weight is not needed.
-        // Tested before the search among the scan's returns: most cells a beam crosses
-        // are saturated Free, and a skipped cell is skipped either way.
+        // A return's cell saturated Occupied stays so whatever the weight, as a saturated
+        // Free cell under a miss (skipped by the loop).
         let current = self.grid.log_odds_at(index);
-        let bounds = self.grid.bounds();
-        if (occupied && current >= bounds.max) || (!occupied && current <= bounds.min) {
+        if occupied && current >= self.grid.bounds().max {
             return;
         }
         if model.hits_before_misses && self.hit_cells.binary_search(&index).is_ok() {
@@ -615,7 +612,7 @@ impl<const N: usize, O: CellObserver> BeamUpdate<'_, N, O> {
         }
         if !occupied
             && current >= CONFIDENT_OCCUPIED_LOG_ODDS
-            && self.evidence.offset_m(self.geom, cell).abs() > self.miss_offset_m
+            && self.evidence.offset_m(self.grid.geometry(), cell).abs() > self.miss_offset_m
         {
             // A miss grazing a cell held Occupied: as likely pose error along its face.
             return;
