@@ -313,14 +313,14 @@ impl MissionConfig {
                 return bad(field, value);
             }
         }
-        if !(self.stuck_timeout_s.is_finite() && self.stuck_timeout_s > 0.0) {
-            return bad("stuck_timeout_s", self.stuck_timeout_s);
-        }
-        if !(self.progress_distance_m.is_finite() && self.progress_distance_m > 0.0) {
-            return bad("progress_distance_m", self.progress_distance_m);
-        }
-        if !(self.progress_timeout_s.is_finite() && self.progress_timeout_s > 0.0) {
-            return bad("progress_timeout_s", self.progress_timeout_s);
+        for (field, value) in [
+            ("stuck_timeout_s", self.stuck_timeout_s),
+            ("progress_distance_m", self.progress_distance_m),
+            ("progress_timeout_s", self.progress_timeout_s),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return bad(field, value);
+            }
         }
         if self.explore.targets == 0 || self.explore.targets > MAX_TARGETS {
             return bad("explore.targets", self.explore.targets as f32);
