@@ -173,6 +173,8 @@ pub enum TraversabilityError {
     },
     /// The Unknown cost factor, or a wall band's, is below 1 or not finite.
     BadCostFactor(f32),
+    /// The cell size is not a positive number of metres.
+    BadResolution(f32),
 }
 
 impl core::fmt::Display for TraversabilityError {
@@ -204,11 +206,138 @@ impl core::fmt::Display for TraversabilityError {
                     "a cost factor (Unknown cells, wall bands) must be finite and at least 1, got {c}"
                 )
             }
+            TraversabilityError::BadResolution(r) => {
+                write!(f, "cell size must be a positive number of metres, got {r}")
+            }
         }
     }
 }
 
 impl core::error::Error for TraversabilityError {}
+
+/// The discs of cell offsets a configuration stamps around an Occupied cell at a resolution
+/// (see [`Traversability`]), with the configuration's checked values.
+struct Stencil {
+    /// Offsets of the widest band's disc, those within the robot radius first, then those of
+    /// the no-turn band, then the near band's.
+    offsets: [[i16; 2]; MAX_STENCIL],
+    /// Offsets within the robot radius, the no-turn radius and the near radius.
+    lens: [usize; 3],
+    /// No offset is farther than this in a row or a column \[cells\].
+    reach: usize,
+    /// Each row's largest `|dc|` per band (see [`Traversability`]'s `row_spans`).
+    row_spans: [[i16; 3]; MAX_SPAN_ROWS],
+    unknown_blocked: bool,
+    unknown_cost_factor: f32,
+}
+
+impl Stencil {
+    fn of(resolution_m: f32, config: &TraversabilityConfig) -> Result<Self, TraversabilityError> {
+        let r = config.robot_radius_m;
+        if !(r.is_finite() && r >= 0.0) {
+            return Err(TraversabilityError::BadRadius(r));
+        }
+        let (unknown_blocked, factor) = match config.unknown_policy {
+            UnknownPolicy::Blocked => (true, 1.0),
+            UnknownPolicy::Traversable { cost_factor } => {
+                if !(cost_factor.is_finite() && cost_factor >= 1.0) {
+                    return Err(TraversabilityError::BadCostFactor(cost_factor));
+                }
+                (false, cost_factor)
+            }
+        };
+        let bands = config.bands;
+        for f in [bands.no_turn_cost_factor, bands.near_cost_factor] {
+            if !(f.is_finite() && f >= 1.0) {
+                return Err(TraversabilityError::BadCostFactor(f));
+            }
+        }
+        for b in [bands.no_turn_radius_m, bands.near_radius_m] {
+            if !(b.is_finite() && b >= 0.0) {
+                return Err(TraversabilityError::BadRadius(b));
+            }
+        }
+        // Discs of offsets whose centre distance is below each radius ((0, 0) always within
+        // the robot radius), the inner ones first.
+        let res = resolution_m;
+        let r_turn = bands.no_turn_radius_m.max(r);
+        let r_near = bands.near_radius_m.max(r_turn);
+        let radii2 = [r, r_turn, r_near].map(|m| {
+            let c = m / res;
+            c * c
+        });
+        // A disc wider than the row spans hold is refused before it is walked (on cells
+        // fine enough, a metre is a million of them).
+        let reach_cells = crate::math::ceil(r_near / res);
+        if !(reach_cells.is_finite() && 2.0 * reach_cells < MAX_SPAN_ROWS as f32) {
+            let side = 2.0 * reach_cells + 1.0;
+            return Err(TraversabilityError::InflationTooLarge {
+                needed: (side * side).min(usize::MAX as f32) as usize,
+                capacity: MAX_STENCIL,
+            });
+        }
+        let reach = reach_cells as i32;
+        let mut stencil = [[0i16; 2]; MAX_STENCIL];
+        let mut lens = [0usize; 3];
+        let mut len = 0usize;
+        for (band, &limit2) in radii2.iter().enumerate() {
+            let inner2 = if band == 0 { -1.0 } else { radii2[band - 1] };
+            for dr in -reach..=reach {
+                for dc in -reach..=reach {
+                    let d2 = (dc * dc + dr * dr) as f32;
+                    let centre = dc == 0 && dr == 0;
+                    let inside = centre || d2 < limit2;
+                    let inner = if band == 0 {
+                        false
+                    } else {
+                        centre || d2 < inner2
+                    };
+                    if inside && !inner {
+                        if len == MAX_STENCIL {
+                            let side = (2 * reach + 1) as usize;
+                            return Err(TraversabilityError::InflationTooLarge {
+                                needed: side * side,
+                                capacity: MAX_STENCIL,
+                            });
+                        }
+                        stencil[len] = [dc as i16, dr as i16];
+                        len += 1;
+                    }
+                }
+            }
+            lens[band] = len;
+        }
+        let mut row_spans = [[-1i16; 3]; MAX_SPAN_ROWS];
+        for (k, &[dc, dr]) in stencil[..len].iter().enumerate() {
+            let row = &mut row_spans[(dr as i32 + reach) as usize];
+            // Offset k lies in its own band's disc and every wider one.
+            let first_band = lens.iter().position(|&l| k < l).unwrap_or(2);
+            for span in &mut row[first_band..] {
+                *span = (*span).max(dc.abs());
+            }
+        }
+        Ok(Self {
+            offsets: stencil,
+            lens,
+            reach: reach as usize,
+            row_spans,
+            unknown_blocked,
+            unknown_cost_factor: factor,
+        })
+    }
+}
+
+impl TraversabilityConfig {
+    /// Whether a layer of cells of `resolution_m` can be built with this configuration: the
+    /// radii and cost factors are valid and the discs fit the layer's stencil
+    /// ([`MAX_STENCIL`]). A board is checked with it before a mission is built.
+    pub fn check(&self, resolution_m: f32) -> Result<(), TraversabilityError> {
+        if !(resolution_m.is_finite() && resolution_m > 0.0) {
+            return Err(TraversabilityError::BadResolution(resolution_m));
+        }
+        Stencil::of(resolution_m, self).map(|_| ())
+    }
+}
 
 /// Traversability of up to `N` cells: blocked flags (obstacles and their inflation) and step
 /// cost factors, maintained incrementally from the occupancy grid.
@@ -474,97 +603,20 @@ impl<const N: usize> Traversability<N> {
                 capacity: N,
             });
         }
-        let r = config.robot_radius_m;
-        if !(r.is_finite() && r >= 0.0) {
-            return Err(TraversabilityError::BadRadius(r));
-        }
-        let (unknown_blocked, factor) = match config.unknown_policy {
-            UnknownPolicy::Blocked => (true, 1.0),
-            UnknownPolicy::Traversable { cost_factor } => {
-                if !(cost_factor.is_finite() && cost_factor >= 1.0) {
-                    return Err(TraversabilityError::BadCostFactor(cost_factor));
-                }
-                (false, cost_factor)
-            }
-        };
-        let bands = config.bands;
-        for f in [bands.no_turn_cost_factor, bands.near_cost_factor] {
-            if !(f.is_finite() && f >= 1.0) {
-                return Err(TraversabilityError::BadCostFactor(f));
-            }
-        }
-        for b in [bands.no_turn_radius_m, bands.near_radius_m] {
-            if !(b.is_finite() && b >= 0.0) {
-                return Err(TraversabilityError::BadRadius(b));
-            }
-        }
-        // Discs of offsets whose centre distance is below each radius ((0, 0) always within
-        // the robot radius), the inner ones first.
-        let res = geometry.resolution_m;
-        let r_turn = bands.no_turn_radius_m.max(r);
-        let r_near = bands.near_radius_m.max(r_turn);
-        let radii2 = [r, r_turn, r_near].map(|m| {
-            let c = m / res;
-            c * c
-        });
-        let reach = crate::math::ceil(r_near / res) as i32;
-        let mut stencil = [[0i16; 2]; MAX_STENCIL];
-        let mut lens = [0usize; 3];
-        let mut len = 0usize;
-        for (band, &limit2) in radii2.iter().enumerate() {
-            let inner2 = if band == 0 { -1.0 } else { radii2[band - 1] };
-            for dr in -reach..=reach {
-                for dc in -reach..=reach {
-                    let d2 = (dc * dc + dr * dr) as f32;
-                    let centre = dc == 0 && dr == 0;
-                    let inside = centre || d2 < limit2;
-                    let inner = if band == 0 {
-                        false
-                    } else {
-                        centre || d2 < inner2
-                    };
-                    if inside && !inner {
-                        if len == MAX_STENCIL {
-                            let side = (2 * reach + 1) as usize;
-                            return Err(TraversabilityError::InflationTooLarge {
-                                needed: side * side,
-                                capacity: MAX_STENCIL,
-                            });
-                        }
-                        stencil[len] = [dc as i16, dr as i16];
-                        len += 1;
-                    }
-                }
-            }
-            lens[band] = len;
-        }
-        let side = (2 * reach + 1) as usize;
-        if side > MAX_SPAN_ROWS {
-            return Err(TraversabilityError::InflationTooLarge {
-                needed: side * side,
-                capacity: MAX_STENCIL,
-            });
-        }
-        let mut row_spans = [[-1i16; 3]; MAX_SPAN_ROWS];
-        for (k, &[dc, dr]) in stencil[..len].iter().enumerate() {
-            let row = &mut row_spans[(dr as i32 + reach) as usize];
-            // Offset k lies in its own band's disc and every wider one.
-            let first_band = lens.iter().position(|&l| k < l).unwrap_or(2);
-            for span in &mut row[first_band..] {
-                *span = (*span).max(dc.abs());
-            }
-        }
+        let stencil = Stencil::of(geometry.resolution_m, &config)?;
         self.geometry = geometry;
-        self.robot_radius_m = r;
-        self.unknown_blocked = unknown_blocked;
-        self.unknown_cost_factor = factor;
-        self.bands = bands;
-        self.stencil = stencil;
-        self.stencil_len = lens[0];
-        self.stencil_turn_len = lens[1];
-        self.stencil_near_len = lens[2];
-        self.stencil_reach = reach as usize;
-        self.row_spans = row_spans;
+        self.robot_radius_m = config.robot_radius_m;
+        self.unknown_blocked = stencil.unknown_blocked;
+        self.unknown_cost_factor = stencil.unknown_cost_factor;
+        self.bands = config.bands;
+        self.stencil = stencil.offsets;
+        [
+            self.stencil_len,
+            self.stencil_turn_len,
+            self.stencil_near_len,
+        ] = stencil.lens;
+        self.stencil_reach = stencil.reach;
+        self.row_spans = stencil.row_spans;
         Ok(())
     }
 
@@ -1217,6 +1269,21 @@ mod tests {
             Traversability::<CAP>::new(g, cfg(5.0, 1.0)).unwrap_err(),
             TraversabilityError::InflationTooLarge { .. }
         ));
+        // The same checks without a layer: a radius of a million cells is refused before
+        // its disc is walked, and so is a cell size that is no size.
+        assert_eq!(cfg(0.2, 1.0).check(0.1), Ok(()));
+        for res in [1e-6, f32::MIN_POSITIVE] {
+            assert!(matches!(
+                cfg(0.2, 1.0).check(res).unwrap_err(),
+                TraversabilityError::InflationTooLarge { .. }
+            ));
+        }
+        for res in [0.0, -0.1, f32::NAN] {
+            assert!(matches!(
+                cfg(0.2, 1.0).check(res).unwrap_err(),
+                TraversabilityError::BadResolution(_)
+            ));
+        }
         assert_eq!(
             Traversability::<100>::new(g, cfg(0.2, 1.0)).unwrap_err(),
             TraversabilityError::CapacityExceeded {
