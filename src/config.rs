@@ -124,7 +124,9 @@ pub struct RobotConfig {
     pub name: Name,
     /// The ARCOS subclass the robot must report (`p3dx-sh`), compared without regard to case.
     pub subclass: Name,
-    /// Radius of the robot's footprint \[m\].
+    /// Radius of the circle around the robot that `check` compares the grid's cells and the
+    /// laser's blind zone with \[m\]. What the planner and the safety monitor take for the
+    /// body is [`Self::footprint`].
     pub radius_m: f32,
     /// Translational speed limit sent as SETV \[mm/s\].
     pub max_speed_mm_s: f32,
@@ -149,6 +151,42 @@ pub struct RobotConfig {
     /// absent: 0.33.
     #[serde(default)]
     pub wheelbase_m: Option<f32>,
+    /// The body's outline, for planning and the safety monitor (optional; each absent key
+    /// takes the P3-DX datasheet's value, [`crate::control::safety::RobotFootprint::p3dx`]).
+    #[serde(default)]
+    pub footprint: FootprintBoardConfig,
+}
+
+/// The robot's outline seen from above (`$.robot.footprint`, optional): a rectangle around
+/// the centre of rotation and the circle it sweeps turning in place. Every key is optional;
+/// an absent one takes the P3-DX's (0.381 m wide, 0.21 m ahead of the axle, 0.245 m behind
+/// it, 0.267 m swing radius).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FootprintBoardConfig {
+    /// Overall width \[m\].
+    #[serde(default)]
+    pub width_m: Option<f32>,
+    /// From the centre of rotation to the front edge \[m\].
+    #[serde(default)]
+    pub front_m: Option<f32>,
+    /// From the centre of rotation to the rear edge \[m\].
+    #[serde(default)]
+    pub rear_m: Option<f32>,
+    /// Radius of the circle swept turning in place \[m\].
+    #[serde(default)]
+    pub swing_radius_m: Option<f32>,
+}
+
+/// How the planner treats the body (`$.planning`, an optional section). Every key is
+/// optional.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanningBoardConfig {
+    /// Room kept between the body's side and a wall on a planned path, each side \[m\]; absent:
+    /// [`crate::mission::footprint::DEFAULT_CLEARANCE_M`] (0.05).
+    #[serde(default)]
+    pub clearance_m: Option<f32>,
 }
 
 /// The link to the robot's microcontroller.
@@ -439,6 +477,9 @@ pub struct BoardConfig {
     /// Which scans are mapped (optional; absent: every scan).
     #[serde(default)]
     pub mapping: MappingBoardConfig,
+    /// How the planner treats the body (optional; absent: the defaults).
+    #[serde(default)]
+    pub planning: PlanningBoardConfig,
 }
 
 fn name(s: &str) -> Name {
@@ -466,6 +507,7 @@ impl Default for BoardConfig {
                 wheel_diameter_ratio: None,
                 wheelbase_ratio: None,
                 wheelbase_m: None,
+                footprint: FootprintBoardConfig::default(),
             },
             link: LinkConfig {
                 port: address("/dev/ttyS0"),
@@ -530,6 +572,7 @@ impl Default for BoardConfig {
             persistence: PersistenceConfig { save_every_s: 5.0 },
             localize: LocalizeBoardConfig::default(),
             mapping: MappingBoardConfig::default(),
+            planning: PlanningBoardConfig::default(),
         }
     }
 }
@@ -728,6 +771,26 @@ impl BoardConfig {
         c.min_turn_rad = m.min_turn_deg.map_or(c.min_turn_rad, deg_to_rad);
         c.max_interval_s = m.max_interval_s.unwrap_or(c.max_interval_s);
         c
+    }
+
+    /// The body's outline: `$.robot.footprint`'s values, the P3-DX's where absent.
+    pub fn footprint(&self) -> crate::control::safety::RobotFootprint {
+        let f = &self.robot.footprint;
+        let p3dx = crate::control::safety::RobotFootprint::p3dx();
+        crate::control::safety::RobotFootprint {
+            width_m: f.width_m.unwrap_or(p3dx.width_m),
+            front_m: f.front_m.unwrap_or(p3dx.front_m),
+            rear_m: f.rear_m.unwrap_or(p3dx.rear_m),
+            radius_m: f.swing_radius_m.unwrap_or(p3dx.radius_m),
+        }
+    }
+
+    /// The clearance kept each side of the body on planned paths \[m\]: `$.planning.clearance_m`,
+    /// or [`crate::mission::footprint::DEFAULT_CLEARANCE_M`].
+    pub fn clearance_m(&self) -> f32 {
+        self.planning
+            .clearance_m
+            .unwrap_or(crate::mission::footprint::DEFAULT_CLEARANCE_M)
     }
 
     /// The target-selection strategy, `None` if the board names an unknown one.

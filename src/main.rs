@@ -276,8 +276,20 @@ fn check(path: &Path) -> ExitCode {
         None => format!("{} @ {} baud", board.link.port, board.link.baud),
     };
     let (cols, rows) = board.grid.size_cells();
+    let body = board.footprint();
+    let opening = papillon::onboard::mission::mission_config(&board)
+        .ok()
+        .and_then(|c| {
+            papillon::mission::footprint::narrowest_opening_m(
+                &c.traversability,
+                board.grid.resolution_m,
+            )
+        })
+        .map_or(String::new(), |m| {
+            format!(", passes openings from {m:.2} m (aligned with the cells)")
+        });
     println!(
-        "OK: {} ({}), link {link}, laser {} {} beams, grid {cols}x{rows} cells at {} m, mission {} pop {} gen {}",
+        "OK: {} ({}), link {link}, laser {} {} beams, grid {cols}x{rows} cells at {} m, mission {} pop {} gen {}, body {} m wide with {} m clearance{opening}",
         board.robot.name,
         board.robot.subclass,
         board.laser.model,
@@ -285,7 +297,9 @@ fn check(path: &Path) -> ExitCode {
         board.grid.resolution_m,
         board.mission.method,
         board.mission.population,
-        board.mission.generations
+        board.mission.generations,
+        body.width_m,
+        board.clearance_m(),
     );
     ExitCode::SUCCESS
 }

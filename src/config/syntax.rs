@@ -47,6 +47,27 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
         Kind::Optional(&Kind::Number),
     ),
     ("$.robot.wheelbase_m", false, Kind::Optional(&Kind::Number)),
+    ("$.robot.footprint", false, Kind::Object),
+    (
+        "$.robot.footprint.width_m",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.robot.footprint.front_m",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.robot.footprint.rear_m",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    (
+        "$.robot.footprint.swing_radius_m",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
     ("$.link", true, Kind::Object),
     ("$.link.port", true, Kind::Str(64)),
     ("$.link.tcp", false, Kind::Optional(&Kind::Str(64))),
@@ -164,6 +185,12 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
     ),
     (
         "$.mapping.max_interval_s",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
+    ("$.planning", false, Kind::Object),
+    (
+        "$.planning.clearance_m",
         false,
         Kind::Optional(&Kind::Number),
     ),

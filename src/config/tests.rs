@@ -672,3 +672,89 @@ fn bad_mapping_values_name_their_field() {
         c.mapping.max_interval_s = Some(1e9)
     });
 }
+
+/// `$.robot.footprint` and `$.planning` are optional: absent, the body is the P3-DX's
+/// datasheet outline and the clearance the default; present, each key replaces its value.
+#[test]
+fn the_footprint_and_the_clearance_come_from_the_board() {
+    use crate::control::safety::RobotFootprint;
+    use crate::mission::footprint::DEFAULT_CLEARANCE_M;
+    let c = BoardConfig::from_json(SIM.as_bytes()).unwrap();
+    assert_eq!(c.footprint(), RobotFootprint::p3dx());
+    assert_eq!(c.clearance_m(), DEFAULT_CLEARANCE_M);
+    // A P3-DX with its bumper rings, and more room on each side.
+    let json = SIM
+        .replacen(
+            "\"robot\": {",
+            "\"robot\": {\"footprint\": {\"width_m\": 0.425, \"rear_m\": 0.301, \
+             \"swing_radius_m\": 0.25},",
+            1,
+        )
+        .replacen(
+            "\"persistence\"",
+            "\"planning\": {\"clearance_m\": 0.08}, \"persistence\"",
+            1,
+        );
+    let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+    assert_eq!(paths(&c), Vec::<String>::new());
+    assert_eq!(c.footprint(), RobotFootprint::p3dx_with_bumpers());
+    assert_eq!(c.clearance_m(), 0.08);
+}
+
+/// Each bad footprint or clearance value is one problem naming its key; so is a body whose
+/// planning layer the grid's cells cannot hold.
+#[test]
+fn bad_footprint_and_clearance_values_name_their_field() {
+    only_problem_at("$.robot.footprint.width_m", |c| {
+        c.robot.footprint.width_m = Some(0.0)
+    });
+    only_problem_at("$.robot.footprint.front_m", |c| {
+        c.robot.footprint.front_m = Some(f32::NAN)
+    });
+    only_problem_at("$.robot.footprint.rear_m", |c| {
+        c.robot.footprint.rear_m = Some(1.5)
+    });
+    only_problem_at("$.robot.footprint.swing_radius_m", |c| {
+        c.robot.footprint.swing_radius_m = Some(-0.2)
+    });
+    // Sides outside the swing circle.
+    only_problem_at("$.robot.footprint.swing_radius_m", |c| {
+        c.robot.footprint.width_m = Some(0.6)
+    });
+    only_problem_at("$.planning.clearance_m", |c| {
+        c.planning.clearance_m = Some(-0.01)
+    });
+    only_problem_at("$.planning.clearance_m", |c| {
+        c.planning.clearance_m = Some(0.5)
+    });
+    // A metre-wide robot on 5 cm cells: its wall bands reach past the layer's stencil.
+    only_problem_at("$.robot.footprint", |c| {
+        c.grid.resolution_m = 0.05;
+        c.robot.footprint.width_m = Some(1.0);
+        c.robot.footprint.swing_radius_m = Some(1.0);
+    });
+    let mut big = BoardConfig::default();
+    big.robot.footprint.width_m = Some(1.0);
+    big.robot.footprint.swing_radius_m = Some(1.0);
+    assert_eq!(paths(&big), Vec::<String>::new(), "10 cm cells hold it");
+    let typo = SIM.replacen(
+        "\"persistence\"",
+        "\"planning\": {\"clearance\": 0.05}, \"persistence\"",
+        1,
+    );
+    match BoardConfig::from_json(typo.as_bytes()) {
+        Err(ConfigError::UnknownKey { path, .. }) => {
+            assert_eq!(path.as_str(), "$.planning.clearance")
+        }
+        other => panic!("{other:?}"),
+    }
+    let wrong = SIM.replacen(
+        "\"robot\": {",
+        "\"robot\": {\"footprint\": {\"width_m\": \"wide\"},",
+        1,
+    );
+    match BoardConfig::from_json(wrong.as_bytes()) {
+        Err(ConfigError::Value { path, .. }) => assert_eq!(path, "$.robot.footprint.width_m"),
+        other => panic!("{other:?}"),
+    }
+}

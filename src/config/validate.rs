@@ -5,6 +5,9 @@ use core::fmt::Write as _;
 use super::*;
 use crate::capacity::MAX_CELLS;
 
+/// Largest body dimension a board may give \[m\].
+const MAX_BODY_M: f32 = 1.0;
+
 impl BoardConfig {
     /// Checks every semantic constraint and calls `report(path, problem)` once per problem,
     /// with `path` a JSON path such as `$.mission.population`. Returns the number of problems.
@@ -23,6 +26,7 @@ impl BoardConfig {
         self.validate_safety(&mut r);
         self.validate_localize(&mut r);
         self.validate_mapping(&mut r);
+        self.validate_planning(&mut r);
         if !positive(self.persistence.save_every_s) {
             r(
                 "$.persistence.save_every_s",
@@ -341,6 +345,66 @@ impl BoardConfig {
             {
                 r(path, problem);
             }
+        }
+    }
+
+    /// The body's outline and the clearance, and that the planning layer they make can be
+    /// built at the grid's cell size.
+    fn validate_planning(&self, r: &mut impl FnMut(&str, &str)) {
+        let f = &self.robot.footprint;
+        let mut fine = true;
+        for (path, value) in [
+            ("$.robot.footprint.width_m", f.width_m),
+            ("$.robot.footprint.front_m", f.front_m),
+            ("$.robot.footprint.rear_m", f.rear_m),
+            ("$.robot.footprint.swing_radius_m", f.swing_radius_m),
+        ] {
+            if let Some(v) = value
+                && !(positive(v) && v <= MAX_BODY_M)
+            {
+                r(path, "must be in (0, 1] m");
+                fine = false;
+            }
+        }
+        let body = self.footprint();
+        if fine && body.radius_m < 0.5 * body.width_m {
+            r(
+                "$.robot.footprint.swing_radius_m",
+                "is less than half the width: the body's sides lie outside the circle it sweeps turning in place",
+            );
+            fine = false;
+        }
+        if let Some(c) = self.planning.clearance_m
+            && !(c.is_finite() && (0.0..=crate::mission::footprint::MAX_CLEARANCE_M).contains(&c))
+        {
+            r("$.planning.clearance_m", "must be from 0 to 0.3 [m]");
+            fine = false;
+        }
+        // A grid refused for its size is reported as such, not as a body too big for it.
+        let g = &self.grid;
+        let res = g.resolution_m;
+        let grid_fine = positive(g.width_m) && positive(g.height_m) && positive(res) && {
+            let (cols, rows) = g.size_cells();
+            cols.saturating_mul(rows) <= MAX_CELLS
+        };
+        if !(fine && grid_fine) {
+            return;
+        }
+        let safety = crate::control::safety::SafetyConfig {
+            footprint: body,
+            ..Default::default()
+        };
+        let layer = crate::mission::footprint::planning_layer(
+            &safety,
+            self.clearance_m(),
+            res,
+            crate::planner::UnknownPolicy::Traversable { cost_factor: 1.0 },
+        );
+        if layer.check(res).is_err() {
+            r(
+                "$.robot.footprint",
+                "the body, its clearance and its turning margin span more cells of $.grid.resolution_m than the planning layer holds; use a coarser grid",
+            );
         }
     }
 

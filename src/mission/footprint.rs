@@ -22,6 +22,9 @@ use crate::planner::{TraversabilityConfig, UnknownPolicy, WallBands};
 
 /// Default clearance between the body's side and a wall on a planned path \[m\].
 pub const DEFAULT_CLEARANCE_M: f32 = 0.05;
+/// Largest clearance a board or the simulator accepts \[m\]: more would shut every ordinary
+/// door to a P3-DX.
+pub const MAX_CLEARANCE_M: f32 = 0.3;
 /// Width of the near-wall band beyond the no-turn band \[m\].
 pub const NEAR_BAND_WIDTH_M: f32 = 0.15;
 /// Cost factor of a no-turn cell: crossing a door costs a little, so paths do not run along
@@ -52,6 +55,25 @@ pub fn planning_layer(
             near_cost_factor: NEAR_COST_FACTOR,
         },
     }
+}
+
+/// The narrowest opening in a wall, aligned with the cells of `resolution_m`, that the layer
+/// `planning_layer` made lets the robot through \[m\]: an opening of `n` free cells between
+/// two Occupied ones leaves its middle cell `⌊(n + 1) / 2⌋` cells from the nearer jamb's
+/// centre, which must not be closer than the blocking radius. An opening off the cells' lines
+/// may need one cell more. `None` for a bad cell size.
+pub fn narrowest_opening_m(layer: &TraversabilityConfig, resolution_m: f32) -> Option<f32> {
+    if !(resolution_m.is_finite() && resolution_m > 0.0) {
+        return None;
+    }
+    let r2 = (layer.robot_radius_m / resolution_m) * (layer.robot_radius_m / resolution_m);
+    // The least half-width k (in cells) with k² not below the radius², as the layer's own
+    // stencil test (`d² < r²` blocks) counts it.
+    let mut k = 1u32;
+    while ((k * k) as f32) < r2 {
+        k += 1;
+    }
+    Some((2 * k - 1) as f32 * resolution_m)
 }
 
 /// Most map obstacles passed to the safety monitor in one period.
@@ -202,5 +224,78 @@ mod tests {
         assert!(t.robot_radius_m > 0.2 && t.robot_radius_m < 0.3);
         assert!((t.bands.no_turn_radius_m - 0.347).abs() < 1e-4);
         assert!(t.bands.near_radius_m > t.bands.no_turn_radius_m);
+    }
+
+    /// Whether the middle column of a `door_cells`-cell opening (aligned with the cells) in a
+    /// wall is passable for the layer `planning_layer` makes of `body` and `clearance_m`.
+    fn passes_door(body: crate::control::safety::RobotFootprint, clearance_m: f32) -> bool {
+        use crate::geometry::Point2;
+        use crate::grid::{CellClass, GridGeometry, LogOddsBounds, OccupancyGrid};
+        use crate::planner::Traversability;
+        const CAP: usize = 32 * 24;
+        let g = GridGeometry::new(32, 24, 0.1, Point2::new(0.0, 0.0)).unwrap();
+        let mut grid = OccupancyGrid::<CAP>::new(g, LogOddsBounds::default()).unwrap();
+        let safety = SafetyConfig {
+            footprint: body,
+            ..SafetyConfig::default()
+        };
+        let layer = planning_layer(&safety, clearance_m, 0.1, UnknownPolicy::Blocked);
+        let mut trav = Traversability::<CAP>::new(g, layer).unwrap();
+        for i in 0..g.cell_count() {
+            let c = g.cell(i);
+            let wall = c.row == 12 && !(14..19).contains(&c.col);
+            let class = if wall {
+                CellClass::Occupied
+            } else {
+                CellClass::Free
+            };
+            grid.set_class(i, class, &mut trav);
+        }
+        trav.is_passable(crate::grid::Cell::new(16, 12))
+    }
+
+    #[test]
+    fn the_narrowest_opening_follows_the_body_the_clearance_and_the_cells() {
+        use crate::control::safety::RobotFootprint;
+        let opening = |body: RobotFootprint, clearance_m: f32, res: f32| {
+            let safety = SafetyConfig {
+                footprint: body,
+                ..SafetyConfig::default()
+            };
+            let layer = planning_layer(&safety, clearance_m, res, UnknownPolicy::Blocked);
+            narrowest_opening_m(&layer, res).unwrap()
+        };
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+        let p3dx = RobotFootprint::p3dx();
+        assert!(close(opening(p3dx, DEFAULT_CLEARANCE_M, 0.1), 0.5));
+        // Finer cells cost the half-metre door: half a 5 cm cell of doubt is too much of
+        // the 0.95 cm left each side.
+        assert!(close(opening(p3dx, DEFAULT_CLEARANCE_M, 0.05), 0.55));
+        assert!(close(opening(p3dx, 0.1, 0.1), 0.7));
+        let bumpers = RobotFootprint::p3dx_with_bumpers();
+        assert!(close(opening(bumpers, DEFAULT_CLEARANCE_M, 0.1), 0.7));
+        // The figure agrees with the layer itself (the door test below).
+        assert!(
+            passes_door(p3dx, DEFAULT_CLEARANCE_M) && !passes_door(bumpers, DEFAULT_CLEARANCE_M)
+        );
+        assert_eq!(
+            narrowest_opening_m(&TraversabilityConfig::default(), 0.0),
+            None
+        );
+    }
+
+    #[test]
+    fn the_body_and_the_clearance_decide_a_half_metre_door() {
+        use crate::control::safety::RobotFootprint;
+        assert!(passes_door(RobotFootprint::p3dx(), DEFAULT_CLEARANCE_M));
+        // No clearance at all still passes; 10 cm a side does not (0.381 + 0.2 > 0.5).
+        assert!(passes_door(RobotFootprint::p3dx(), 0.0));
+        assert!(!passes_door(RobotFootprint::p3dx(), 0.1));
+        // With its bumper rings (0.425 m) a P3-DX no longer fits with 5 cm a side.
+        assert!(!passes_door(
+            RobotFootprint::p3dx_with_bumpers(),
+            DEFAULT_CLEARANCE_M
+        ));
+        assert!(passes_door(RobotFootprint::p3dx_with_bumpers(), 0.0));
     }
 }

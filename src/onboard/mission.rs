@@ -184,10 +184,6 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
         whole(r.rot_accel_deg_s2),
         whole(r.rot_accel_deg_s2),
     );
-    // The planning layer is the runner's (`MissionConfig::default().traversability`): the
-    // runner predicts the binary only if both plan alike. (A planning radius of the robot's
-    // radius plus the stop distance, as before, made every doorway of the house narrower
-    // than in the runner.)
     let f = &mut config.follower;
     f.cruise_speed_mm_s = f.cruise_speed_mm_s.min(r.max_speed_mm_s);
     f.max_turn_rate_deg_s = f.max_turn_rate_deg_s.min(r.max_turn_rate_deg_s);
@@ -199,6 +195,18 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     s.max_input_age = core::time::Duration::from_secs_f32(board.safety.stale_timeout_s);
     s.min_clearance_m = board.safety.obstacle_stop_m;
     s.backoff_distance_m = board.safety.back_off_m;
+    s.footprint = board.footprint();
+    // The planning layer is derived as the runner derives it (`footprint::planning_layer`)
+    // from the board's body, clearance and cell size: with the defaults it is the runner's,
+    // which predicts the binary only if both plan alike. (A planning radius of the robot's
+    // radius plus the stop distance, as before, made every doorway of the house narrower
+    // than in the runner.)
+    config.traversability = crate::mission::footprint::planning_layer(
+        &config.safety,
+        board.clearance_m(),
+        board.grid.resolution_m,
+        config.traversability.unknown_policy,
+    );
     let v = &mut config.voltage;
     v.low_v = m.low_voltage_v.unwrap_or(v.low_v);
     v.hold_s = m.low_voltage_hold_s.unwrap_or(v.hold_s);
@@ -1140,6 +1148,34 @@ mod tests {
             .collect();
         assert_eq!(ends.iter().filter(|&&e| e).count(), 1);
         assert!(ends[STALL_DECISIONS]);
+    }
+
+    /// The planning layer follows the board's body, clearance and cell size, derived as the
+    /// runner derives it; the safety monitor gets the same body.
+    #[test]
+    fn the_planning_layer_follows_the_boards_body_clearance_and_cells() {
+        use crate::control::safety::RobotFootprint;
+        use crate::mission::footprint::planning_layer;
+        let mut board = BoardConfig::default();
+        board.grid.resolution_m = 0.05;
+        board.robot.footprint.width_m = Some(0.425);
+        board.robot.footprint.rear_m = Some(0.301);
+        board.robot.footprint.swing_radius_m = Some(0.25);
+        board.planning.clearance_m = Some(0.08);
+        let config = mission_config(&board).unwrap();
+        assert_eq!(config.safety.footprint, RobotFootprint::p3dx_with_bumpers());
+        let layer = config.traversability;
+        assert!((layer.robot_radius_m - (0.2125 + 0.08 + 0.025)).abs() < 1e-6);
+        assert_eq!(
+            layer,
+            planning_layer(&config.safety, 0.08, 0.05, layer.unknown_policy)
+        );
+        // The defaults at the default cell size: the runner's layer.
+        let config = mission_config(&BoardConfig::default()).unwrap();
+        assert_eq!(
+            config.traversability,
+            MissionConfig::default().traversability
+        );
     }
 
     #[test]
