@@ -181,6 +181,9 @@ pub struct ScenarioSpec {
     /// Hyper-parameters replacing the preset's for the selector's optimizer
     /// (`None`: the preset's; see [`papillon::optim::Method::build_tuned`]).
     pub tuning: Option<papillon::optim::Tuning>,
+    /// Room the planner keeps between the body's side and a wall, each side \[m\]
+    /// ([`footprint::planning_layer`]; `--clearance`, a board's `$.planning.clearance_m`).
+    pub clearance_m: f32,
 }
 
 impl Default for ScenarioSpec {
@@ -205,6 +208,7 @@ impl Default for ScenarioSpec {
             laser_noise_m: None,
             preset: papillon::explore::DEFAULT_PRESET,
             tuning: None,
+            clearance_m: footprint::DEFAULT_CLEARANCE_M,
         }
     }
 }
@@ -292,11 +296,20 @@ impl Setup {
             }
             mission.battery_steps = b;
         }
+        if !(spec.clearance_m.is_finite()
+            && (0.0..=footprint::MAX_CLEARANCE_M).contains(&spec.clearance_m))
+        {
+            return Err(format!(
+                "--clearance: expected 0 to {} m, got {}",
+                footprint::MAX_CLEARANCE_M,
+                spec.clearance_m
+            ));
+        }
         let mut world = World::load(&spec.map, spec.resolution_m).map_err(|e| e.to_string())?;
         // The planning layer follows the body at the world's own cell size.
         mission.traversability = footprint::planning_layer(
             &mission.safety,
-            footprint::DEFAULT_CLEARANCE_M,
+            spec.clearance_m,
             world.geometry().resolution_m,
             mission.traversability.unknown_policy,
         );

@@ -46,6 +46,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
             )?),
             None => None,
         },
+        clearance_m: papillon::mission::footprint::DEFAULT_CLEARANCE_M,
     })
 }
 

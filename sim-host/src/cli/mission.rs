@@ -91,6 +91,11 @@ pub struct Args {
     /// typical statistical error (SICK: 12 mm, 1 σ); default 0.
     #[arg(long, allow_negative_numbers = true)]
     pub laser_noise_m: Option<String>,
+    /// Room the planner keeps between the robot's side and a wall on a planned path, each side,
+    /// in metres (0 to 0.3): cells nearer a wall than half the body's width plus this (plus
+    /// half a cell) are blocked. A board's `$.planning.clearance_m`.
+    #[arg(long, default_value = "0.05", allow_negative_numbers = true)]
+    pub clearance: String,
     /// Cell size in metres (the map file's own for .yaml).
     #[arg(long, default_value = "0.1", allow_negative_numbers = true)]
     pub resolution: String,
@@ -204,6 +209,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         None => None,
     };
     let resolution_m = number("--resolution", &args.resolution, "a cell size in metres")?;
+    let clearance_m = number("--clearance", &args.clearance, "a distance in metres")?;
     let start = match &args.start {
         Some(v) => {
             if !(2..=3).contains(&v.len()) {
@@ -269,6 +275,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         laser_noise_m,
         preset,
         tuning: None,
+        clearance_m,
     })
 }
 
@@ -351,6 +358,7 @@ mod tests {
             battery: None,
             start: None,
             resolution: "0.1".into(),
+            clearance: "0.05".into(),
             slip: "thesis".into(),
             localize: "off".into(),
             pose_graph: "off".into(),
@@ -434,6 +442,22 @@ mod tests {
             papillon::explore::ObjectiveKind::Thesis
         );
         assert_eq!(m.explore.preset, papillon::explore::DEFAULT_PRESET);
+        // The planning layer: the body with 5 cm a side by default, `--clearance` else.
+        let layer = |clearance_m: f32| {
+            papillon::mission::footprint::planning_layer(
+                &m.safety,
+                clearance_m,
+                0.1,
+                m.traversability.unknown_policy,
+            )
+        };
+        assert_eq!(m.traversability, layer(0.05));
+        let roomy = setup_from_args(&Args {
+            clearance: "0.12".into(),
+            ..args()
+        })
+        .unwrap();
+        assert_eq!(roomy.run.mission.traversability, layer(0.12));
         for preset in papillon::optim::Preset::ALL {
             let s = setup_from_args(&Args {
                 preset: preset.name().into(),
@@ -502,6 +526,20 @@ mod tests {
                     ..args()
                 },
                 "--strategy:",
+            ),
+            (
+                Args {
+                    clearance: "-0.05".into(),
+                    ..args()
+                },
+                "--clearance:",
+            ),
+            (
+                Args {
+                    clearance: "wide".into(),
+                    ..args()
+                },
+                "--clearance:",
             ),
             (
                 Args {
