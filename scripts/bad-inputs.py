@@ -180,6 +180,17 @@ def boards(path):
     edit("kp-huge.json", "pid", "distance_kp", 1e30)
     edit("stop.json", "safety", "obstacle_stop_m", -1.0)
     edit("stale.json", "safety", "stale_timeout_s", 0.0)
+    b = json.loads(text)
+    b["robot"]["footprint"] = {"width_m": -0.4}
+    write("footprint-width.json", json.dumps(b, indent=2))
+    b = json.loads(text)
+    b["robot"]["footprint"] = {"width_m": 0.6}
+    write("footprint-swing.json", json.dumps(b, indent=2))
+    b = json.loads(text)
+    b["robot"]["footprint"] = {"width": 0.4}
+    write("footprint-typo.json", json.dumps(b, indent=2))
+    edit("clearance.json", "planning", None, {"clearance_m": 0.5})
+    edit("clearance-neg.json", "planning", None, {"clearance_m": -0.05})
     edit("save0.json", "persistence", "save_every_s", 0.0)
     edit("saveneg.json", "persistence", "save_every_s", -2.0)
     return base
@@ -372,7 +383,7 @@ def sweeps():
     sweep("sweep-strategy.json", strategies=[{"name": "medium"}])
     sweep("sweep-pop0.json", populations=[0])
     sweep("sweep-robots0.json", robots=[0])
-    sweep("sweep-robots100.json", robots=[100])
+    sweep("sweep-robots101.json", robots=[101])
     sweep("sweep-runs0.json", runs=0)
     sweep("sweep-runs-huge.json", runs=10**12)
     sweep("sweep-gens.json", generations=-1)

@@ -231,6 +231,11 @@ check_field kp '$.pid.heading_kp'
 check_field kp-huge '$.pid.distance_kp'
 check_field stop '$.safety.obstacle_stop_m'
 check_field stale '$.safety.stale_timeout_s'
+check_field footprint-width '$.robot.footprint.width_m'
+check_field footprint-swing '$.robot.footprint.swing_radius_m'
+check_field footprint-typo '$.robot.footprint.width'
+check_field clearance '$.planning.clearance_m'
+check_field clearance-neg '$.planning.clearance_m'
 check_field save0 '$.persistence.save_every_s'
 check_field saveneg '$.persistence.save_every_s'
 # ---------------------------------------------------------------- papillon run
@@ -349,7 +354,7 @@ t "--map" $S --map lab
 # ---------------------------------------------------------------- papillon-sim mission: flags
 m() { t "$1" $S mission --map lab "${@:2}"; }
 m "--robots" --robots 0
-m "--robots" --robots 9
+m "--robots" --robots 101
 m "--robots" --robots -1
 m "--robots" --robots 1e3
 m "--robots" --robots ''
@@ -396,6 +401,10 @@ m "--resolution" --resolution 1e-9
 m "--resolution" --resolution 0.001
 m "--resolution" --resolution 100
 m "--resolution" --resolution fine
+m "--clearance" --clearance -0.05
+m "--clearance" --clearance 0.5
+m "--clearance" --clearance nan
+m "--clearance" --clearance wide
 m "--png;/nonexistent/dir/map.png" --png /nonexistent/dir/map.png
 m "--png;/tmp" --png /tmp
 m "--frames;afile" --frames afile
@@ -555,7 +564,7 @@ b "sweep-map.json;maps[0]" --config sweep-map.json --out o
 b "sweep-strategy.json;strateg" --config sweep-strategy.json --out o
 b "sweep-pop0.json;populations" --config sweep-pop0.json --out o
 b "sweep-robots0.json;robots" --config sweep-robots0.json --out o
-b "sweep-robots100.json;robots" --config sweep-robots100.json --out o
+b "sweep-robots101.json;robots" --config sweep-robots101.json --out o
 b "sweep-runs0.json;runs" --config sweep-runs0.json --out o
 b "sweep-runs-huge.json;runs" --config sweep-runs-huge.json --out o
 b "sweep-gens.json;generations|LINE" --config sweep-gens.json --out o
