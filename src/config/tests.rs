@@ -717,9 +717,13 @@ fn bad_footprint_and_clearance_values_name_their_field() {
     only_problem_at("$.robot.footprint.swing_radius_m", |c| {
         c.robot.footprint.swing_radius_m = Some(-0.2)
     });
-    // Sides outside the swing circle.
-    only_problem_at("$.robot.footprint.swing_radius_m", |c| {
+    // Sides outside the swing circle: named at the key the board gave.
+    only_problem_at("$.robot.footprint.width_m", |c| {
         c.robot.footprint.width_m = Some(0.6)
+    });
+    only_problem_at("$.robot.footprint.swing_radius_m", |c| {
+        c.robot.footprint.width_m = Some(0.6);
+        c.robot.footprint.swing_radius_m = Some(0.28);
     });
     only_problem_at("$.planning.clearance_m", |c| {
         c.planning.clearance_m = Some(-0.01)

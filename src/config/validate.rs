@@ -368,10 +368,18 @@ impl BoardConfig {
         }
         let body = self.footprint();
         if fine && body.radius_m < 0.5 * body.width_m {
-            r(
-                "$.robot.footprint.swing_radius_m",
-                "is less than half the width: the body's sides lie outside the circle it sweeps turning in place",
-            );
+            // Named where the board wrote the conflict: the swing radius if it gave one.
+            if f.swing_radius_m.is_some() {
+                r(
+                    "$.robot.footprint.swing_radius_m",
+                    "is less than half the width: the body's sides lie outside the circle it sweeps turning in place",
+                );
+            } else {
+                r(
+                    "$.robot.footprint.width_m",
+                    "is more than twice the swing radius (the P3-DX's 0.267 m, as swing_radius_m is not given): the body's sides would lie outside the circle it sweeps turning in place",
+                );
+            }
             fine = false;
         }
         if let Some(c) = self.planning.clearance_m
