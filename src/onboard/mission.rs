@@ -142,7 +142,8 @@ pub fn grid_geometry(board: &BoardConfig) -> Result<GridGeometry, String> {
 
 /// The core mission configuration of a board: [`MissionConfig::default`] (the runner's set-up)
 /// with what the board says (selector, battery, laser, optimizer budget, limits, PID gains,
-/// safety distances, scan matching); `boards/sim-thesis.json` says what the runner's defaults say
+/// safety distances, the body and its clearance with the planning layer they make at the
+/// grid's cell size, scan matching); `boards/sim-thesis.json` says what the runner's defaults say
 /// (the thesis's laser, no matcher), so that `papillon-sim mission` predicts `papillon run` on
 /// the simulator; `boards/sim.json` is the same robot with its LMS1xx described as it is and
 /// the matcher on (`onboard_compare` gives the runner a board's set-up).
