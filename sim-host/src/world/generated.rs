@@ -1024,7 +1024,7 @@ fn furnish(rng: &mut ProjectRng, s: &mut Sketch, room: &Room) {
     }
 }
 
-/// Tries at furnishing one room of a storey ([`furnish_storey`]) before it is left empty.
+/// Tries at furnishing one room of a storey (`furnish_storey`) before it is left empty.
 pub const ROOM_TRIES: u64 = 8;
 
 /// Cells around a room that [`room_is_reached`] takes for the building the room opens into:
