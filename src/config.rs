@@ -793,6 +793,24 @@ impl BoardConfig {
             .unwrap_or(crate::mission::footprint::DEFAULT_CLEARANCE_M)
     }
 
+    /// The planning layer the board's body and clearance make at its cell size
+    /// ([`crate::mission::footprint::planning_layer`], Unknown cells crossed at the default
+    /// factor): what `papillon run` plans with and `check` tests.
+    pub fn planning_layer(&self) -> crate::planner::TraversabilityConfig {
+        let safety = crate::control::safety::SafetyConfig {
+            footprint: self.footprint(),
+            ..Default::default()
+        };
+        crate::mission::footprint::planning_layer(
+            &safety,
+            self.clearance_m(),
+            self.grid.resolution_m,
+            crate::planner::UnknownPolicy::Traversable {
+                cost_factor: crate::planner::traversability::DEFAULT_UNKNOWN_COST_FACTOR,
+            },
+        )
+    }
+
     /// The target-selection strategy, `None` if the board names an unknown one.
     pub fn strategy(&self) -> Option<Strategy> {
         Strategy::from_name(&self.mission.strategy)

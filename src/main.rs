@@ -277,17 +277,13 @@ fn check(path: &Path) -> ExitCode {
     };
     let (cols, rows) = board.grid.size_cells();
     let body = board.footprint();
-    let opening = papillon::onboard::mission::mission_config(&board)
-        .ok()
-        .and_then(|c| {
-            papillon::mission::footprint::narrowest_opening_m(
-                &c.traversability,
-                board.grid.resolution_m,
-            )
-        })
-        .map_or(String::new(), |m| {
-            format!(", passes openings from {m:.2} m (aligned with the cells)")
-        });
+    let opening = papillon::mission::footprint::narrowest_opening_m(
+        &board.planning_layer(),
+        board.grid.resolution_m,
+    )
+    .map_or(String::new(), |m| {
+        format!(", passes openings from {m:.2} m (aligned with the cells)")
+    });
     println!(
         "OK: {} ({}), link {link}, laser {} {} beams, grid {cols}x{rows} cells at {} m, mission {} pop {} gen {}, body {} m wide with {} m clearance{opening}",
         board.robot.name,

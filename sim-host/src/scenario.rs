@@ -296,9 +296,7 @@ impl Setup {
             }
             mission.battery_steps = b;
         }
-        if !(spec.clearance_m.is_finite()
-            && (0.0..=footprint::MAX_CLEARANCE_M).contains(&spec.clearance_m))
-        {
+        if !footprint::is_valid_clearance(spec.clearance_m) {
             return Err(format!(
                 "--clearance: expected 0 to {} m, got {}",
                 footprint::MAX_CLEARANCE_M,

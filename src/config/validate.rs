@@ -20,13 +20,13 @@ impl BoardConfig {
         self.validate_robot(&mut r);
         self.validate_link(&mut r);
         self.validate_laser(&mut r);
-        self.validate_grid(&mut r);
+        let grid_fine = self.validate_grid(&mut r);
         self.validate_mission(&mut r);
         self.validate_pid(&mut r);
         self.validate_safety(&mut r);
         self.validate_localize(&mut r);
         self.validate_mapping(&mut r);
-        self.validate_planning(&mut r);
+        self.validate_planning(grid_fine, &mut r);
         if !positive(self.persistence.save_every_s) {
             r(
                 "$.persistence.save_every_s",
@@ -194,7 +194,9 @@ impl BoardConfig {
         }
     }
 
-    fn validate_grid(&self, r: &mut impl FnMut(&str, &str)) {
+    /// Returns whether the grid's sizes and cell count are usable (the tests that need a grid
+    /// skip theirs otherwise).
+    fn validate_grid(&self, r: &mut impl FnMut(&str, &str)) -> bool {
         let g = &self.grid;
         let mut sizes_ok = true;
         for (path, v) in [
@@ -210,9 +212,11 @@ impl BoardConfig {
             r("$.grid.resolution_m", "must be a positive cell size [m]");
             sizes_ok = false;
         }
+        let mut usable = sizes_ok;
         if sizes_ok {
             let (cols, rows) = g.size_cells();
             if cols.saturating_mul(rows) > MAX_CELLS {
+                usable = false;
                 let mut problem = heapless::String::<160>::new();
                 let _ = write!(
                     problem,
@@ -248,6 +252,7 @@ impl BoardConfig {
                 "the start pose (0, 0) must lie inside the grid: origin must be <= 0 and origin + size > 0",
             );
         }
+        usable
     }
 
     fn validate_mission(&self, r: &mut impl FnMut(&str, &str)) {
@@ -349,8 +354,9 @@ impl BoardConfig {
     }
 
     /// The body's outline and the clearance, and that the planning layer they make can be
-    /// built at the grid's cell size.
-    fn validate_planning(&self, r: &mut impl FnMut(&str, &str)) {
+    /// built at the grid's cell size (tested only on a usable grid, `grid_fine`: a grid
+    /// refused for its size is reported as such, not as a body too big for it).
+    fn validate_planning(&self, grid_fine: bool, r: &mut impl FnMut(&str, &str)) {
         let f = &self.robot.footprint;
         let mut fine = true;
         for (path, value) in [
@@ -383,32 +389,12 @@ impl BoardConfig {
             fine = false;
         }
         if let Some(c) = self.planning.clearance_m
-            && !(c.is_finite() && (0.0..=crate::mission::footprint::MAX_CLEARANCE_M).contains(&c))
+            && !crate::mission::footprint::is_valid_clearance(c)
         {
             r("$.planning.clearance_m", "must be from 0 to 0.3 [m]");
             fine = false;
         }
-        // A grid refused for its size is reported as such, not as a body too big for it.
-        let g = &self.grid;
-        let res = g.resolution_m;
-        let grid_fine = positive(g.width_m) && positive(g.height_m) && positive(res) && {
-            let (cols, rows) = g.size_cells();
-            cols.saturating_mul(rows) <= MAX_CELLS
-        };
-        if !(fine && grid_fine) {
-            return;
-        }
-        let safety = crate::control::safety::SafetyConfig {
-            footprint: body,
-            ..Default::default()
-        };
-        let layer = crate::mission::footprint::planning_layer(
-            &safety,
-            self.clearance_m(),
-            res,
-            crate::planner::UnknownPolicy::Traversable { cost_factor: 1.0 },
-        );
-        if layer.check(res).is_err() {
+        if fine && grid_fine && self.planning_layer().check(self.grid.resolution_m).is_err() {
             r(
                 "$.robot.footprint",
                 "the body, its clearance and its turning margin span more cells of $.grid.resolution_m than the planning layer holds; use a coarser grid",

@@ -25,6 +25,11 @@ pub const DEFAULT_CLEARANCE_M: f32 = 0.05;
 /// Largest clearance a board or the simulator accepts \[m\]: more would shut every ordinary
 /// door to a P3-DX.
 pub const MAX_CLEARANCE_M: f32 = 0.3;
+
+/// Whether `clearance_m` is one a board or the simulator accepts (0 to [`MAX_CLEARANCE_M`]).
+pub fn is_valid_clearance(clearance_m: f32) -> bool {
+    clearance_m.is_finite() && (0.0..=MAX_CLEARANCE_M).contains(&clearance_m)
+}
 /// Width of the near-wall band beyond the no-turn band \[m\].
 pub const NEAR_BAND_WIDTH_M: f32 = 0.15;
 /// Cost factor of a no-turn cell: crossing a door costs a little, so paths do not run along

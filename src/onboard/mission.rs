@@ -197,17 +197,13 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     s.min_clearance_m = board.safety.obstacle_stop_m;
     s.backoff_distance_m = board.safety.back_off_m;
     s.footprint = board.footprint();
-    // The planning layer is derived as the runner derives it (`footprint::planning_layer`)
-    // from the board's body, clearance and cell size: with the defaults it is the runner's,
+    // The planning layer is derived as the runner derives it (`footprint::planning_layer`,
+    // through `BoardConfig::planning_layer`) from the board's body, clearance and cell size:
+    // with the defaults it is the runner's,
     // which predicts the binary only if both plan alike. (A planning radius of the robot's
     // radius plus the stop distance, as before, made every doorway of the house narrower
     // than in the runner.)
-    config.traversability = crate::mission::footprint::planning_layer(
-        &config.safety,
-        board.clearance_m(),
-        board.grid.resolution_m,
-        config.traversability.unknown_policy,
-    );
+    config.traversability = board.planning_layer();
     let v = &mut config.voltage;
     v.low_v = m.low_voltage_v.unwrap_or(v.low_v);
     v.hold_s = m.low_voltage_hold_s.unwrap_or(v.hold_s);
