@@ -1049,11 +1049,14 @@ fn furnish_storey(seed: u64, attempt: u64, s: &mut Sketch, rooms: &[Room]) {
         if r.is_empty() {
             continue;
         }
+        // The room's rows of the bitmap, as flat index ranges.
+        let (sw, w) = (s.w, r.w() as usize);
+        let row = move |y: i32| {
+            let from = (y * sw + r.x0) as usize;
+            from..from + w
+        };
         let saved: Vec<bool> = (r.y0..r.y1)
-            .flat_map(|y| {
-                let from = (y * s.w + r.x0) as usize;
-                s.blocked[from..from + r.w() as usize].to_vec()
-            })
+            .flat_map(|y| s.blocked[row(y)].iter().copied())
             .collect();
         let (ops, openings) = (s.ops.len(), s.openings.len());
         for t in 0..ROOM_TRIES {
@@ -1068,9 +1071,7 @@ fn furnish_storey(seed: u64, attempt: u64, s: &mut Sketch, rooms: &[Room]) {
             }
             // Put the room back as it was before this try.
             for (j, y) in (r.y0..r.y1).enumerate() {
-                let from = (y * s.w + r.x0) as usize;
-                let w = r.w() as usize;
-                s.blocked[from..from + w].copy_from_slice(&saved[j * w..(j + 1) * w]);
+                s.blocked[row(y)].copy_from_slice(&saved[j * w..(j + 1) * w]);
             }
             s.ops.truncate(ops);
             s.openings.truncate(openings);
