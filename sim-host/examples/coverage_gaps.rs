@@ -14,7 +14,9 @@
 //! `coverage_gaps --map gen-03 --seed 25 --battery 488`. Prints one tab-separated line:
 //! `map method seed coverage reason missing unseen left noise shut spurious_occupied steps
 //! contacts replans_by_cause`. With `GAPS_EVENTS=1` it also prints the last 40 events (`GAPS_EVENTS=N`: N), the map
-//! around the robot (or around `GAPS_AT=X,Y`) and the planning layer there; with
+//! around the robot (or around `GAPS_AT=X,Y`) and the planning layer there (`GAPS_TRUTH=1`:
+//! the map against the truth instead: `#` Occupied and a wall, `X` Occupied but free, `w`
+//! Free but a wall, `.` Free and free, `:` an unknown wall, ` ` unknown free ground); with
 //! `GAPS_GATES=1` the spurious Occupied cells next to where the final map's reach stops; with
 //! `GAPS_FRONTIER=1` the final map's frontier cells in clusters, each with how many of its cells
 //! the robot reaches (`reached`), could stand next to but not get to (`cut`: a door shut on the
@@ -416,13 +418,24 @@ fn main() {
         // 'o' passable and turnable, '-' passable only straight, 'x' blocked, ' ' Unknown;
         // passable cells the robot does not reach on the final map print 'c' and '='.
         let (hr, hc) = span().unwrap_or((6, 6));
+        let truth_print = std::env::var_os("GAPS_TRUTH").is_some();
         for dr in (-hr..=hr).rev() {
             let line: String = (-hc..=hc)
                 .map(|dc| {
                     let c = Cell::new(centre.col + dc, centre.row + dr);
                     let reached = g.index(c).is_some_and(|i| reach_final[i]);
+                    let wall = g.index(c).is_some_and(|i| world.is_blocked_index(i));
                     if dc == 0 && dr == 0 {
                         'R'
+                    } else if truth_print {
+                        match (map.class_of(c), wall) {
+                            (Some(CellClass::Occupied), true) => '#',
+                            (Some(CellClass::Occupied), false) => 'X',
+                            (Some(CellClass::Free), true) => 'w',
+                            (Some(CellClass::Free), false) => '.',
+                            (_, true) => ':',
+                            _ => ' ',
+                        }
                     } else if map.class_of(c) == Some(CellClass::Unknown) {
                         ' '
                     } else if trav.is_passable(c) {

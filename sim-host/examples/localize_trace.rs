@@ -19,8 +19,9 @@
 //! gate, σ), `GRAPH_FLOOR_M`/`GRAPH_FLOOR_RAD` (a step's least σ), `GRAPH_EVERY` (path between
 //! closures), `GRAPH_RESID` (a
 //! closure's largest residual after the optimisation, σ; 0: none), `GRAPH_AMB=0|1` (the closures'
-//! ambiguity test, on by default; `GRAPH_AMB_D`, `GRAPH_AMB_R`: its distance and inlier ratio), `DIAG=1` (each closure's
-//! and each step's error against the truth).
+//! ambiguity test, on by default; `GRAPH_AMB_D`, `GRAPH_AMB_R`: its distance and inlier ratio),
+//! `GRAPH_SXY`/`GRAPH_STH` (a closure's search, m and rad each way), `DIAG=1` (each closure's
+//! error against the truth, with the old keyframe's true position, and each step's).
 //!
 //! Odometry self-calibration (`src/localize/odometry_calibration.rs`): `LOC_CAL=1` (on),
 //! `CAL_RANDOM` (the share of the odometry variances kept as random), `CAL_SG`/`CAL_SK` (the
@@ -111,6 +112,12 @@ fn main() {
     }
     if let Some(v) = env("GRAPH_AMB_R") {
         m.localize.graph.closure.ambiguity_ratio = v;
+    }
+    if let Some(v) = env("GRAPH_SXY") {
+        m.localize.graph.closure.search_xy_m = v;
+    }
+    if let Some(v) = env("GRAPH_STH") {
+        m.localize.graph.closure.search_theta_rad = v;
     }
     if let Some(v) = env("GRAPH_SM") {
         m.localize.graph.closure.sigma_m = v;
@@ -434,7 +441,9 @@ fn main() {
             let t = key_truth[j].in_frame_of(key_truth[i]);
             let err = e.measured.in_frame_of(t);
             println!(
-                "closure {i:5} -> {j:5}: measured {:6.3} {:6.3} {:6.2}° true {:6.3} {:6.3} {:6.2}° error {:.3} m {:.2}°",
+                "closure {i:5} -> {j:5} (at {:.2} {:.2}): measured {:6.3} {:6.3} {:6.2}° true {:6.3} {:6.3} {:6.2}° error {:.3} m {:.2}°",
+                key_truth[i].x,
+                key_truth[i].y,
                 e.measured.x,
                 e.measured.y,
                 e.measured.theta.to_degrees(),

@@ -17,6 +17,7 @@ use crate::sensor::{IntegrationError, LaserConfig, Scan, SensorModel, integrate_
 
 use super::keyframes::{KeyframeStore, is_keyframe};
 use super::loop_closure::{ClosureConfig, LOCAL_CELLS, LocalMap, Refusal, candidate};
+use super::path_uncertainty::PathUncertainty;
 use super::pose_graph::{Edge, PoseGraph};
 use super::{HitMap, MatchConfig, ScanMatcher, WINDOW_CELLS};
 
@@ -97,6 +98,20 @@ impl Default for GraphConfig {
             iterations: 10,
             cg_steps: 3000,
         }
+    }
+}
+
+impl GraphConfig {
+    /// Variances of a step `z` between two keyframes along its `x`, `y` and heading
+    /// \[m², m², rad²\]: growing with the distance driven and the angle turned, at least the
+    /// floors.
+    pub fn step_variances(&self, z: Pose2) -> [f32; 3] {
+        let d = crate::math::hypot(z.x, z.y);
+        let turn = crate::math::abs(z.theta);
+        let var_m2 = (self.step_var_m2_per_m * d).max(self.step_floor_m * self.step_floor_m);
+        let var_rad2 = (self.step_var_rad2_per_rad * turn + self.step_var_rad2_per_m * d)
+            .max(self.step_floor_rad * self.step_floor_rad);
+        [var_m2, var_m2, var_rad2]
     }
 }
 
@@ -250,12 +265,7 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
         self.stats.keyframes += 1;
         if let Some(p) = prev {
             let z = pose.in_frame_of(p);
-            let d = crate::math::hypot(z.x, z.y);
-            let turn = crate::math::abs(z.theta);
-            let var_m2 =
-                (config.step_var_m2_per_m * d).max(config.step_floor_m * config.step_floor_m);
-            let var_rad2 = (config.step_var_rad2_per_rad * turn + config.step_var_rad2_per_m * d)
-                .max(config.step_floor_rad * config.step_floor_rad);
+            let [var_m2, _, var_rad2] = config.step_variances(z);
             let edge = Edge {
                 from: (node - 1) as u16,
                 to: node as u16,
@@ -310,14 +320,28 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
         };
         let old_pose = self.graph.pose(old)?;
         if c.gate_sigmas > 0.0 {
-            // The path between the two keyframes, as the graph's steps would drift over it.
-            let path = self.path_m - self.store.get(old).map_or(0.0, |k| k.path_m);
-            let var_m2 = c.sigma_m * c.sigma_m + config.step_var_m2_per_m * path;
-            let var_rad2 = c.sigma_rad * c.sigma_rad + config.step_var_rad2_per_m * path;
-            let dx = matched.x - pose.x;
-            let dy = matched.y - pose.y;
-            let dt = crate::geometry::normalize_angle(matched.theta - pose.theta);
-            let d2 = (dx * dx + dy * dy) / var_m2 + dt * dt / var_rad2;
+            // How far the graph may have drifted over the path between the two keyframes:
+            // the steps' covariance compounded along it, each heading error swinging all
+            // that follows it. The match is tested against the graph's prediction of the same
+            // relative pose under that covariance and the closure's own.
+            let mut path = PathUncertainty::new();
+            for i in old..node {
+                let (Some(a), Some(b)) = (self.graph.pose(i), self.graph.pose(i + 1)) else {
+                    break;
+                };
+                let z = b.in_frame_of(a);
+                path.push(z, config.step_variances(z));
+            }
+            let closure = [
+                c.sigma_m * c.sigma_m,
+                c.sigma_m * c.sigma_m,
+                c.sigma_rad * c.sigma_rad,
+            ];
+            let d2 = path.mahalanobis2(
+                matched.in_frame_of(old_pose),
+                pose.in_frame_of(old_pose),
+                closure,
+            );
             if d2 > c.gate_sigmas * c.gate_sigmas {
                 self.stats.refuse(Refusal::Inconsistent(d2));
                 return None;

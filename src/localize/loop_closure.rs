@@ -71,7 +71,9 @@ pub struct ClosureConfig {
     pub sigma_rad: f32,
     /// A match is refused when it differs from the pose the graph predicts by more than this
     /// many standard deviations of the closure and of the path between the two keyframes
-    /// (χ² test on each axis; 0: no test), a consistency check as Olson's, *Recognizing
+    /// (the squared Mahalanobis distance over the three axes under the steps' covariance
+    /// compounded along the path, [`super::path_uncertainty`], plus the closure's; 0: no
+    /// test), a consistency check as Olson's, *Recognizing
     /// places using spectrally clustered local matches*, RAS 2009, rejects matches that
     /// disagree with the odometry of the loop.
     pub gate_sigmas: f32,

@@ -45,6 +45,7 @@ pub mod likelihood;
 pub mod loop_closure;
 pub mod ndt;
 pub mod odometry_calibration;
+pub mod path_uncertainty;
 pub mod pose_graph;
 pub mod tracker;
 
