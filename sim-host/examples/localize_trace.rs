@@ -20,7 +20,8 @@
 //! closures), `GRAPH_RESID` (a
 //! closure's largest residual after the optimisation, σ; 0: none), `GRAPH_AMB=0|1` (the closures'
 //! ambiguity test, on by default; `GRAPH_AMB_D`, `GRAPH_AMB_R`: its distance and inlier ratio),
-//! `GRAPH_SXY`/`GRAPH_STH` (a closure's search, m and rad each way), `DIAG=1` (each closure's
+//! `GRAPH_SXY`/`GRAPH_STH` (a closure's search, m and rad each way), `GRAZE` (misses through a
+//! confident wall count within this many cells of its centre; negative: every miss counts), `DIAG=1` (each closure's
 //! error against the truth, with the old keyframe's true position, and each step's).
 //!
 //! Odometry self-calibration (`src/localize/odometry_calibration.rs`): `LOC_CAL=1` (on),
@@ -211,6 +212,9 @@ fn main() {
     }
     if let Some(v) = env("WALL_SIGMAS") {
         m.localize.wall_band_sigmas = v;
+    }
+    if let Some(v) = env("GRAZE") {
+        m.localize.grazing_miss_offset_cells = (v >= 0.0).then_some(v);
     }
     let quiet = std::env::var("QUIET").is_ok();
     // WINDOW=FROM,TO: every scan between FROM and TO s of simulated time.
