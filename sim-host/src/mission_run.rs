@@ -17,6 +17,11 @@ pub fn picture_scale(world: &World) -> u32 {
     papillon::picture::picture_scale(world.geometry())
 }
 
+/// A setting as the user wrote it (`0.08`, not the `f32`'s `0.07999999821186066`).
+fn setting(value: f32) -> f64 {
+    value.to_string().parse().unwrap_or(f64::from(value))
+}
+
 /// The JSON report (one object).
 pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
     let per_robot: Vec<serde_json::Value> = report
@@ -55,6 +60,10 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
         "slip": setup.slip.name(),
         "localize": m.localize.enabled,
         "pose_graph": m.localize.graph.enabled,
+        "resolution_m": setting(setup.world.geometry().resolution_m),
+        "clearance_m": setting(setup.clearance_m),
+        "laser_noise": setting(m.laser.noise_fraction),
+        "laser_noise_m": setting(setup.run.laser_range_sigma_m),
         "coverage": report.coverage,
         "map_accuracy": report.map_accuracy,
         "observable_cells": report.observable_cells,

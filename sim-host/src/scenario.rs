@@ -224,6 +224,8 @@ pub struct Setup {
     pub strategy: Strategy,
     /// The slip.
     pub slip: Slip,
+    /// Room kept between the body's side and a wall on a planned path \[m\] (`--clearance`).
+    pub clearance_m: f32,
 }
 
 /// Most generations per decision (as a board's `$.mission.generations`).
@@ -352,6 +354,7 @@ impl Setup {
             run,
             strategy: spec.strategy,
             slip: spec.slip,
+            clearance_m: spec.clearance_m,
         })
     }
 

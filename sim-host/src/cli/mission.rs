@@ -469,6 +469,28 @@ mod tests {
     }
 
     #[test]
+    fn the_json_report_records_the_settings_as_given() {
+        let s = setup_from_args(&Args {
+            clearance: "0.08".into(),
+            laser_noise: Some("0.003".into()),
+            laser_noise_m: Some("0.012".into()),
+            resolution: "0.05".into(),
+            ..args()
+        })
+        .unwrap();
+        let json = json_report(&s, &crate::runner::RunReport::default());
+        assert_eq!(json["clearance_m"], 0.08);
+        assert_eq!(json["laser_noise"], 0.003);
+        assert_eq!(json["laser_noise_m"], 0.012);
+        assert_eq!(json["resolution_m"], 0.05);
+        let defaults = json_report(&setup_from_args(&args()).unwrap(), &Default::default());
+        assert_eq!(defaults["clearance_m"], 0.05);
+        assert_eq!(defaults["laser_noise"], 0.05);
+        assert_eq!(defaults["laser_noise_m"], 0.0);
+        assert_eq!(defaults["resolution_m"], 0.1);
+    }
+
+    #[test]
     fn bad_arguments_name_the_option_on_one_line() {
         let cases: Vec<(Args, &str)> = vec![
             (
