@@ -423,8 +423,9 @@ fn main() {
             let line: String = (-hc..=hc)
                 .map(|dc| {
                     let c = Cell::new(centre.col + dc, centre.row + dr);
-                    let reached = g.index(c).is_some_and(|i| reach_final[i]);
-                    let wall = g.index(c).is_some_and(|i| world.is_blocked_index(i));
+                    let index = g.index(c);
+                    let reached = index.is_some_and(|i| reach_final[i]);
+                    let wall = index.is_some_and(|i| world.is_blocked_index(i));
                     if dc == 0 && dr == 0 {
                         'R'
                     } else if truth_print {

@@ -391,7 +391,13 @@ impl BoardConfig {
         if let Some(c) = self.planning.clearance_m
             && !crate::mission::footprint::is_valid_clearance(c)
         {
-            r("$.planning.clearance_m", "must be from 0 to 0.3 [m]");
+            let mut problem = heapless::String::<48>::new();
+            let _ = write!(
+                problem,
+                "must be from 0 to {} [m]",
+                crate::mission::footprint::MAX_CLEARANCE_M
+            );
+            r("$.planning.clearance_m", &problem);
             fine = false;
         }
         if fine && grid_fine && self.planning_layer().check(self.grid.resolution_m).is_err() {

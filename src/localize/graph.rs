@@ -325,12 +325,12 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
             // that follows it. The match is tested against the graph's prediction of the same
             // relative pose under that covariance and the closure's own.
             let mut path = PathUncertainty::new();
-            for i in old..node {
-                let (Some(a), Some(b)) = (self.graph.pose(i), self.graph.pose(i + 1)) else {
-                    break;
-                };
-                let z = b.in_frame_of(a);
+            let mut from = old_pose;
+            for i in old + 1..=node {
+                let Some(to) = self.graph.pose(i) else { break };
+                let z = to.in_frame_of(from);
                 path.push(z, config.step_variances(z));
+                from = to;
             }
             let closure = [
                 c.sigma_m * c.sigma_m,

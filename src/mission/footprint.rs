@@ -30,6 +30,7 @@ pub const MAX_CLEARANCE_M: f32 = 0.3;
 pub fn is_valid_clearance(clearance_m: f32) -> bool {
     clearance_m.is_finite() && (0.0..=MAX_CLEARANCE_M).contains(&clearance_m)
 }
+
 /// Width of the near-wall band beyond the no-turn band \[m\].
 pub const NEAR_BAND_WIDTH_M: f32 = 0.15;
 /// Cost factor of a no-turn cell: crossing a door costs a little, so paths do not run along
