@@ -105,6 +105,11 @@ pub fn execute(
     let mut records: Vec<RunRecord> = pool.install(|| {
         specs
             .par_iter()
+            // One run per rayon job: runs last from a fraction of a second to tens of
+            // seconds, and rayon's default splitting leaves a worker idle while the other
+            // works through an unsplit block of runs (boa-variants, 2 workers: 1.6 of 2 cores
+            // busy; with one run per job, 1.9). See docs/benchmarks.md.
+            .with_max_len(1)
             .map(|spec| {
                 let result = run(spec);
                 let record = RunRecord {
