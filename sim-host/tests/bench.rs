@@ -8,7 +8,7 @@ use std::process::Command;
 
 use papillon_sim::bench::exec::ProgressMode;
 use papillon_sim::bench::sweep::{Shard, Sweep};
-use papillon_sim::bench::{self, record, run_sweep, sim};
+use papillon_sim::bench::{self, record, run_sweep, sim, sweep};
 
 fn tiny() -> Sweep {
     Sweep::from_json(
@@ -171,12 +171,73 @@ fn a_tiny_sweep_writes_consistent_csv_summaries_and_plots() {
     let _ = fs::remove_dir_all(&out);
 }
 
+/// Two sweeps that share runs, run as one pool: each shared run runs once, and each sweep's
+/// directory holds what running it alone writes (its own spec and index on every record).
+#[test]
+fn pooled_sweeps_run_a_shared_run_once_and_write_what_each_alone_writes() {
+    let first = tiny();
+    let second = Sweep::from_json(
+        r#"{"name": "tiny2", "maps": ["lab"], "methods": ["boa", "xboa"],
+            "runs": 2, "battery_steps": 40}"#,
+        "tiny2.json",
+    )
+    .unwrap();
+    let out = scratch("pool");
+    // A run function is `'static`: the count lives in a static of this test's own.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let counted = |spec: &sweep::RunSpec| {
+        CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        sim::run(spec)
+    };
+    let sweeps = [first, second];
+    let pooled = bench::run_pooled(&sweeps, 2, &out, &counted, ProgressMode::Quiet).unwrap();
+    // xBOA's two runs are in both sweeps: 8 runs asked for, 6 distinct, each run once.
+    assert_eq!(
+        pooled,
+        bench::Pooled {
+            runs: 8,
+            distinct: 6,
+            failed: 0
+        }
+    );
+    assert_eq!(CALLS.load(std::sync::atomic::Ordering::Relaxed), 6);
+    assert_eq!(
+        record::read_jsonl(&out.join(bench::POOL_FILE))
+            .unwrap()
+            .len(),
+        6
+    );
+    for sweep in &sweeps {
+        let alone = out.join(format!("alone-{}", sweep.name));
+        run_sweep(sweep, Shard::ALL, 1, &alone, &sim::run, ProgressMode::Quiet).unwrap();
+        let dir = out.join(&sweep.name);
+        assert_eq!(bench::read_sweep_file(&dir).unwrap().sweep, *sweep);
+        let pooled = record::read_jsonl(&dir.join(bench::RUNS_FILE)).unwrap();
+        let alone = record::read_jsonl(&alone.join(bench::RUNS_FILE)).unwrap();
+        assert_eq!(pooled.len(), sweep.len());
+        for (p, a) in pooled.iter().zip(&alone) {
+            assert_eq!(p.spec, a.spec);
+            let (mp, ma) = (p.result.as_ref().unwrap(), a.result.as_ref().unwrap());
+            assert_eq!(mp.coverage, ma.coverage);
+            assert_eq!(mp.steps, ma.steps);
+            assert_eq!(mp.coverage_curve, ma.coverage_curve);
+            assert_eq!(mp.convergence, ma.convergence);
+        }
+        assert!(dir.join("summary.md").exists() && dir.join("results.csv").exists());
+    }
+    let _ = fs::remove_dir_all(&out);
+}
+
 #[test]
 fn bad_bench_arguments_exit_with_status_2_and_one_line() {
     let bin = env!("CARGO_BIN_EXE_papillon-sim");
     for args in [
         vec!["bench", "--experiment", "nope"],
         vec!["bench", "--experiment", "methods", "--shard", "3/3"],
+        vec!["bench", "--experiment", "methods,nope"],
+        vec!["bench", "--experiment", "methods,,horizon"],
+        vec!["bench", "--experiment", "methods,methods"],
+        vec!["bench", "--experiment", "all,methods"],
         vec!["bench", "--config", "/nonexistent/sweep.json"],
         vec!["bench"],
     ] {

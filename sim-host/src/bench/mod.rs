@@ -27,7 +27,7 @@ pub mod sweep;
 pub mod thesis;
 pub mod tune;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::fs::{self, OpenOptions};
 use std::path::{Path, PathBuf};
 
@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 
 use exec::{ProgressMode, RunFn, execute};
 use record::RunRecord;
-use sweep::{Shard, Sweep};
+use sweep::{RunSpec, Shard, Sweep};
 
 /// `sweep.json`: the sweep a directory's runs come from, and which shard.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -52,6 +52,9 @@ pub struct SweepFile {
 pub const RUNS_FILE: &str = "runs.jsonl";
 /// Name of the sweep file.
 pub const SWEEP_FILE: &str = "sweep.json";
+/// Name of the log of a pool of sweeps ([`run_pooled`]), in its output directory: one record
+/// per run actually run, appended as it finishes, numbered by its place in the pool.
+pub const POOL_FILE: &str = "pool.jsonl";
 
 /// Creates `dir` and writes its `sweep.json`.
 pub fn write_sweep_file(dir: &Path, sweep: &Sweep, shard: Shard) -> Result<(), String> {
@@ -105,6 +108,102 @@ pub fn run_sweep(
     let records = execute(&specs, jobs, run, Some(file), mode)?;
     write_outputs(out, &sweep.name, &records)?;
     Ok(records.iter().filter(|r| r.result.is_err()).count())
+}
+
+/// What [`run_pooled`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pooled {
+    /// Runs the sweeps ask for, all together.
+    pub runs: usize,
+    /// Runs actually run: those asked for by no earlier sweep (or earlier in the same one).
+    pub distinct: usize,
+    /// Failed runs, counted in every sweep that asks for them.
+    pub failed: usize,
+}
+
+/// What makes two runs the same run: everything in the spec but its place in its sweep
+/// (a run is a pure function of it: every random choice comes from its seed).
+fn same_run_key(spec: &RunSpec) -> Result<String, String> {
+    serde_json::to_string(&RunSpec {
+        index: 0,
+        ..spec.clone()
+    })
+    .map_err(|e| format!("run {}: {e}", spec.index))
+}
+
+/// Runs whole `sweeps` as one pool of runs, each sweep's outputs written into `out/NAME` as
+/// [`run_sweep`] writes them. A run that several sweeps ask for (the same world, method,
+/// objective, preset, strategy, population, robots, seed, battery, ...: the named
+/// experiments share many) runs once and its record serves each of them, and the runs of
+/// every sweep share the worker threads, so no sweep waits on another's last run. The pool's
+/// records are appended to `out/`[`POOL_FILE`] as they finish.
+pub fn run_pooled(
+    sweeps: &[Sweep],
+    jobs: usize,
+    out: &Path,
+    run: &RunFn,
+    mode: ProgressMode,
+) -> Result<Pooled, String> {
+    let mut pool: Vec<RunSpec> = Vec::new();
+    let mut slot_of: HashMap<String, usize> = HashMap::new();
+    let mut asked: Vec<Vec<(RunSpec, usize)>> = Vec::with_capacity(sweeps.len());
+    for sweep in sweeps {
+        let mut runs = Vec::with_capacity(sweep.len());
+        for spec in sweep.specs() {
+            let slot = *slot_of.entry(same_run_key(&spec)?).or_insert_with(|| {
+                // Numbered by its place in the pool, which `execute` sorts by.
+                pool.push(RunSpec {
+                    index: pool.len(),
+                    ..spec.clone()
+                });
+                pool.len() - 1
+            });
+            runs.push((spec, slot));
+        }
+        asked.push(runs);
+    }
+    for sweep in sweeps {
+        write_sweep_file(&out.join(&sweep.name), sweep, Shard::ALL)?;
+    }
+    let pool_path = out.join(POOL_FILE);
+    let file = OpenOptions::new()
+        .create(true)
+        .write(true)
+        .truncate(true)
+        .open(&pool_path)
+        .map_err(|e| format!("{}: cannot write: {e}", pool_path.display()))?;
+    let runs = asked.iter().map(Vec::len).sum();
+    if mode != ProgressMode::Quiet {
+        eprintln!(
+            "bench: {} experiments, {runs} runs of which {} distinct, {} worker threads, into {}",
+            sweeps.len(),
+            pool.len(),
+            if jobs == 0 {
+                rayon::current_num_threads()
+            } else {
+                jobs
+            },
+            out.display()
+        );
+    }
+    let done = execute(&pool, jobs, run, Some(file), mode)?;
+    let mut failed = 0;
+    for (sweep, runs) in sweeps.iter().zip(asked) {
+        let records: Vec<RunRecord> = runs
+            .into_iter()
+            .map(|(spec, slot)| RunRecord {
+                spec,
+                result: done[slot].result.clone(),
+            })
+            .collect();
+        failed += records.iter().filter(|r| r.result.is_err()).count();
+        write_outputs(&out.join(&sweep.name), &sweep.name, &records)?;
+    }
+    Ok(Pooled {
+        runs,
+        distinct: pool.len(),
+        failed,
+    })
 }
 
 /// Reads a directory's `sweep.json`.

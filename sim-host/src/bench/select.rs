@@ -65,10 +65,11 @@ impl fmt::Display for SelectError {
         match self {
             SelectError::UnknownExperiment(name) => write!(
                 f,
-                "unknown experiment '{name}', expected one of: {}, {}, {}",
+                "unknown experiment '{name}', expected one of: {}, {}, {}, {}",
                 EXPERIMENTS.join(", "),
                 super::thesis::EXPERIMENTS.join(", "),
-                super::thesis::ALL
+                super::thesis::ALL,
+                super::sweep::ALL
             ),
             SelectError::NoThesisMaps(dir) => write!(
                 f,

@@ -44,6 +44,10 @@ pub const EXPERIMENTS: [&str; 6] = [
     "scale",
 ];
 
+/// The experiment that runs every named experiment, these and the thesis's
+/// ([`super::thesis::EXPERIMENTS`]), as one pool ([`super::run_pooled`]).
+pub const ALL: &str = "all";
+
 /// The maps of the `scale` experiment: generated square storeys
 /// ([`crate::world::generated`], `gen-floor-SIDEm-SEED`) of 24, 48, 96 and 192 m, at 0.1 m
 /// 240², 480², 960² and 1920² cells.

@@ -24,7 +24,10 @@ pub struct Args {
     /// on generated storeys of 240² to 1920² cells, 1 to 100 robots, 1 run); the
     /// thesis's, side by side with its tables: thesis-methods, thesis-methods-long,
     /// thesis-horizon, thesis-population, thesis-pop5, thesis-boa-variants,
-    /// thesis-multi-robot, or thesis-all (all of them, each into OUT/NAME).
+    /// thesis-multi-robot, or thesis-all (all of them, each into OUT/NAME); or all (every
+    /// named experiment, each into OUT/NAME); or a comma-separated list of experiments (each
+    /// into OUT/NAME). thesis-all, all and a list run their experiments' runs as one pool, a
+    /// run that several of them ask for once (with --shard: one experiment after the other).
     #[arg(long, conflicts_with = "config")]
     pub experiment: Option<String>,
     /// Sweep file (JSON: maps, methods, strategies, populations, robots, runs, generations,
@@ -143,8 +146,34 @@ pub fn run(args: Args) -> ExitCode {
     if let Err(e) = super::check_jobs(args.jobs) {
         return fail(&e);
     }
-    if args.experiment.as_deref() == Some(crate::bench::thesis::ALL) {
-        return run_thesis_all(&args);
+    match args.experiment.as_deref() {
+        Some(crate::bench::thesis::ALL) => {
+            let names = crate::bench::thesis::EXPERIMENTS;
+            return run_group(&args, crate::bench::thesis::ALL, &names);
+        }
+        Some(crate::bench::sweep::ALL) => {
+            let names: Vec<&str> = crate::bench::sweep::EXPERIMENTS
+                .into_iter()
+                .chain(crate::bench::thesis::EXPERIMENTS)
+                .collect();
+            return run_group(&args, crate::bench::sweep::ALL, &names);
+        }
+        Some(list) if list.contains(',') => {
+            let names: Vec<&str> = list.split(',').map(str::trim).collect();
+            let group = |n: &str| n == crate::bench::sweep::ALL || n == crate::bench::thesis::ALL;
+            let bad = names
+                .iter()
+                .enumerate()
+                .find(|&(i, n)| n.is_empty() || group(n) || names[..i].contains(n));
+            if let Some((_, bad)) = bad {
+                return fail(&format!(
+                    "--experiment: a list names single experiments, each once; got '{bad}' in \
+                     '{list}'"
+                ));
+            }
+            return run_group(&args, "pool", &names);
+        }
+        _ => {}
     }
     let sweep = match sweep_from_args(&args) {
         Ok(s) => s,
@@ -187,42 +216,93 @@ pub fn run(args: Args) -> ExitCode {
     }
 }
 
-/// `--experiment thesis-all`: every thesis experiment in turn, each into `OUT/NAME` (default
-/// OUT: `bench-results/thesis-all`), then `OUT/thesis.md` with all their side-by-side tables.
-fn run_thesis_all(args: &Args) -> ExitCode {
+/// `--experiment thesis-all`, `all` or a list `A,B,...`: the experiments `names`, each into
+/// `OUT/NAME` (default OUT: `bench-results/GROUP`, GROUP `pool` for a list), then
+/// `OUT/thesis.md` with the side-by-side tables of the thesis's among them. Their runs form
+/// one pool ([`b::run_pooled`]); with `--shard` each experiment runs its own shard in turn
+/// instead, to be merged experiment by experiment.
+fn run_group(args: &Args, group: &str, names: &[&str]) -> ExitCode {
     let base = args
         .out
         .clone()
-        .unwrap_or_else(|| Path::new("bench-results").join(crate::bench::thesis::ALL));
-    let start = std::time::Instant::now();
-    let mut index = String::from("# The thesis reproduced side by side (`thesis-all`)\n");
-    let mut status = ExitCode::SUCCESS;
-    for name in crate::bench::thesis::EXPERIMENTS {
-        let sub = Args {
+        .unwrap_or_else(|| Path::new("bench-results").join(group));
+    // Every experiment's sweep first: a bad name or option stops the group before any run.
+    let mut sweeps = Vec::with_capacity(names.len());
+    for name in names {
+        let one = Args {
             experiment: Some(name.to_string()),
-            out: Some(base.join(name)),
             ..args.clone()
         };
-        let code = run(sub);
-        if code != ExitCode::SUCCESS {
-            status = code;
+        match sweep_from_args(&one) {
+            Ok(s) => sweeps.push(s),
+            Err(e) => return fail(&e),
         }
-        if code == ExitCode::from(2) {
-            return code;
+    }
+    let start = std::time::Instant::now();
+    let mut status = ExitCode::SUCCESS;
+    if args.shard.is_some() {
+        for name in names {
+            let sub = Args {
+                experiment: Some(name.to_string()),
+                out: Some(base.join(name)),
+                ..args.clone()
+            };
+            let code = run(sub);
+            if code != ExitCode::SUCCESS {
+                status = code;
+            }
+            if code == ExitCode::from(2) {
+                return code;
+            }
         }
-        if let Ok(md) = std::fs::read_to_string(base.join(name).join("thesis.md")) {
-            index.push('\n');
-            index += &md.replacen("# ", "## ", 1).replace("\n## ", "\n### ");
+    } else {
+        let mode = if args.plain {
+            ProgressMode::Lines
+        } else {
+            ProgressMode::auto()
+        };
+        match b::run_pooled(&sweeps, args.jobs, &base, &crate::bench::sim::run, mode) {
+            Ok(p) => {
+                eprintln!(
+                    "papillon-sim bench: {group}: {} runs, {} of them distinct and run",
+                    p.runs, p.distinct
+                );
+                if p.failed > 0 {
+                    eprintln!(
+                        "papillon-sim bench: {} runs failed (see the status column of each \
+                         experiment's results.csv)",
+                        p.failed
+                    );
+                    status = ExitCode::from(1);
+                }
+            }
+            Err(e) => return fail(&e),
         }
     }
     let wall = start.elapsed().as_secs_f64();
-    index += &format!("\nWall time of the whole reproduction: {wall:.0} s.\n");
-    let path = base.join("thesis.md");
-    if let Err(e) = std::fs::write(&path, index) {
-        return fail(&format!("{}: cannot write: {e}", path.display()));
+    let mut index = format!("# The thesis reproduced side by side (`{group}`)\n");
+    let mut thesis_tables = false;
+    for name in names {
+        if let Ok(md) = std::fs::read_to_string(base.join(name).join("thesis.md")) {
+            index.push('\n');
+            index += &md.replacen("# ", "## ", 1).replace("\n## ", "\n### ");
+            thesis_tables = true;
+        }
     }
-    eprintln!("papillon-sim bench: thesis-all took {wall:.0} s");
-    println!("{}", path.display());
+    if thesis_tables {
+        index += &format!("\nWall time of `{group}`: {wall:.0} s.\n");
+        let path = base.join("thesis.md");
+        if let Err(e) = std::fs::write(&path, index) {
+            return fail(&format!("{}: cannot write: {e}", path.display()));
+        }
+    }
+    eprintln!("papillon-sim bench: {group} took {wall:.0} s");
+    // thesis-all's result is its side-by-side tables; all's, the directory of every table.
+    if group == crate::bench::thesis::ALL {
+        println!("{}", base.join("thesis.md").display());
+    } else {
+        println!("{}", base.display());
+    }
     status
 }
 
