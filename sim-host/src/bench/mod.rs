@@ -69,6 +69,25 @@ pub fn write_sweep_file(dir: &Path, sweep: &Sweep, shard: Shard) -> Result<(), S
     fs::write(&path, text + "\n").map_err(|e| format!("{}: cannot write: {e}", path.display()))
 }
 
+/// Creates (or empties) a file of run records.
+fn create_records_file(path: &Path) -> Result<fs::File, String> {
+    OpenOptions::new()
+        .create(true)
+        .write(true)
+        .truncate(true)
+        .open(path)
+        .map_err(|e| format!("{}: cannot write: {e}", path.display()))
+}
+
+/// The worker threads `--jobs` asks for (0: one per core).
+fn worker_count(jobs: usize) -> usize {
+    if jobs == 0 {
+        rayon::current_num_threads()
+    } else {
+        jobs
+    }
+}
+
 /// Runs the sweep's shard with `run` into `out`; returns the number of failed runs.
 pub fn run_sweep(
     sweep: &Sweep,
@@ -84,24 +103,14 @@ pub fn run_sweep(
         .into_iter()
         .filter(|s| shard.contains(s.index))
         .collect();
-    let runs_path = out.join(RUNS_FILE);
-    let file = OpenOptions::new()
-        .create(true)
-        .write(true)
-        .truncate(true)
-        .open(&runs_path)
-        .map_err(|e| format!("{}: cannot write: {e}", runs_path.display()))?;
+    let file = create_records_file(&out.join(RUNS_FILE))?;
     if mode != ProgressMode::Quiet {
         eprintln!(
             "bench {}: {} runs (shard {shard} of a sweep of {}), {} worker threads, into {}",
             sweep.name,
             specs.len(),
             sweep.len(),
-            if jobs == 0 {
-                rayon::current_num_threads()
-            } else {
-                jobs
-            },
+            worker_count(jobs),
             out.display()
         );
     }
@@ -165,24 +174,14 @@ pub fn run_pooled(
     for sweep in sweeps {
         write_sweep_file(&out.join(&sweep.name), sweep, Shard::ALL)?;
     }
-    let pool_path = out.join(POOL_FILE);
-    let file = OpenOptions::new()
-        .create(true)
-        .write(true)
-        .truncate(true)
-        .open(&pool_path)
-        .map_err(|e| format!("{}: cannot write: {e}", pool_path.display()))?;
+    let file = create_records_file(&out.join(POOL_FILE))?;
     let runs = asked.iter().map(Vec::len).sum();
     if mode != ProgressMode::Quiet {
         eprintln!(
             "bench: {} experiments, {runs} runs of which {} distinct, {} worker threads, into {}",
             sweeps.len(),
             pool.len(),
-            if jobs == 0 {
-                rayon::current_num_threads()
-            } else {
-                jobs
-            },
+            worker_count(jobs),
             out.display()
         );
     }
