@@ -545,6 +545,15 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                     w.len()
                 }
                 Some(Err(status)) => return Err(status),
+                // A target the robot's distance field does not reach cannot be reached from
+                // the previous target either, which the field reaches: the same moves on the
+                // same layer. Answered here, the planner does not flood the whole reachable
+                // region to find no path (the thesis objective's targets fall anywhere); the
+                // field, swept lazily, settles that region at most once per decision.
+                None if k > 0 && !self.field.is_reachable(cell) => {
+                    self.legs.put(prev, cell, Err(CandidateStatus::Unreachable));
+                    return Err(CandidateStatus::Unreachable);
+                }
                 None => {
                     let planned = if k == 0 {
                         self.field.path_to(cell, &mut self.leg)

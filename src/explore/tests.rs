@@ -1419,3 +1419,54 @@ fn a_door_shut_on_the_map_is_looked_at_from_its_mouth_once() {
     // A wall without a door: no Free passage, nothing to look at.
     assert_eq!(shut_mouth_of(&door_grid(false, false), &[]), None);
 }
+
+/// A* that counts the searches it is asked for.
+struct CountingAStar {
+    astar: Box<AStar<CELLS>>,
+    searches: u32,
+}
+
+impl crate::planner::Planner<CELLS> for CountingAStar {
+    fn plan(
+        &mut self,
+        trav: &Trav,
+        start: Cell,
+        goal: Cell,
+        path: &mut [Cell],
+    ) -> Result<crate::planner::PlannedPath, crate::planner::PlanError> {
+        self.searches += 1;
+        self.astar.find_path(trav, start, goal, path)
+    }
+}
+
+#[test]
+fn a_leg_to_a_target_the_robot_cannot_reach_is_refused_without_a_search() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut field = DistanceField::<CELLS>::new_boxed();
+    let mut planner = CountingAStar {
+        astar: AStar::new_boxed(),
+        searches: 0,
+    };
+    let mut stamps = vec![0u32; CELLS];
+    let mut obj = ExploreObjective::new(&mut field, &mut planner, &mut stamps);
+    let config = ExploreConfig {
+        objective: ObjectiveKind::Thesis,
+        targets: 2,
+        ..ExploreConfig::default()
+    };
+    obj.prepare(&req, &config).unwrap();
+    // The second target inside the closed box: passable (Unknown, clear of the ring's
+    // inflation) but walled off, so the leg to it is refused before any search.
+    let inside_box = Point2::new(5.15, 3.15);
+    let g = *grid.geometry();
+    assert!(trav.is_passable(g.cell_at(inside_box).unwrap()));
+    let e = obj.evaluate_targets(&req, &[Point2::new(1.5, 1.5), inside_box]);
+    assert_eq!(e.status, CandidateStatus::Unreachable);
+    // A reachable second target is the planner's to join.
+    let e = obj.evaluate_targets(&req, &[Point2::new(1.5, 1.5), Point2::new(3.0, 2.0)]);
+    assert_eq!(e.status, CandidateStatus::Feasible);
+    assert_eq!(planner.searches, 1);
+}
