@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use crate::bench::exec::ProgressMode;
 use crate::bench::select::{Overrides, SelectError, Source, ThesisMaps, select};
-use crate::bench::sweep::Sweep;
+use crate::bench::sweep::{Shard, Sweep};
 use crate::bench::{self as b, run_sweep};
 
 /// Arguments of `papillon-sim bench`.
@@ -188,19 +188,22 @@ pub fn run(args: Args) -> ExitCode {
         Ok(x) => x,
         Err(e) => return fail(&e),
     };
-    let mode = if args.plain {
+    run_one(&sweep, shard, args.jobs, &out, progress_mode(&args))
+}
+
+/// A terminal's progress bar, or one line per run with `--plain`.
+fn progress_mode(args: &Args) -> ProgressMode {
+    if args.plain {
         ProgressMode::Lines
     } else {
         ProgressMode::auto()
-    };
-    match run_sweep(
-        &sweep,
-        shard,
-        args.jobs,
-        &out,
-        &crate::bench::sim::run,
-        mode,
-    ) {
+    }
+}
+
+/// Runs one experiment's `shard` into `out` and reports where its summary is (status 0), how
+/// many runs failed (1) or why it could not run (2).
+fn run_one(sweep: &Sweep, shard: Shard, jobs: usize, out: &Path, mode: ProgressMode) -> ExitCode {
+    match run_sweep(sweep, shard, jobs, out, &crate::bench::sim::run, mode) {
         Ok(0) => {
             println!("{}", out.join("summary.md").display());
             ExitCode::SUCCESS
@@ -240,14 +243,14 @@ fn run_group(args: &Args, group: &str, names: &[&str]) -> ExitCode {
     }
     let start = std::time::Instant::now();
     let mut status = ExitCode::SUCCESS;
-    if args.shard.is_some() {
-        for name in names {
-            let sub = Args {
-                experiment: Some(name.to_string()),
-                out: Some(base.join(name)),
-                ..args.clone()
-            };
-            let code = run(sub);
+    let mode = progress_mode(args);
+    if let Some(text) = args.shard.as_deref() {
+        let shard = match Shard::parse(text) {
+            Ok(s) => s,
+            Err(e) => return fail(&e),
+        };
+        for sweep in &sweeps {
+            let code = run_one(sweep, shard, args.jobs, &base.join(&sweep.name), mode);
             if code != ExitCode::SUCCESS {
                 status = code;
             }
@@ -256,11 +259,6 @@ fn run_group(args: &Args, group: &str, names: &[&str]) -> ExitCode {
             }
         }
     } else {
-        let mode = if args.plain {
-            ProgressMode::Lines
-        } else {
-            ProgressMode::auto()
-        };
         match b::run_pooled(&sweeps, args.jobs, &base, &crate::bench::sim::run, mode) {
             Ok(p) => {
                 eprintln!(
