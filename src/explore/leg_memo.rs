@@ -8,51 +8,92 @@
 //! instead of searched again, which gives the same waypoints, so the same evaluation. A
 //! direct-mapped table (one slot per hash of the pair; a new leg replaces the slot's old one);
 //! a generation number clears it in O(1) per decision. Legs with more waypoints than a slot
-//! holds are not remembered.
+//! holds are not remembered. An objective with a visibility cache (every mission's) uses the
+//! larger table the cache carries on the heap ([`DECISION_LEG_SLOTS`]); one without keeps a
+//! small one in itself ([`LEG_SLOTS`]).
 
 use crate::geometry::Point2;
 use crate::grid::Cell;
 
 use super::evaluation::CandidateStatus;
 
-/// Slots of the table.
+/// Slots of the table an objective keeps in itself (without a visibility cache).
 pub const LEG_SLOTS: usize = 64;
+/// Slots of the table a visibility cache carries for the decisions it serves
+/// ([`super::view_cache::ViewCache`], on the heap): a population of 20 proposing tours of three
+/// targets for 30 generations plans a few thousand distinct legs per decision, which 64
+/// slots mostly forget before they come round again (docs/benchmarks.md, "Legs remembered
+/// over the whole decision").
+pub const DECISION_LEG_SLOTS: usize = 4096;
 /// Most waypoints of a remembered leg.
 pub const LEG_WAYPOINTS: usize = 16;
 
-#[derive(Clone, Copy, Debug)]
+/// One remembered leg. All zeros is an empty slot (generation 0 is never current).
+#[derive(Clone, Copy, Debug, bytemuck::Zeroable)]
 struct Entry {
     generation: u32,
     from: Cell,
     to: Cell,
-    /// The waypoints' count, or why the leg could not be planned.
-    outcome: Result<u8, CandidateStatus>,
+    /// The waypoints' count when `status` is [`FEASIBLE`].
+    count: u8,
+    /// Why the leg could not be planned ([`status_code`]), or [`FEASIBLE`].
+    status: u8,
     waypoints: [Point2; LEG_WAYPOINTS],
+}
+
+/// The code of a planned leg.
+const FEASIBLE: u8 = 0;
+
+fn status_code(s: CandidateStatus) -> u8 {
+    match s {
+        CandidateStatus::Feasible => FEASIBLE,
+        CandidateStatus::OutOfBounds => 1,
+        CandidateStatus::Blocked => 2,
+        CandidateStatus::Unreachable => 3,
+        CandidateStatus::OverBudget => 4,
+        CandidateStatus::TooLong => 5,
+    }
+}
+
+fn status_of(code: u8) -> CandidateStatus {
+    match code {
+        1 => CandidateStatus::OutOfBounds,
+        2 => CandidateStatus::Blocked,
+        3 => CandidateStatus::Unreachable,
+        4 => CandidateStatus::OverBudget,
+        _ => CandidateStatus::TooLong,
+    }
 }
 
 const EMPTY: Entry = Entry {
     generation: 0,
     from: Cell::new(0, 0),
     to: Cell::new(0, 0),
-    outcome: Ok(0),
+    count: 0,
+    status: FEASIBLE,
     waypoints: [Point2::new(0.0, 0.0); LEG_WAYPOINTS],
 };
 
 /// A leg as remembered: its pruned waypoints, or why it could not be planned.
 pub(crate) type Leg<'a> = Result<&'a [Point2], CandidateStatus>;
 
-/// Remembered legs of the current decision.
-#[derive(Clone, Debug)]
-pub(crate) struct LegMemo {
+/// Remembered legs of the current decision, in `SLOTS` slots (a power of two, at most 2^16).
+#[derive(Clone, Debug, bytemuck::Zeroable)]
+pub(crate) struct LegMemo<const SLOTS: usize> {
+    /// Current generation; 0 (all zeros) until the first [`Self::clear`].
     generation: u32,
-    entries: [Entry; LEG_SLOTS],
+    entries: [Entry; SLOTS],
 }
 
-impl LegMemo {
+impl<const SLOTS: usize> LegMemo<SLOTS> {
+    /// The slot is taken from the hash's upper 16 bits.
+    const POWER_OF_TWO: () = assert!(SLOTS.is_power_of_two() && SLOTS <= 1 << 16);
+
     pub(crate) const fn new() -> Self {
+        let () = Self::POWER_OF_TWO;
         Self {
             generation: 1,
-            entries: [EMPTY; LEG_SLOTS],
+            entries: [EMPTY; SLOTS],
         }
     }
 
@@ -73,25 +114,35 @@ impl LegMemo {
             .wrapping_add((from.row as u32).wrapping_mul(0x85EB_CA77))
             .wrapping_add((to.col as u32).wrapping_mul(0xC2B2_AE3D))
             .wrapping_add((to.row as u32).wrapping_mul(0x27D4_EB2F));
-        (h >> 16) as usize % LEG_SLOTS
+        (h >> 16) as usize & (SLOTS - 1)
     }
 
     /// The leg from `from` to `to`, if remembered in this decision.
     pub(crate) fn get(&self, from: Cell, to: Cell) -> Option<Leg<'_>> {
         let e = &self.entries[Self::slot(from, to)];
-        if e.generation != self.generation || e.from != from || e.to != to {
+        if self.generation == 0 || e.generation != self.generation || e.from != from || e.to != to {
             return None;
         }
-        Some(e.outcome.map(|n| &e.waypoints[..usize::from(n)]))
+        Some(if e.status == FEASIBLE {
+            Ok(&e.waypoints[..usize::from(e.count)])
+        } else {
+            Err(status_of(e.status))
+        })
     }
 
     /// Remembers the leg from `from` to `to` (replacing the slot's leg); a leg with more than
-    /// [`LEG_WAYPOINTS`] waypoints is not remembered.
+    /// [`LEG_WAYPOINTS`] waypoints is not remembered, nor anything before the first
+    /// [`Self::clear`] of a zeroed table.
     pub(crate) fn put(&mut self, from: Cell, to: Cell, leg: Leg<'_>) {
-        let outcome = match leg {
+        if self.generation == 0 {
+            return;
+        }
+        let (count, status) = match leg {
             Ok(w) if w.len() > LEG_WAYPOINTS => return,
-            Ok(w) => Ok(w.len() as u8),
-            Err(s) => Err(s),
+            Ok(w) => (w.len() as u8, FEASIBLE),
+            // A leg is remembered as planned or not; `Feasible` is no reason for failing.
+            Err(CandidateStatus::Feasible) => return,
+            Err(s) => (0, status_code(s)),
         };
         let generation = self.generation;
         let e = &mut self.entries[Self::slot(from, to)];
@@ -101,7 +152,8 @@ impl LegMemo {
         e.generation = generation;
         e.from = from;
         e.to = to;
-        e.outcome = outcome;
+        e.count = count;
+        e.status = status;
     }
 }
 
@@ -111,7 +163,7 @@ mod tests {
 
     #[test]
     fn remembers_legs_of_this_decision_only() {
-        let mut m = LegMemo::new();
+        let mut m = LegMemo::<LEG_SLOTS>::new();
         let (a, b, c) = (Cell::new(1, 2), Cell::new(3, 4), Cell::new(5, 6));
         let w = [Point2::new(0.1, 0.2), Point2::new(0.3, 0.4)];
         assert!(m.get(a, b).is_none());

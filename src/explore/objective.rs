@@ -106,7 +106,7 @@ use crate::sensor::LaserConfig;
 use crate::units;
 
 use super::evaluation::{CandidateStatus, Evaluation, WORST_FITNESS};
-use super::leg_memo::LegMemo;
+use super::leg_memo::{LEG_SLOTS, Leg, LegMemo};
 use super::memo::EvalMemo;
 use super::reachable::ReachableViewpoints;
 use super::tour::FrontierTour;
@@ -162,8 +162,9 @@ pub struct ExploreObjective<'m, const N: usize, P: Planner<N> = AStar<N>> {
     budget_steps: f32,
     config: ExploreConfig,
     memo: EvalMemo,
-    /// Legs between targets planned in this decision.
-    legs: LegMemo,
+    /// Legs between targets planned in this decision, when there is no visibility cache
+    /// (whose larger table serves otherwise: [`remembered_leg`]).
+    legs: LegMemo<LEG_SLOTS>,
     views: Option<&'m mut ViewCache>,
     cached: bool,
     reachable: ReachableViewpoints,
@@ -295,6 +296,9 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         self.config = *config;
         self.memo.clear();
         self.legs.clear();
+        if let Some(v) = self.views.as_deref_mut() {
+            v.legs.clear();
+        }
         let efficient = predict && config.objective == ObjectiveKind::Efficient;
         self.set_back_plans = efficient && config.setback_m > 0.0;
         self.turnable_ends = efficient;
@@ -535,7 +539,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             let remembered = if k == 0 {
                 None
             } else {
-                self.legs.get(prev, cell)
+                remembered_leg(&self.views, &self.legs, prev, cell)
             };
             let n = match remembered {
                 Some(Ok(w)) => {
@@ -551,7 +555,13 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                 // region to find no path (the thesis objective's targets fall anywhere); the
                 // field, swept lazily, settles that region at most once per decision.
                 None if k > 0 && !self.field.is_reachable(cell) => {
-                    self.legs.put(prev, cell, Err(CandidateStatus::Unreachable));
+                    remember_leg(
+                        &mut self.views,
+                        &mut self.legs,
+                        prev,
+                        cell,
+                        Err(CandidateStatus::Unreachable),
+                    );
                     return Err(CandidateStatus::Unreachable);
                 }
                 None => {
@@ -570,7 +580,13 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                         Ok(p) => p,
                         Err(status) => {
                             if k > 0 {
-                                self.legs.put(prev, cell, Err(status));
+                                remember_leg(
+                                    &mut self.views,
+                                    &mut self.legs,
+                                    prev,
+                                    cell,
+                                    Err(status),
+                                );
                             }
                             return Err(status);
                         }
@@ -582,7 +598,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                     }
                     .map_err(|_| CandidateStatus::TooLong)?;
                     if k > 0 {
-                        self.legs.put(prev, cell, Ok(&out[..n]));
+                        remember_leg(&mut self.views, &mut self.legs, prev, cell, Ok(&out[..n]));
                     }
                     n
                 }
@@ -937,5 +953,33 @@ impl<const N: usize, P: Planner<N>> ExploreObjective<'_, N, P> {
         let h = &history[..history.len().min(super::MAX_DECISION_HISTORY)];
         d.history.extend_from_slice(h).ok()?;
         Some(d)
+    }
+}
+
+/// The leg from `from` to `to` if this decision planned it already: in the visibility cache's
+/// table when there is a cache, else in the objective's own.
+fn remembered_leg<'a>(
+    views: &'a Option<&mut ViewCache>,
+    own: &'a LegMemo<LEG_SLOTS>,
+    from: Cell,
+    to: Cell,
+) -> Option<Leg<'a>> {
+    match views.as_deref() {
+        Some(v) => v.legs.get(from, to),
+        None => own.get(from, to),
+    }
+}
+
+/// Remembers a leg where [`remembered_leg`] looks for it.
+fn remember_leg(
+    views: &mut Option<&mut ViewCache>,
+    own: &mut LegMemo<LEG_SLOTS>,
+    from: Cell,
+    to: Cell,
+    leg: Leg<'_>,
+) {
+    match views.as_deref_mut() {
+        Some(v) => v.legs.put(from, to, leg),
+        None => own.put(from, to, leg),
     }
 }

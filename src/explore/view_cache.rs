@@ -49,6 +49,8 @@ use crate::geometry::{Point2, Pose2};
 use crate::grid::{Cell, GridGeometry, OccupancyGrid};
 use crate::math;
 use crate::planner::BlockedBoxes;
+
+use super::leg_memo::{DECISION_LEG_SLOTS, LegMemo};
 use crate::raycast;
 use crate::sensor::{LaserConfig, MAX_BEAMS};
 
@@ -172,6 +174,8 @@ pub struct ViewCache {
     stats: ViewCacheStats,
     /// Blocked-cell counts of the decision's traversability layer.
     pub(crate) boxes: BlockedBoxes,
+    /// The legs the decision planned between targets (the objective clears it per decision).
+    pub(crate) legs: LegMemo<DECISION_LEG_SLOTS>,
 }
 
 impl core::fmt::Debug for ViewCache {
@@ -341,6 +345,7 @@ impl ViewCache {
                 unobstructed: 0,
             },
             boxes: BlockedBoxes::new(),
+            legs: LegMemo::new(),
         }
     }
 
