@@ -39,11 +39,12 @@
 //! **Cache**: an open-addressing table keyed by (cell, direction), cleared in O(1) per decision
 //! by a generation number. When the table or its arena is full, a window is computed into
 //! scratch space and used without being stored: the same result, only slower. Nothing is
-//! allocated; every capacity is a constant (16.0 MB in all, built on the heap by
+//! allocated; every capacity is a constant (16.7 MB in all, built on the heap by
 //! [`ViewCache::new_boxed`] on a host).
 //!
 //! The cache also carries the decision's [`BlockedBoxes`], with which the objective prunes
-//! its paths to waypoints without walking every line of sight (same waypoints).
+//! its paths to waypoints without walking every line of sight (same waypoints), and the legs
+//! it planned between targets ([`super::leg_memo`]).
 
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{Cell, GridGeometry, OccupancyGrid};
@@ -291,7 +292,7 @@ const EMPTY_SLOT: Slot = Slot {
 };
 
 impl ViewCache {
-    /// An empty cache, for a `static` without an allocator (16.0 MB: on a host prefer
+    /// An empty cache, for a `static` without an allocator (16.7 MB: on a host prefer
     /// [`Self::new_boxed`]).
     pub const fn new() -> Self {
         Self {
@@ -349,7 +350,7 @@ impl ViewCache {
         }
     }
 
-    /// An empty cache built directly on the heap (16.0 MB).
+    /// An empty cache built directly on the heap (16.7 MB).
     #[cfg(feature = "std")]
     pub fn new_boxed() -> std::boxed::Box<Self> {
         let mut cache = crate::heap::boxed_zeroed::<Self>();

@@ -191,7 +191,7 @@ impl<const N: usize> SharedMap<N> {
 }
 
 /// Decision working memory: distance field, path planner, visited-cell stamps, the visibility
-/// cache of the exploration objective (16.0 MB, whatever `N`), frontier search memory and the
+/// cache of the exploration objective (16.7 MB, whatever `N`), frontier search memory and the
 /// memory of the search for passages shut on the map ([`MouthSearch`]) and the map window
 /// saved while a robot's body is lifted and the others stamped (213 KB). One
 /// per process is enough, as robots decide one after the other.
@@ -227,7 +227,7 @@ impl<const N: usize> Default for Workspace<N> {
 
 impl<const N: usize> Workspace<N> {
     /// Working memory with A*, built on the stack (or in a `static`); about 90 bytes per
-    /// cell plus the 16.0 MB visibility cache.
+    /// cell plus the 16.7 MB visibility cache.
     pub const fn new() -> Self {
         Self::with_planner(AStar::new())
     }
