@@ -1,8 +1,9 @@
-//! Legs between two targets remembered within a decision, keyed by their end cells.
+//! Legs remembered within a decision, keyed by their end cells.
 //!
-//! Under the long-term strategy each candidate is a tour of several targets; every leg after
-//! the first is an A* search from one target's cell to the next ([`crate::planner::Planner`])
-//! and a pruning of its cells to waypoints. Within one decision the map does not change, so a
+//! Under the long-term strategy each candidate is a tour of several targets; its first leg is
+//! the path on the decision's distance field from the robot's cell, every leg after it an A*
+//! search from one target's cell to the next ([`crate::planner::Planner`]), and each is pruned
+//! to waypoints. Within one decision the map does not change, so a
 //! leg's waypoints depend only on its two cells, and a converging population proposes the same
 //! pairs of (snapped) cells again and again: the pruned waypoints are remembered and copied
 //! instead of searched again, which gives the same waypoints, so the same evaluation. A
@@ -34,6 +35,9 @@ struct Entry {
     generation: u32,
     from: Cell,
     to: Cell,
+    /// The leg starts at the robot (planned on the decision's distance field), not at a
+    /// target (planned by A*): the two may differ between the same cells.
+    from_robot: bool,
     /// The waypoints' count when `status` is [`FEASIBLE`].
     count: u8,
     /// Why the leg could not be planned ([`status_code`]), or [`FEASIBLE`].
@@ -69,6 +73,7 @@ const EMPTY: Entry = Entry {
     generation: 0,
     from: Cell::new(0, 0),
     to: Cell::new(0, 0),
+    from_robot: false,
     count: 0,
     status: FEASIBLE,
     waypoints: [Point2::new(0.0, 0.0); LEG_WAYPOINTS],
@@ -117,10 +122,16 @@ impl<const SLOTS: usize> LegMemo<SLOTS> {
         (h >> 16) as usize & (SLOTS - 1)
     }
 
-    /// The leg from `from` to `to`, if remembered in this decision.
-    pub(crate) fn get(&self, from: Cell, to: Cell) -> Option<Leg<'_>> {
+    /// The leg from `from` to `to` (from the robot's cell on the distance field if
+    /// `from_robot`), if remembered in this decision.
+    pub(crate) fn get(&self, from: Cell, to: Cell, from_robot: bool) -> Option<Leg<'_>> {
         let e = &self.entries[Self::slot(from, to)];
-        if self.generation == 0 || e.generation != self.generation || e.from != from || e.to != to {
+        if self.generation == 0
+            || e.generation != self.generation
+            || e.from != from
+            || e.to != to
+            || e.from_robot != from_robot
+        {
             return None;
         }
         Some(if e.status == FEASIBLE {
@@ -133,7 +144,7 @@ impl<const SLOTS: usize> LegMemo<SLOTS> {
     /// Remembers the leg from `from` to `to` (replacing the slot's leg); a leg with more than
     /// [`LEG_WAYPOINTS`] waypoints is not remembered, nor anything before the first
     /// [`Self::clear`] of a zeroed table.
-    pub(crate) fn put(&mut self, from: Cell, to: Cell, leg: Leg<'_>) {
+    pub(crate) fn put(&mut self, from: Cell, to: Cell, from_robot: bool, leg: Leg<'_>) {
         if self.generation == 0 {
             return;
         }
@@ -152,6 +163,7 @@ impl<const SLOTS: usize> LegMemo<SLOTS> {
         e.generation = generation;
         e.from = from;
         e.to = to;
+        e.from_robot = from_robot;
         e.count = count;
         e.status = status;
     }
@@ -166,16 +178,23 @@ mod tests {
         let mut m = LegMemo::<LEG_SLOTS>::new();
         let (a, b, c) = (Cell::new(1, 2), Cell::new(3, 4), Cell::new(5, 6));
         let w = [Point2::new(0.1, 0.2), Point2::new(0.3, 0.4)];
-        assert!(m.get(a, b).is_none());
-        m.put(a, b, Ok(&w));
-        m.put(b, c, Err(CandidateStatus::Unreachable));
-        assert_eq!(m.get(a, b), Some(Ok(&w[..])));
-        assert!(m.get(b, a).is_none(), "a leg is directed");
-        assert_eq!(m.get(b, c), Some(Err(CandidateStatus::Unreachable)));
+        assert!(m.get(a, b, false).is_none());
+        m.put(a, b, false, Ok(&w));
+        m.put(b, c, false, Err(CandidateStatus::Unreachable));
+        assert_eq!(m.get(a, b, false), Some(Ok(&w[..])));
+        assert!(m.get(b, a, false).is_none(), "a leg is directed");
+        assert!(
+            m.get(a, b, true).is_none(),
+            "a leg from the robot is planned another way"
+        );
+        assert_eq!(m.get(b, c, false), Some(Err(CandidateStatus::Unreachable)));
         m.clear();
-        assert!(m.get(a, b).is_none() && m.get(b, c).is_none());
+        assert!(m.get(a, b, false).is_none() && m.get(b, c, false).is_none());
         let long = [Point2::new(0.0, 0.0); LEG_WAYPOINTS + 1];
-        m.put(a, c, Ok(&long));
-        assert!(m.get(a, c).is_none(), "too many waypoints to remember");
+        m.put(a, c, false, Ok(&long));
+        assert!(
+            m.get(a, c, false).is_none(),
+            "too many waypoints to remember"
+        );
     }
 }

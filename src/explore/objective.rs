@@ -536,11 +536,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
             let out = &mut self.waypoints[self.waypoint_len..];
             // A leg between two targets planned earlier in this decision: the same
             // waypoints, copied (see `leg_memo`).
-            let remembered = if k == 0 {
-                None
-            } else {
-                remembered_leg(&self.views, &self.legs, prev, cell)
-            };
+            let remembered = remembered_leg(&self.views, &self.legs, prev, cell, k == 0);
             let n = match remembered {
                 Some(Ok(w)) => {
                     out.get_mut(..w.len())
@@ -558,8 +554,7 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                     remember_leg(
                         &mut self.views,
                         &mut self.legs,
-                        prev,
-                        cell,
+                        (prev, cell, false),
                         Err(CandidateStatus::Unreachable),
                     );
                     return Err(CandidateStatus::Unreachable);
@@ -579,15 +574,12 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                     let planned = match planned {
                         Ok(p) => p,
                         Err(status) => {
-                            if k > 0 {
-                                remember_leg(
-                                    &mut self.views,
-                                    &mut self.legs,
-                                    prev,
-                                    cell,
-                                    Err(status),
-                                );
-                            }
+                            remember_leg(
+                                &mut self.views,
+                                &mut self.legs,
+                                (prev, cell, k == 0),
+                                Err(status),
+                            );
                             return Err(status);
                         }
                     };
@@ -597,9 +589,12 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                         None => prune_to_waypoints(req.trav, leg, out),
                     }
                     .map_err(|_| CandidateStatus::TooLong)?;
-                    if k > 0 {
-                        remember_leg(&mut self.views, &mut self.legs, prev, cell, Ok(&out[..n]));
-                    }
+                    remember_leg(
+                        &mut self.views,
+                        &mut self.legs,
+                        (prev, cell, k == 0),
+                        Ok(&out[..n]),
+                    );
                     n
                 }
             };
@@ -956,30 +951,31 @@ impl<const N: usize, P: Planner<N>> ExploreObjective<'_, N, P> {
     }
 }
 
-/// The leg from `from` to `to` if this decision planned it already: in the visibility cache's
-/// table when there is a cache, else in the objective's own.
+/// The leg from `from` to `to` (from the robot's cell if `from_robot`) if this decision
+/// planned it already: in the visibility cache's table when there is a cache, else in the
+/// objective's own.
 fn remembered_leg<'a>(
     views: &'a Option<&mut ViewCache>,
     own: &'a LegMemo<LEG_SLOTS>,
     from: Cell,
     to: Cell,
+    from_robot: bool,
 ) -> Option<Leg<'a>> {
     match views.as_deref() {
-        Some(v) => v.legs.get(from, to),
-        None => own.get(from, to),
+        Some(v) => v.legs.get(from, to, from_robot),
+        None => own.get(from, to, from_robot),
     }
 }
 
-/// Remembers a leg where [`remembered_leg`] looks for it.
+/// Remembers the leg `(from, to, from_robot)` where [`remembered_leg`] looks for it.
 fn remember_leg(
     views: &mut Option<&mut ViewCache>,
     own: &mut LegMemo<LEG_SLOTS>,
-    from: Cell,
-    to: Cell,
+    (from, to, from_robot): (Cell, Cell, bool),
     leg: Leg<'_>,
 ) {
     match views.as_deref_mut() {
-        Some(v) => v.legs.put(from, to, leg),
-        None => own.put(from, to, leg),
+        Some(v) => v.legs.put(from, to, from_robot, leg),
+        None => own.put(from, to, from_robot, leg),
     }
 }
