@@ -330,6 +330,12 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
         self.cached
     }
 
+    /// The planner of the legs between targets.
+    #[cfg(test)]
+    pub(crate) fn planner(&self) -> &P {
+        self.planner
+    }
+
     /// The visibility cache, if one was given.
     #[cfg(test)]
     pub(crate) fn view_cache(&self) -> Option<&ViewCache> {

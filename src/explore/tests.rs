@@ -1470,3 +1470,64 @@ fn a_leg_to_a_target_the_robot_cannot_reach_is_refused_without_a_search() {
     assert_eq!(e.status, CandidateStatus::Feasible);
     assert_eq!(planner.searches, 1);
 }
+
+#[test]
+fn a_decision_searches_each_leg_between_two_targets_once_even_past_a_hundred_legs() {
+    let grid = fixture_grid();
+    let trav = trav_of(&grid);
+    let laser = laser();
+    let req = request(&grid, &trav, &laser);
+    let mut field = DistanceField::<CELLS>::new_boxed();
+    let mut planner = CountingAStar {
+        astar: AStar::new_boxed(),
+        searches: 0,
+    };
+    let mut stamps = vec![0u32; CELLS];
+    let mut views = ViewCache::new_boxed();
+    let mut obj =
+        ExploreObjective::with_view_cache(&mut field, &mut planner, &mut stamps, &mut views);
+    let config = ExploreConfig {
+        objective: ObjectiveKind::Thesis,
+        targets: 2,
+        ..ExploreConfig::default()
+    };
+    obj.prepare(&req, &config).unwrap();
+    // 120 legs from one first target to second targets on a grid of free cells: more than
+    // the 64 slots an objective without a visibility cache keeps.
+    let first = Point2::new(1.5, 1.5);
+    let seconds: Vec<Point2> = (0..120)
+        .map(|k| {
+            Point2::new(
+                0.75 + 0.1 * (k % 12) as f32,
+                0.75 + 0.1 * (k / 12) as f32 + 1.0,
+            )
+        })
+        .collect();
+    let mut evaluations = Vec::new();
+    for &s in &seconds {
+        let e = obj.evaluate_targets(&req, &[first, s]);
+        assert_eq!(e.status, CandidateStatus::Feasible, "{s:?}");
+        evaluations.push((e, obj.waypoints().to_vec()));
+    }
+    let searches = planner_searches(&obj);
+    assert_eq!(
+        searches,
+        seconds.len() as u32,
+        "one search per distinct leg"
+    );
+    // The same candidates again: every leg remembered, the same evaluation and waypoints.
+    for (&s, (e, w)) in seconds.iter().zip(&evaluations) {
+        assert_eq!(obj.evaluate_targets(&req, &[first, s]), *e);
+        assert_eq!(obj.waypoints(), &w[..]);
+    }
+    assert_eq!(planner_searches(&obj), searches, "no leg searched twice");
+    // A new decision forgets them (the map may have changed).
+    obj.prepare(&req, &config).unwrap();
+    obj.evaluate_targets(&req, &[first, seconds[0]]);
+    assert_eq!(planner_searches(&obj), searches + 1);
+}
+
+/// The searches the counting planner of an objective made.
+fn planner_searches(obj: &ExploreObjective<'_, CELLS, CountingAStar>) -> u32 {
+    obj.planner().searches
+}
