@@ -162,8 +162,8 @@ pub struct ExploreObjective<'m, const N: usize, P: Planner<N> = AStar<N>> {
     budget_steps: f32,
     config: ExploreConfig,
     memo: EvalMemo,
-    /// Legs between targets planned in this decision, when there is no visibility cache
-    /// (whose larger table serves otherwise: [`remembered_leg`]).
+    /// Legs planned in this decision, when there is no visibility cache (whose larger table
+    /// serves otherwise: [`remembered_leg`]).
     legs: LegMemo<LEG_SLOTS>,
     views: Option<&'m mut ViewCache>,
     cached: bool,
@@ -540,8 +540,8 @@ impl<'m, const N: usize, P: Planner<N>> ExploreObjective<'m, N, P> {
                 self.target_len = k + 1;
             }
             let out = &mut self.waypoints[self.waypoint_len..];
-            // A leg between two targets planned earlier in this decision: the same
-            // waypoints, copied (see `leg_memo`).
+            // A leg planned earlier in this decision (a first leg apart from an A* leg
+            // between the same cells): the same waypoints, copied (see `leg_memo`).
             let remembered = remembered_leg(&self.views, &self.legs, prev, cell, k == 0);
             let n = match remembered {
                 Some(Ok(w)) => {
