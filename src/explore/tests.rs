@@ -1426,6 +1426,43 @@ struct CountingAStar {
     searches: u32,
 }
 
+/// Planner memory for an objective whose planner counts its searches.
+struct CountingMemory {
+    field: Box<DistanceField<CELLS>>,
+    planner: CountingAStar,
+    stamps: Vec<u32>,
+    views: Box<ViewCache>,
+}
+
+impl CountingMemory {
+    fn new() -> Self {
+        Self {
+            field: DistanceField::new_boxed(),
+            planner: CountingAStar {
+                astar: AStar::new_boxed(),
+                searches: 0,
+            },
+            stamps: vec![0; CELLS],
+            views: ViewCache::new_boxed(),
+        }
+    }
+
+    /// The objective with the cached gain model (and the cache's table of legs).
+    fn objective(&mut self) -> ExploreObjective<'_, CELLS, CountingAStar> {
+        ExploreObjective::with_view_cache(
+            &mut self.field,
+            &mut self.planner,
+            &mut self.stamps,
+            &mut self.views,
+        )
+    }
+
+    /// The objective with the traced gain model (and its own table of legs).
+    fn traced(&mut self) -> ExploreObjective<'_, CELLS, CountingAStar> {
+        ExploreObjective::new(&mut self.field, &mut self.planner, &mut self.stamps)
+    }
+}
+
 impl crate::planner::Planner<CELLS> for CountingAStar {
     fn plan(
         &mut self,
@@ -1445,13 +1482,8 @@ fn a_leg_to_a_target_the_robot_cannot_reach_is_refused_without_a_search() {
     let trav = trav_of(&grid);
     let laser = laser();
     let req = request(&grid, &trav, &laser);
-    let mut field = DistanceField::<CELLS>::new_boxed();
-    let mut planner = CountingAStar {
-        astar: AStar::new_boxed(),
-        searches: 0,
-    };
-    let mut stamps = vec![0u32; CELLS];
-    let mut obj = ExploreObjective::new(&mut field, &mut planner, &mut stamps);
+    let mut memory = CountingMemory::new();
+    let mut obj = memory.traced();
     let config = ExploreConfig {
         objective: ObjectiveKind::Thesis,
         targets: 2,
@@ -1468,7 +1500,7 @@ fn a_leg_to_a_target_the_robot_cannot_reach_is_refused_without_a_search() {
     // A reachable second target is the planner's to join.
     let e = obj.evaluate_targets(&req, &[Point2::new(1.5, 1.5), Point2::new(3.0, 2.0)]);
     assert_eq!(e.status, CandidateStatus::Feasible);
-    assert_eq!(planner.searches, 1);
+    assert_eq!(obj.planner().searches, 1);
 }
 
 #[test]
@@ -1477,15 +1509,8 @@ fn a_decision_searches_each_leg_between_two_targets_once_even_past_a_hundred_leg
     let trav = trav_of(&grid);
     let laser = laser();
     let req = request(&grid, &trav, &laser);
-    let mut field = DistanceField::<CELLS>::new_boxed();
-    let mut planner = CountingAStar {
-        astar: AStar::new_boxed(),
-        searches: 0,
-    };
-    let mut stamps = vec![0u32; CELLS];
-    let mut views = ViewCache::new_boxed();
-    let mut obj =
-        ExploreObjective::with_view_cache(&mut field, &mut planner, &mut stamps, &mut views);
+    let mut memory = CountingMemory::new();
+    let mut obj = memory.objective();
     let config = ExploreConfig {
         objective: ObjectiveKind::Thesis,
         targets: 2,
@@ -1509,7 +1534,7 @@ fn a_decision_searches_each_leg_between_two_targets_once_even_past_a_hundred_leg
         assert_eq!(e.status, CandidateStatus::Feasible, "{s:?}");
         evaluations.push((e, obj.waypoints().to_vec()));
     }
-    let searches = planner_searches(&obj);
+    let searches = obj.planner().searches;
     assert_eq!(
         searches,
         seconds.len() as u32,
@@ -1520,14 +1545,9 @@ fn a_decision_searches_each_leg_between_two_targets_once_even_past_a_hundred_leg
         assert_eq!(obj.evaluate_targets(&req, &[first, s]), *e);
         assert_eq!(obj.waypoints(), &w[..]);
     }
-    assert_eq!(planner_searches(&obj), searches, "no leg searched twice");
+    assert_eq!(obj.planner().searches, searches, "no leg searched twice");
     // A new decision forgets them (the map may have changed).
     obj.prepare(&req, &config).unwrap();
     obj.evaluate_targets(&req, &[first, seconds[0]]);
-    assert_eq!(planner_searches(&obj), searches + 1);
-}
-
-/// The searches the counting planner of an objective made.
-fn planner_searches(obj: &ExploreObjective<'_, CELLS, CountingAStar>) -> u32 {
-    obj.planner().searches
+    assert_eq!(obj.planner().searches, searches + 1);
 }
