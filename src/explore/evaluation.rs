@@ -5,8 +5,9 @@
 /// `[-1, 0]`).
 pub const WORST_FITNESS: f32 = 1.0;
 
-/// Whether a candidate can be driven.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Whether a candidate can be driven. All zeros is [`CandidateStatus::Feasible`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Zeroable)]
+#[repr(u8)]
 pub enum CandidateStatus {
     /// Reachable and within the battery.
     Feasible,

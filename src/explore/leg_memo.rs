@@ -38,35 +38,11 @@ struct Entry {
     /// The leg starts at the robot (planned on the decision's distance field), not at a
     /// target (planned by A*): the two may differ between the same cells.
     from_robot: bool,
-    /// The waypoints' count when `status` is [`FEASIBLE`].
+    /// The waypoints' count when `status` is `Feasible`.
     count: u8,
-    /// Why the leg could not be planned ([`status_code`]), or [`FEASIBLE`].
-    status: u8,
+    /// `Feasible` for a planned leg, else why it could not be planned.
+    status: CandidateStatus,
     waypoints: [Point2; LEG_WAYPOINTS],
-}
-
-/// The code of a planned leg.
-const FEASIBLE: u8 = 0;
-
-fn status_code(s: CandidateStatus) -> u8 {
-    match s {
-        CandidateStatus::Feasible => FEASIBLE,
-        CandidateStatus::OutOfBounds => 1,
-        CandidateStatus::Blocked => 2,
-        CandidateStatus::Unreachable => 3,
-        CandidateStatus::OverBudget => 4,
-        CandidateStatus::TooLong => 5,
-    }
-}
-
-fn status_of(code: u8) -> CandidateStatus {
-    match code {
-        1 => CandidateStatus::OutOfBounds,
-        2 => CandidateStatus::Blocked,
-        3 => CandidateStatus::Unreachable,
-        4 => CandidateStatus::OverBudget,
-        _ => CandidateStatus::TooLong,
-    }
 }
 
 const EMPTY: Entry = Entry {
@@ -75,7 +51,7 @@ const EMPTY: Entry = Entry {
     to: Cell::new(0, 0),
     from_robot: false,
     count: 0,
-    status: FEASIBLE,
+    status: CandidateStatus::Feasible,
     waypoints: [Point2::new(0.0, 0.0); LEG_WAYPOINTS],
 };
 
@@ -134,10 +110,9 @@ impl<const SLOTS: usize> LegMemo<SLOTS> {
         {
             return None;
         }
-        Some(if e.status == FEASIBLE {
-            Ok(&e.waypoints[..usize::from(e.count)])
-        } else {
-            Err(status_of(e.status))
+        Some(match e.status {
+            CandidateStatus::Feasible => Ok(&e.waypoints[..usize::from(e.count)]),
+            failed => Err(failed),
         })
     }
 
@@ -150,10 +125,10 @@ impl<const SLOTS: usize> LegMemo<SLOTS> {
         }
         let (count, status) = match leg {
             Ok(w) if w.len() > LEG_WAYPOINTS => return,
-            Ok(w) => (w.len() as u8, FEASIBLE),
+            Ok(w) => (w.len() as u8, CandidateStatus::Feasible),
             // A leg is remembered as planned or not; `Feasible` is no reason for failing.
             Err(CandidateStatus::Feasible) => return,
-            Err(s) => (0, status_code(s)),
+            Err(s) => (0, s),
         };
         let generation = self.generation;
         let e = &mut self.entries[Self::slot(from, to)];
