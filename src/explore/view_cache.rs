@@ -44,16 +44,16 @@
 //!
 //! The cache also carries the decision's [`BlockedBoxes`], with which the objective prunes
 //! its paths to waypoints without walking every line of sight (same waypoints), and the legs
-//! it planned between targets ([`super::leg_memo`]).
+//! it planned ([`super::leg_memo`]).
 
 use crate::geometry::{Point2, Pose2};
 use crate::grid::{Cell, GridGeometry, OccupancyGrid};
 use crate::math;
 use crate::planner::BlockedBoxes;
-
-use super::leg_memo::{DECISION_LEG_SLOTS, LegMemo};
 use crate::raycast;
 use crate::sensor::{LaserConfig, MAX_BEAMS};
+
+use super::leg_memo::{DECISION_LEG_SLOTS, LegMemo};
 
 /// Largest usable range the cache handles \[cells\] (a window row is 128 bits wide).
 pub const MAX_VIEW_RADIUS_CELLS: usize = 63;
@@ -175,7 +175,7 @@ pub struct ViewCache {
     stats: ViewCacheStats,
     /// Blocked-cell counts of the decision's traversability layer.
     pub(crate) boxes: BlockedBoxes,
-    /// The legs the decision planned between targets (the objective clears it per decision).
+    /// The legs the decision planned (the objective clears it per decision).
     pub(crate) legs: LegMemo<DECISION_LEG_SLOTS>,
 }
 
