@@ -222,7 +222,8 @@ pub fn find_frontiers<'w, const N: usize, const CELLS: usize, const FRONTIERS: u
             cells: geom.cell_count(),
         });
     }
-    let free = |i: usize| grid.log_odds_at(i) < 0.0;
+    let bounds = grid.bounds();
+    let free = |i: usize| bounds.class_of(grid.log_odds_at(i)) == CellClass::Free;
 
     // Pass 1: collect frontier cells in flat-index order, from the box where they can be.
     let area = frontier_box(grid);

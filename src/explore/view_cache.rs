@@ -231,13 +231,14 @@ fn or128(sheet: &mut [u64], at: usize, shift: u32, v: u128) {
 }
 
 /// The Unknown and the Occupied cells among eight log-odds, as bits 0 to 7
-/// ([`crate::grid::CellClass::of_log_odds`] without branches, which vector compares serve).
+/// ([`crate::grid::LogOddsBounds::class_of`] with the Occupied threshold `occupied_above`,
+/// without branches, which vector compares serve).
 #[inline(always)]
-fn classes_of_eight(l: &[f32; 8]) -> (u64, u64) {
+fn classes_of_eight(l: &[f32; 8], occupied_above: f32) -> (u64, u64) {
     let (mut unknown, mut occupied) = (0u64, 0u64);
     for (b, &l) in l.iter().enumerate() {
         unknown |= ((l == 0.0 || l.is_nan()) as u64) << b;
-        occupied |= ((l > 0.0) as u64) << b;
+        occupied |= ((l > occupied_above) as u64) << b;
     }
     (unknown, occupied)
 }
@@ -414,6 +415,7 @@ impl ViewCache {
         // reading the cells, so the pass costs what the explored region holds plus one word
         // per 64 cells.
         let log_odds = grid.log_odds();
+        let occupied_above = grid.bounds().occupied_above;
         let known = grid.known_box();
         for r in 0..h {
             let at = (r + SHEET_MARGIN_ROWS) * stride + 1;
@@ -428,14 +430,15 @@ impl ViewCache {
                 let eights = run.chunks_exact(8);
                 let tail = eights.remainder();
                 for (k, eight) in eights.enumerate() {
-                    let (u, o) = classes_of_eight(eight.try_into().unwrap_or(&[0.0; 8]));
+                    let (u, o) =
+                        classes_of_eight(eight.try_into().unwrap_or(&[0.0; 8]), occupied_above);
                     unknown |= u << (8 * k);
                     occupied |= o << (8 * k);
                 }
                 for (b, &l) in tail.iter().enumerate() {
                     let b = run.len() - tail.len() + b;
                     unknown |= ((l == 0.0 || l.is_nan()) as u64) << b;
-                    occupied |= ((l > 0.0) as u64) << b;
+                    occupied |= ((l > occupied_above) as u64) << b;
                 }
                 self.unknown[at + i] = unknown;
                 self.occupied[at + i] = occupied;

@@ -415,9 +415,10 @@ impl<const K: usize, const E: usize> KeyframeGraph<K, E> {
         let geometry = *grid.geometry();
         let cells = grid.cell_count();
         let mut before = keep_unseen.and_then(|k| k.get_mut(..cells));
+        let bounds = grid.bounds();
         if let Some(before) = before.as_deref_mut() {
             for (b, &l) in before.iter_mut().zip(grid.log_odds()) {
-                *b = class_code(CellClass::of_log_odds(l));
+                *b = class_code(bounds.class_of(l));
             }
         }
         // The grid keeps its geometry, which fits.
