@@ -449,6 +449,11 @@ pub struct MappingBoardConfig {
     /// ...or this long has passed \[s\].
     #[serde(default)]
     pub max_interval_s: Option<f32>,
+    /// Probability above which a cell is an obstacle (ROS `map_server`'s `occupied_thresh`);
+    /// absent: [`crate::grid::DEFAULT_OCCUPIED_THRESH`] (0.5, the thesis's rule; 0.65 for a
+    /// noisy laser, [`crate::grid::NOISY_LASER_OCCUPIED_THRESH`]).
+    #[serde(default)]
+    pub occupied_thresh: Option<f32>,
 }
 
 /// A whole board file.
@@ -771,6 +776,17 @@ impl BoardConfig {
         c.min_turn_rad = m.min_turn_deg.map_or(c.min_turn_rad, deg_to_rad);
         c.max_interval_s = m.max_interval_s.unwrap_or(c.max_interval_s);
         c
+    }
+
+    /// The grid's log-odds bounds with `$.mapping.occupied_thresh` (the default's where
+    /// absent; `None` for a value [`crate::grid::LogOddsBounds::with_occupied_thresh`]
+    /// refuses, which validation reports).
+    pub fn grid_bounds(&self) -> Option<crate::grid::LogOddsBounds> {
+        let b = crate::grid::LogOddsBounds::default();
+        match self.mapping.occupied_thresh {
+            Some(p) => b.with_occupied_thresh(p),
+            None => Some(b),
+        }
     }
 
     /// The body's outline: `$.robot.footprint`'s values, the P3-DX's where absent.

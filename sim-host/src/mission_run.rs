@@ -62,6 +62,7 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
         "pose_graph": m.localize.graph.enabled,
         "resolution_m": setting(setup.world.geometry().resolution_m),
         "clearance_m": setting(setup.clearance_m),
+        "occupied_thresh": setting(setup.occupied_thresh),
         "laser_noise": setting(m.laser.noise_fraction),
         "laser_noise_m": setting(setup.run.laser_range_sigma_m),
         "coverage": report.coverage,

@@ -184,6 +184,9 @@ pub struct ScenarioSpec {
     /// Room the planner keeps between the body's side and a wall, each side \[m\]
     /// ([`footprint::planning_layer`]; `--clearance`, a board's `$.planning.clearance_m`).
     pub clearance_m: f32,
+    /// Probability above which a map cell is an obstacle (`--occupied-thresh`; 0.5 is the
+    /// thesis's rule; [`papillon::grid::LogOddsBounds::with_occupied_thresh`]).
+    pub occupied_thresh: f32,
 }
 
 impl Default for ScenarioSpec {
@@ -209,6 +212,7 @@ impl Default for ScenarioSpec {
             preset: papillon::explore::DEFAULT_PRESET,
             tuning: None,
             clearance_m: footprint::DEFAULT_CLEARANCE_M,
+            occupied_thresh: papillon::grid::DEFAULT_OCCUPIED_THRESH,
         }
     }
 }
@@ -226,6 +230,8 @@ pub struct Setup {
     pub slip: Slip,
     /// Room kept between the body's side and a wall on a planned path \[m\] (`--clearance`).
     pub clearance_m: f32,
+    /// Probability above which a map cell is an obstacle (`--occupied-thresh`).
+    pub occupied_thresh: f32,
 }
 
 /// Most generations per decision (as a board's `$.mission.generations`).
@@ -305,6 +311,17 @@ impl Setup {
                 spec.clearance_m
             ));
         }
+        mission.grid_bounds = mission
+            .grid_bounds
+            .with_occupied_thresh(spec.occupied_thresh)
+            .ok_or_else(|| {
+                format!(
+                    "--occupied-thresh: expected a probability from 0.5 (the thesis's rule) up to \
+                     below {:.2}, got {}",
+                    papillon::grid::probability_of(mission.grid_bounds.max),
+                    spec.occupied_thresh
+                )
+            })?;
         let mut world = World::load(&spec.map, spec.resolution_m).map_err(|e| e.to_string())?;
         // The planning layer follows the body at the world's own cell size.
         mission.traversability = footprint::planning_layer(
@@ -355,6 +372,7 @@ impl Setup {
             strategy: spec.strategy,
             slip: spec.slip,
             clearance_m: spec.clearance_m,
+            occupied_thresh: spec.occupied_thresh,
         })
     }
 

@@ -188,6 +188,11 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
         false,
         Kind::Optional(&Kind::Number),
     ),
+    (
+        "$.mapping.occupied_thresh",
+        false,
+        Kind::Optional(&Kind::Number),
+    ),
     ("$.planning", false, Kind::Object),
     (
         "$.planning.clearance_m",

@@ -671,6 +671,28 @@ fn bad_mapping_values_name_their_field() {
     only_problem_at("$.mapping.max_interval_s", |c| {
         c.mapping.max_interval_s = Some(1e9)
     });
+    for p in [0.4, 0.99, f32::NAN] {
+        only_problem_at("$.mapping.occupied_thresh", |c| {
+            c.mapping.occupied_thresh = Some(p)
+        });
+    }
+}
+
+/// `$.mapping.occupied_thresh` sets the probability above which a cell is an obstacle: the
+/// thesis's rule (0.5) when absent; the mission the board makes takes it.
+#[test]
+fn the_occupied_threshold_comes_from_the_board() {
+    let c = BoardConfig::from_json(SIM.as_bytes()).unwrap();
+    assert_eq!(c.grid_bounds().unwrap().occupied_above, 0.0);
+    let json = SIM.replacen(
+        "\"persistence\"",
+        "\"mapping\": {\"occupied_thresh\": 0.65}, \"persistence\"",
+        1,
+    );
+    let noisy = BoardConfig::from_json(json.as_bytes()).unwrap();
+    assert_eq!(paths(&noisy), Vec::<String>::new());
+    let b = noisy.grid_bounds().unwrap();
+    assert!((b.occupied_thresh() - 0.65).abs() < 1e-6);
 }
 
 /// `$.robot.footprint` and `$.planning` are optional: absent, the body is the P3-DX's

@@ -351,6 +351,12 @@ impl BoardConfig {
                 r(path, problem);
             }
         }
+        if self.grid_bounds().is_none() {
+            r(
+                "$.mapping.occupied_thresh",
+                "must be a probability from 0.5 (the thesis's rule) up to below 0.97",
+            );
+        }
     }
 
     /// The body's outline and the clearance, and that the planning layer they make can be

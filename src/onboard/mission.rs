@@ -210,6 +210,9 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     config.return_to_start = m.return_to_start.unwrap_or(false);
     config.localize = board.localize_config();
     config.motion_filter = board.motion_filter_config();
+    config.grid_bounds = board
+        .grid_bounds()
+        .ok_or("$.mapping.occupied_thresh: must be a probability from 0.5 up to below 0.97")?;
     config.validate().map_err(|e| format!("$.mission: {e}"))?;
     Ok(config)
 }
@@ -1167,6 +1170,11 @@ mod tests {
             layer,
             planning_layer(&config.safety, 0.08, 0.05, layer.unknown_policy)
         );
+        // The map's Occupied threshold is the board's.
+        let mut noisy = BoardConfig::default();
+        noisy.mapping.occupied_thresh = Some(0.65);
+        let b = mission_config(&noisy).unwrap().grid_bounds;
+        assert!((b.occupied_thresh() - 0.65).abs() < 1e-6);
         // The defaults at the default cell size: the runner's layer.
         let config = mission_config(&BoardConfig::default()).unwrap();
         assert_eq!(

@@ -47,6 +47,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
             None => None,
         },
         clearance_m: papillon::mission::footprint::DEFAULT_CLEARANCE_M,
+        occupied_thresh: papillon::grid::DEFAULT_OCCUPIED_THRESH,
     })
 }
 
