@@ -191,6 +191,8 @@ def boards(path):
     write("footprint-typo.json", json.dumps(b, indent=2))
     edit("clearance.json", "planning", None, {"clearance_m": 0.5})
     edit("clearance-neg.json", "planning", None, {"clearance_m": -0.05})
+    edit("occupied-thresh.json", "mapping", None, {"occupied_thresh": 0.4})
+    edit("occupied-thresh-one.json", "mapping", None, {"occupied_thresh": 1.0})
     edit("save0.json", "persistence", "save_every_s", 0.0)
     edit("saveneg.json", "persistence", "save_every_s", -2.0)
     return base

@@ -236,6 +236,8 @@ check_field footprint-swing '$.robot.footprint.width_m'
 check_field footprint-typo '$.robot.footprint.width'
 check_field clearance '$.planning.clearance_m'
 check_field clearance-neg '$.planning.clearance_m'
+check_field occupied-thresh '$.mapping.occupied_thresh'
+check_field occupied-thresh-one '$.mapping.occupied_thresh'
 check_field save0 '$.persistence.save_every_s'
 check_field saveneg '$.persistence.save_every_s'
 # ---------------------------------------------------------------- papillon run
@@ -405,6 +407,10 @@ m "--clearance" --clearance -0.05
 m "--clearance" --clearance 0.5
 m "--clearance" --clearance nan
 m "--clearance" --clearance wide
+m "--occupied-thresh" --occupied-thresh 0.4
+m "--occupied-thresh" --occupied-thresh 0.99
+m "--occupied-thresh" --occupied-thresh nan
+m "--occupied-thresh" --occupied-thresh most
 m "--png;/nonexistent/dir/map.png" --png /nonexistent/dir/map.png
 m "--png;/tmp" --png /tmp
 m "--frames;afile" --frames afile
