@@ -903,10 +903,15 @@ mod tests {
     const W: usize = 70;
     const H: usize = 45;
 
-    /// Random Occupied (8 %), Free (40 %) and Unknown cells, seeded.
-    fn grid(seed: u64) -> std::boxed::Box<OccupancyGrid<{ W * H }>> {
+    /// Random Occupied (8 %), Free (40 %) and Unknown cells, seeded, and 4 % of cells with
+    /// weak evidence of an obstacle (log-odds 0.3): Occupied under the thesis's rule, Free
+    /// with an Occupied threshold of `occupied_thresh` 0.65.
+    fn grid(seed: u64, occupied_thresh: f32) -> std::boxed::Box<OccupancyGrid<{ W * H }>> {
         let g = GridGeometry::new(W, H, 0.1, Point2::new(-1.0, 2.0)).unwrap();
-        let mut grid = OccupancyGrid::new_boxed(g, LogOddsBounds::default()).unwrap();
+        let bounds = LogOddsBounds::default()
+            .with_occupied_thresh(occupied_thresh)
+            .unwrap();
+        let mut grid = OccupancyGrid::new_boxed(g, bounds).unwrap();
         let mut rng = seeded(seed);
         for i in 0..W * H {
             let x = range_f32(&mut rng, 0.0, 1.0);
@@ -914,6 +919,8 @@ mod tests {
                 grid.set_class(i, CellClass::Occupied, &mut ());
             } else if x < 0.48 {
                 grid.set_class(i, CellClass::Free, &mut ());
+            } else if x < 0.52 {
+                grid.set_log_odds(i, 0.3, &mut ());
             }
         }
         grid
@@ -948,8 +955,9 @@ mod tests {
         let mut cache = ViewCache::new_boxed();
         let mut rng = seeded(5);
         let mut blocked = 0;
-        for seed in 0..3 {
-            let grid = grid(40 + seed);
+        // The bit sheets classify as the grid does, whatever its Occupied threshold.
+        for (seed, occupied_thresh) in [(0, 0.5), (1, 0.65), (2, 0.5), (3, 0.65)] {
+            let grid = grid(40 + seed, occupied_thresh);
             let g = *grid.geometry();
             for laser in lasers() {
                 assert!(cache.begin(&*grid, &laser));
