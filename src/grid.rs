@@ -331,6 +331,21 @@ pub fn probability_of(l: f32) -> f32 {
     1.0 / (1.0 + math::exp(-l))
 }
 
+/// The Occupied thresholds a grid accepts, displayed for error messages ("a probability from
+/// 0.5 ... up to below 0.97"; [`LogOddsBounds::occupied_thresh_range`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OccupiedThreshRange(f32);
+
+impl core::fmt::Display for OccupiedThreshRange {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "a probability from 0.5 (the thesis's rule) up to below {:.2}",
+            self.0
+        )
+    }
+}
+
 /// Saturation bounds of the log-odds, and the evidence a cell needs to be Occupied.
 #[derive(
     Clone, Copy, Debug, PartialEq, serde::Deserialize, serde::Serialize, bytemuck::Zeroable,
@@ -382,6 +397,16 @@ impl LogOddsBounds {
     /// The probability above which a cell is Occupied.
     pub fn occupied_thresh(&self) -> f32 {
         probability_of(self.occupied_above)
+    }
+
+    /// The probability [`Self::with_occupied_thresh`] must stay below: the upper bound's.
+    pub fn occupied_thresh_limit(&self) -> f32 {
+        probability_of(self.max)
+    }
+
+    /// What [`Self::with_occupied_thresh`] accepts, for error messages.
+    pub fn occupied_thresh_range(&self) -> OccupiedThreshRange {
+        OccupiedThreshRange(self.occupied_thresh_limit())
     }
 
     fn check(self) -> Result<Self, GridError> {

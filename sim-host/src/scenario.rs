@@ -316,9 +316,8 @@ impl Setup {
             .with_occupied_thresh(spec.occupied_thresh)
             .ok_or_else(|| {
                 format!(
-                    "--occupied-thresh: expected a probability from 0.5 (the thesis's rule) up to \
-                     below {:.2}, got {}",
-                    papillon::grid::probability_of(mission.grid_bounds.max),
+                    "--occupied-thresh: expected {}, got {}",
+                    mission.grid_bounds.occupied_thresh_range(),
                     spec.occupied_thresh
                 )
             })?;

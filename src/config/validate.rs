@@ -352,10 +352,13 @@ impl BoardConfig {
             }
         }
         if self.grid_bounds().is_none() {
-            r(
-                "$.mapping.occupied_thresh",
-                "must be a probability from 0.5 (the thesis's rule) up to below 0.97",
+            let mut problem = heapless::String::<72>::new();
+            let _ = write!(
+                problem,
+                "must be {}",
+                crate::grid::LogOddsBounds::default().occupied_thresh_range()
             );
+            r("$.mapping.occupied_thresh", &problem);
         }
     }
 

@@ -210,9 +210,12 @@ pub fn mission_config(board: &BoardConfig) -> Result<MissionConfig, String> {
     config.return_to_start = m.return_to_start.unwrap_or(false);
     config.localize = board.localize_config();
     config.motion_filter = board.motion_filter_config();
-    config.grid_bounds = board
-        .grid_bounds()
-        .ok_or("$.mapping.occupied_thresh: must be a probability from 0.5 up to below 0.97")?;
+    config.grid_bounds = board.grid_bounds().ok_or_else(|| {
+        format!(
+            "$.mapping.occupied_thresh: must be {}",
+            config.grid_bounds.occupied_thresh_range()
+        )
+    })?;
     config.validate().map_err(|e| format!("$.mission: {e}"))?;
     Ok(config)
 }
