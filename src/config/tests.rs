@@ -63,6 +63,24 @@ fn lms200_board_values() {
     assert_eq!(c.laser.address, None);
 }
 
+/// A real robot's odometry drifts, and with a laser as precise as a SICK's the map drawn at
+/// the odometry pose doubles its walls (docs/experiments.md, "the real boards' scan
+/// matcher"): the real robots' boards match their scans, with the pose graph, as `sim.json`
+/// (the lab's robot in the simulator) does.
+#[test]
+fn the_real_robots_boards_match_scans_with_the_pose_graph() {
+    for (file, text) in [
+        ("p3dx-lms1xx", LMS1XX),
+        ("p3dx-lms200", LMS200),
+        ("sim", SIM_MATCHING),
+    ] {
+        let c = BoardConfig::from_json(text.as_bytes()).unwrap();
+        let l = c.localize_config();
+        assert!(l.enabled, "{file}.json: the scan matcher is off");
+        assert!(l.graph.enabled, "{file}.json: the pose graph is off");
+    }
+}
+
 #[test]
 fn sim_board_values() {
     let c = BoardConfig::from_json(SIM.as_bytes()).unwrap();
