@@ -412,10 +412,10 @@ pub struct LocalizeBoardConfig {
     #[serde(default)]
     pub every_n_scans: Option<u16>,
     /// A scan is matched only once the odometry has moved this far since the last match
-    /// \[m\]...; absent: 0.5.
+    /// \[m\]...; absent: 0 (every scan is matched).
     #[serde(default)]
     pub min_travel_m: Option<f32>,
-    /// ...or turned this much \[deg\]; absent: 28.6 (0.5 rad).
+    /// ...or turned this much \[deg\]; absent: 0.
     #[serde(default)]
     pub min_turn_deg: Option<f32>,
     /// Translation searched around the odometry prediction, each way \[m\]; absent: 0.3.
