@@ -244,7 +244,8 @@ fn returns(scan: &crate::sensor::Scan, laser: &LaserConfig) -> ([Point2; MAX_BEA
 /// The closures' ambiguity test: in a corridor of evenly spaced jambs, a match the wide search
 /// put one jamb further on (0.6 m) while the prediction lies in the true pose's basin is
 /// refused, the refinement from the prediction pairing as many returns elsewhere; the true
-/// pose from the same prediction is not ambiguous; with the test off nothing is refused.
+/// pose from the same prediction is not ambiguous; with the test off the free-space test
+/// refuses the alias, and with both off nothing is refused.
 #[test]
 fn a_match_the_prediction_explains_as_well_elsewhere_is_ambiguous() {
     let walls = jambs();
@@ -260,18 +261,111 @@ fn a_match_the_prediction_explains_as_well_elsewhere_is_ambiguous() {
     let (points, n) = returns(&scan, &laser);
     let points = &points[..n];
     let c = ClosureConfig::default();
-    let ratio = local.ambiguity(points, &laser, predicted, alias, &config(), &c);
-    assert!(ratio.is_some_and(|r| r >= c.ambiguity_ratio), "{ratio:?}");
+    let verdict = local.second_basin(points, &laser, predicted, alias, &config(), &c);
+    assert!(
+        matches!(verdict, Some(Refusal::Ambiguous(r)) if r >= c.ambiguity_ratio),
+        "{verdict:?}"
+    );
     assert_eq!(
-        local.ambiguity(points, &laser, predicted, truth, &config(), &c),
+        local.second_basin(points, &laser, predicted, truth, &config(), &c),
         None
     );
-    let off = ClosureConfig {
+    // Without the ambiguity test the free-space test still refuses the alias: one jamb on,
+    // the beams that met a jamb's side end behind the next one.
+    let free_space_only = ClosureConfig {
         ambiguity: false,
         ..c
     };
+    let verdict = local.second_basin(
+        points,
+        &laser,
+        predicted,
+        alias,
+        &config(),
+        &free_space_only,
+    );
+    assert!(
+        matches!(verdict, Some(Refusal::SeesThrough(_))),
+        "{verdict:?}"
+    );
+    let off = ClosureConfig {
+        see_through: false,
+        ..free_space_only
+    };
     assert_eq!(
-        local.ambiguity(points, &laser, predicted, alias, &config(), &off),
+        local.second_basin(points, &laser, predicted, alias, &config(), &off),
+        None
+    );
+}
+
+/// Two rooms either side of a 0.2 m wall, with a door at its north end: the old keyframes
+/// saw the wall from both sides.
+fn thick_wall() -> [super::tests::Segment; 7] {
+    use super::tests::seg;
+    [
+        seg(0.0, 0.0, 6.0, 0.0),
+        seg(6.0, 0.0, 6.0, 4.0),
+        seg(6.0, 4.0, 0.0, 4.0),
+        seg(0.0, 4.0, 0.0, 0.0),
+        seg(2.9, 0.0, 2.9, 2.5),
+        seg(3.1, 0.0, 3.1, 2.5),
+        seg(2.9, 2.5, 3.1, 2.5),
+    ]
+}
+
+/// The free-space test between two basins: a scan of the wall's east face matched a wall's
+/// thickness west puts its returns on the west face, behind the east one; with the ambiguity
+/// test off (it may or may not tell the two apart, by the returns each pairs) that match is
+/// refused as seeing through the wall, the true pose from the same prediction is not, and
+/// with both tests off nothing is refused.
+#[test]
+fn a_match_that_puts_the_returns_behind_a_wall_is_refused() {
+    let walls = thick_wall();
+    let laser = LaserConfig::lms1xx();
+    let old = [
+        Pose2::new(1.5, 1.5, 0.0),
+        Pose2::new(1.5, 3.2, 0.0),
+        Pose2::new(3.0, 3.3, 0.0),
+        Pose2::new(4.5, 3.2, core::f32::consts::PI),
+        Pose2::new(4.5, 1.5, core::f32::consts::PI),
+    ];
+    let store = keep(&walls, &old, &laser);
+    let mut local: Box<LocalMap<LOCAL_CELLS>> = bytemuck::zeroed_box();
+    let truth = Pose2::new(4.2, 1.2, core::f32::consts::PI);
+    let predicted = Pose2::new(4.22, 1.18, core::f32::consts::PI + 0.01);
+    let behind = Pose2::new(truth.x - 0.2, truth.y, truth.theta);
+    render_old(&mut local, &store, &old, predicted, &laser);
+    let scan = scan_at(&walls, truth, &laser, 0.003, 12);
+    let (points, n) = returns(&scan, &laser);
+    let points = &points[..n];
+
+    let margin_m = 0.15;
+    let at_truth = local.seen_through(points, &laser, truth, margin_m);
+    let at_behind = local.seen_through(points, &laser, behind, margin_m);
+    assert!(
+        at_behind > at_truth + 0.1,
+        "behind the wall {at_behind}, at the truth {at_truth}"
+    );
+
+    let c = ClosureConfig {
+        ambiguity: false,
+        ..ClosureConfig::default()
+    };
+    let verdict = local.second_basin(points, &laser, predicted, behind, &config(), &c);
+    assert!(
+        matches!(verdict, Some(Refusal::SeesThrough(f)) if f == at_behind),
+        "{verdict:?}"
+    );
+    assert_eq!(
+        local.second_basin(points, &laser, predicted, truth, &config(), &c),
+        None
+    );
+    let off = ClosureConfig {
+        see_through: false,
+        ..c
+    };
+    assert_eq!(
+        local.second_basin(points, &laser, predicted, behind, &config(), &off),
         None
     );
 }

@@ -145,8 +145,9 @@ pub struct GraphStats {
     /// Whether a full store stopped the graph.
     pub full: bool,
     /// Closures refused: by the matcher's own checks, as unconstrained, for a low score, for
-    /// little known ground, as inconsistent with the graph, as ambiguous.
-    pub refused: [u32; 6],
+    /// little known ground, as inconsistent with the graph, as ambiguous, as seeing through
+    /// walls.
+    pub refused: [u32; 7],
 }
 
 impl GraphStats {
@@ -158,6 +159,7 @@ impl GraphStats {
             Refusal::LittleKnown(_) => 3,
             Refusal::Inconsistent(_) => 4,
             Refusal::Ambiguous(_) => 5,
+            Refusal::SeesThrough(_) => 6,
         };
         self.refused[k] += 1;
     }

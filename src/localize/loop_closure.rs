@@ -23,6 +23,9 @@
 //!   knows;
 //! - no second basin: the refinement started again from the prediction must not end elsewhere
 //!   pairing about as many returns ([`ClosureConfig::ambiguity`], Olson's "local uniqueness");
+//! - and when it ends elsewhere pairing fewer, the match must not put more of its beams
+//!   through the local map's walls than that pose does ([`ClosureConfig::see_through`], the
+//!   free space a beam crossed as evidence, as in a beam model);
 //! - and, in [`super::graph`], consistency with the graph's prediction over the path between
 //!   the two keyframes ([`ClosureConfig::gate_sigmas`]).
 //!
@@ -89,6 +92,18 @@ pub struct ClosureConfig {
     pub ambiguity_distance_m: f32,
     /// See [`Self::ambiguity`].
     pub ambiguity_ratio: f32,
+    /// Free-space test between two basins: when the refinement from the prediction ends more
+    /// than [`Self::ambiguity_distance_m`] from the match (pairing fewer returns than the
+    /// ambiguity test refuses), the match is refused if more of its beams pass through a
+    /// wall of the local map before their returns ([`LocalMap::seen_through`]) than at the
+    /// prediction's pose, by more than [`Self::see_through_slack`] of the returns (off: no
+    /// test).
+    pub see_through: bool,
+    /// See [`Self::see_through`]: a beam counts when it crosses an Occupied cell more than
+    /// this many cells before its return \[cells\].
+    pub see_through_margin_cells: f32,
+    /// See [`Self::see_through`] (a fraction of the returns).
+    pub see_through_slack: f32,
 }
 
 impl Default for ClosureConfig {
@@ -96,7 +111,9 @@ impl Default for ClosureConfig {
     /// ±0.2 rad; accepted when the fit constrains all three directions, pairs half the returns
     /// on known ground with a surface, 70 % of the returns are on known ground, and the match
     /// is within 3 σ of the graph's prediction, unless the refinement from the prediction ends
-    /// more than 10 cm away pairing 90 % as many returns (ambiguous); as σ 2 cm and 0.57° (the sixth matcher's
+    /// more than 10 cm away pairing 90 % as many returns (ambiguous) or, ending
+    /// there, with more than 2 % fewer of the beams through a wall of the local map (counted
+    /// from 1.5 cells before the return); as σ 2 cm and 0.57° (the sixth matcher's
     /// closures are within 2 cm and 0.6° of the true relative pose but for a few; σ 5 cm and
     /// 1.15°, about the fourth matcher's spread, let the worst of 20 house missions end 47 cm
     /// off against 11.8 cm: docs/experiments.md, tenth measurement).
@@ -116,6 +133,9 @@ impl Default for ClosureConfig {
             ambiguity: true,
             ambiguity_distance_m: 0.1,
             ambiguity_ratio: 0.9,
+            see_through: true,
+            see_through_margin_cells: 1.5,
+            see_through_slack: 0.02,
         }
     }
 }
@@ -139,6 +159,18 @@ pub enum Refusal {
     /// Another pose more than [`ClosureConfig::ambiguity_distance_m`] away pairs about as many
     /// returns ([`ClosureConfig::ambiguity_ratio`]); that pose's fraction of the match's inliers.
     Ambiguous(f32),
+    /// Another pose more than [`ClosureConfig::ambiguity_distance_m`] away leaves fewer of
+    /// the beams passing through walls ([`ClosureConfig::see_through`]); the match's share.
+    SeesThrough(f32),
+}
+
+/// Another basin a closure's scan fits ([`LocalMap::rival`]).
+#[derive(Clone, Copy, Debug)]
+struct Rival {
+    /// Where the refinement from the prediction ended.
+    pose: Pose2,
+    /// Its inliers as a share of the match's.
+    ratio: f32,
 }
 
 /// The candidate for a closure: the keyframe nearest `pose` among those at least
@@ -255,7 +287,7 @@ impl<const L: usize> LocalMap<L> {
             Err(Refusal::LowScore(q.score))
         } else if q.known_fraction < config.min_known_fraction {
             Err(Refusal::LittleKnown(q.known_fraction))
-        } else if let Some(ratio) = self.ambiguity(
+        } else if let Some(why) = self.second_basin(
             &matcher.points[..matcher.len],
             laser,
             predicted,
@@ -263,18 +295,56 @@ impl<const L: usize> LocalMap<L> {
             tracker,
             config,
         ) {
-            Err(Refusal::Ambiguous(ratio))
+            Err(why)
         } else {
             Ok(result.pose)
         };
         (verdict, q)
     }
 
-    /// The ambiguity test ([`ClosureConfig::ambiguity`]) of a match at `matched` of `points`
-    /// (robot frame, the returns the match used): the refinement ([`super::ndt`]) started
-    /// again from `predicted`; `Some(ratio)` when it ends more than
-    /// [`ClosureConfig::ambiguity_distance_m`] from the refinement at `matched`, pairing at
-    /// least [`ClosureConfig::ambiguity_ratio`] of its inliers (`ratio`: its share). The
+    /// The tests of a match at `matched` of `points` (robot frame, the returns the match used)
+    /// against the basin the prediction lies in ([`Self::rival`]): refused as ambiguous when
+    /// that basin pairs about as many returns ([`ClosureConfig::ambiguity`]), or as seeing
+    /// through walls when more of the match's beams pass through the local map's walls than
+    /// that basin's do ([`ClosureConfig::see_through`]). A wall the old keyframes saw from
+    /// both sides has two faces a wall's thickness apart, and a scan of one face fits the
+    /// other as well: on the generated floor plans' 0.2 m walls the closures that passed the
+    /// ambiguity test with exactly 0.2 m of error (their rival, the true pose, pairing 65-89
+    /// % as many returns) all put their beams through the near face (docs/experiments.md,
+    /// "Issue 18: closures through a wall").
+    pub(super) fn second_basin(
+        &self,
+        points: &[Point2],
+        laser: &LaserConfig,
+        predicted: Pose2,
+        matched: Pose2,
+        tracker: &MatchConfig,
+        config: &ClosureConfig,
+    ) -> Option<Refusal> {
+        if !(config.ambiguity || config.see_through) {
+            return None;
+        }
+        let rival = self.rival(points, laser, predicted, matched, tracker, config)?;
+        if config.ambiguity && rival.ratio >= config.ambiguity_ratio {
+            return Some(Refusal::Ambiguous(rival.ratio));
+        }
+        if config.see_through {
+            let margin_m = config.see_through_margin_cells * self.grid.geometry().resolution_m;
+            let through = self.seen_through(points, laser, matched, margin_m);
+            if through
+                > self.seen_through(points, laser, rival.pose, margin_m) + config.see_through_slack
+            {
+                return Some(Refusal::SeesThrough(through));
+            }
+        }
+        None
+    }
+
+    /// The second basin of a match at `matched` of `points` (robot frame, the returns the
+    /// match used): the refinement ([`super::ndt`]) started again from `predicted`, when it
+    /// ends more than [`ClosureConfig::ambiguity_distance_m`] from the refinement at
+    /// `matched` (with its share of the match's inliers). The ambiguity test refuses a match
+    /// whose rival pairs about as many returns. The
     /// closure's search looks over a window wider than the tracker's; when the basin the
     /// prediction lies in explains the scan about as well as the one the search jumped to, the
     /// scan does not tell the two places apart, however confident each fit is. A place match
@@ -284,7 +354,7 @@ impl<const L: usize> LocalMap<L> {
     /// prediction's basin is tried: starts moved ±0.3 m along `x` and `y` as well refused 166
     /// closures in 20 house missions (up to 17 in one), nearly all true ones
     /// (docs/experiments.md, branch `loc18`).
-    pub(super) fn ambiguity(
+    fn rival(
         &self,
         points: &[Point2],
         laser: &LaserConfig,
@@ -292,10 +362,7 @@ impl<const L: usize> LocalMap<L> {
         matched: Pose2,
         tracker: &MatchConfig,
         config: &ClosureConfig,
-    ) -> Option<f32> {
-        if !config.ambiguity {
-            return None;
-        }
+    ) -> Option<Rival> {
         let mut fine = tracker.fine;
         fine.noise_fraction = laser.noise_fraction.max(0.0);
         fine.length_scale_m = tracker.length_scale_m;
@@ -309,7 +376,60 @@ impl<const L: usize> LocalMap<L> {
             dt,
         );
         let ratio = other.inliers as f32 / best.inliers.max(1) as f32;
-        (d > config.ambiguity_distance_m && ratio >= config.ambiguity_ratio).then_some(ratio)
+        (d > config.ambiguity_distance_m).then_some(Rival {
+            pose: other.pose,
+            ratio,
+        })
+    }
+
+    /// The share of `points` (robot frame, the returns a match used) whose beam from the
+    /// laser at `pose` crosses a cell the local map holds Occupied more than `margin_m` before
+    /// the return: a laser does not see through a wall, so a pose that puts returns behind
+    /// walls the map knows (the far face of a wall the old keyframes saw from both sides, a
+    /// room's width along a row of doors) is not where the scan was taken, however well its
+    /// returns pair with surfaces. The free-space half of a match's evidence, which the
+    /// point-to-line fit reads only at the returns (Hähnel, Burgard, Fox and Thrun, *An
+    /// efficient FastSLAM algorithm*, IROS 2003, and the beam models of Thrun, Burgard and
+    /// Fox, *Probabilistic Robotics*, 2005, §6.3, score a beam's path as well as its end).
+    pub fn seen_through(
+        &self,
+        points: &[Point2],
+        laser: &LaserConfig,
+        pose: Pose2,
+        margin_m: f32,
+    ) -> f32 {
+        let geom = *self.grid.geometry();
+        let origin = pose.transform_point(laser.mount.position());
+        let mut through = 0usize;
+        let mut counted = 0usize;
+        for &p in points {
+            let end = pose.transform_point(p);
+            let range = origin.distance(end);
+            if !range.is_finite() || range <= margin_m {
+                continue;
+            }
+            let k = (range - margin_m) / range;
+            let stop = Point2::new(
+                origin.x + (end.x - origin.x) * k,
+                origin.y + (end.y - origin.y) * k,
+            );
+            counted += 1;
+            let mut hit = false;
+            crate::raycast::traverse(&geom, origin, stop, |_, index| {
+                if self.grid.class(index) == crate::grid::CellClass::Occupied {
+                    hit = true;
+                    core::ops::ControlFlow::Break(())
+                } else {
+                    core::ops::ControlFlow::Continue(())
+                }
+            });
+            through += usize::from(hit);
+        }
+        if counted == 0 {
+            0.0
+        } else {
+            through as f32 / counted as f32
+        }
     }
 
     /// The local grid (for tests and pictures).
