@@ -31,7 +31,9 @@
 //! scales the slip model's random walks and fast-turn slip by `F` (0: systematic wheel errors
 //! and the end-of-move slide only).
 //!
-//! `LOC_L` sets the matcher's length scale (`MatchConfig::length_scale_m`).
+//! `LOC_L` sets the matcher's length scale (`MatchConfig::length_scale_m`); `LOC_SEARCH_SEE=1`
+//! turns on `MatchConfig::search_see_through` (the search's basin only if its beams cross no
+//! more walls).
 //! With `WINDOW`, a second line per scan gives the true, odometry and estimated heading (and distance)
 //! changes since the scan before, the filter's heading σ, the fused match's heading σ and its
 //! null direction `(x, y, θ·1 m)` when it constrains two directions.
@@ -173,6 +175,9 @@ fn main() {
     }
     if let Some(v) = env("LOC_FLOOR") {
         m.localize.matcher.min_sigma_m = v;
+    }
+    if let Some(v) = env("LOC_SEARCH_SEE") {
+        m.localize.matcher.search_see_through = v != 0.0;
     }
     if let Some(v) = env("LOC_INNOV") {
         m.localize.innovation_gate = v;

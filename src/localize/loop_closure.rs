@@ -383,14 +383,8 @@ impl<const L: usize> LocalMap<L> {
     }
 
     /// The share of `points` (robot frame, the returns a match used) whose beam from the
-    /// laser at `pose` crosses a cell the local map holds Occupied more than `margin_m` before
-    /// the return: a laser does not see through a wall, so a pose that puts returns behind
-    /// walls the map knows (the far face of a wall the old keyframes saw from both sides, a
-    /// room's width along a row of doors) is not where the scan was taken, however well its
-    /// returns pair with surfaces. The free-space half of a match's evidence, which the
-    /// point-to-line fit reads only at the returns (Hähnel, Burgard, Fox and Thrun, *An
-    /// efficient FastSLAM algorithm*, IROS 2003, and the beam models of Thrun, Burgard and
-    /// Fox, *Probabilistic Robotics*, 2005, §6.3, score a beam's path as well as its end).
+    /// laser at `pose` crosses a wall of the local map more than `margin_m` before the return
+    /// ([`super::free_space::seen_through`]).
     pub fn seen_through(
         &self,
         points: &[Point2],
@@ -398,38 +392,7 @@ impl<const L: usize> LocalMap<L> {
         pose: Pose2,
         margin_m: f32,
     ) -> f32 {
-        let geom = *self.grid.geometry();
-        let origin = pose.transform_point(laser.mount.position());
-        let mut through = 0usize;
-        let mut counted = 0usize;
-        for &p in points {
-            let end = pose.transform_point(p);
-            let range = origin.distance(end);
-            if !range.is_finite() || range <= margin_m {
-                continue;
-            }
-            let k = (range - margin_m) / range;
-            let stop = Point2::new(
-                origin.x + (end.x - origin.x) * k,
-                origin.y + (end.y - origin.y) * k,
-            );
-            counted += 1;
-            let mut hit = false;
-            crate::raycast::traverse(&geom, origin, stop, |_, index| {
-                if self.grid.class(index) == crate::grid::CellClass::Occupied {
-                    hit = true;
-                    core::ops::ControlFlow::Break(())
-                } else {
-                    core::ops::ControlFlow::Continue(())
-                }
-            });
-            through += usize::from(hit);
-        }
-        if counted == 0 {
-            0.0
-        } else {
-            through as f32 / counted as f32
-        }
+        super::free_space::seen_through(&self.grid, points, laser, pose, margin_m)
     }
 
     /// The local grid (for tests and pictures).

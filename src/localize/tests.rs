@@ -612,3 +612,69 @@ fn the_slide_at_the_end_of_a_move_is_taken_from_the_first_match_at_rest_when_mod
         "modelled {m:?} vs unmodelled {u:?} of the slide taken"
     );
 }
+
+/// The tracker's search through a wall ([`search_basin_wins`]): two rooms either side of a
+/// 0.2 m wall, the scan taken facing its east face. A search basin a wall's thickness west,
+/// its returns on the west face, is not taken over the true pose's basin even pairing more
+/// returns (it is without the test); the true pose's basin is taken over that one.
+#[test]
+fn the_search_does_not_take_a_basin_behind_a_wall() {
+    let walls = [
+        seg(0.0, 0.0, 6.0, 0.0),
+        seg(6.0, 0.0, 6.0, 4.0),
+        seg(6.0, 4.0, 0.0, 4.0),
+        seg(0.0, 4.0, 0.0, 0.0),
+        seg(2.9, 0.0, 2.9, 2.5),
+        seg(3.1, 0.0, 3.1, 2.5),
+        seg(2.9, 2.5, 3.1, 2.5),
+    ];
+    let geom = GridGeometry::new(70, 50, 0.1, Point2::new(-0.5, -0.5)).unwrap();
+    let (grid, _) = draw(&walls, geom, Point2::new(0.0, 0.0), Point2::new(6.0, 4.0));
+    let laser = LaserConfig::lms1xx();
+    let truth = Pose2::new(4.2, 1.2, core::f32::consts::PI);
+    let behind = Pose2::new(truth.x - 0.2, truth.y, truth.theta);
+    let scan = scan_at(&walls, truth, &laser, 0.003, 5);
+    let points: heapless::Vec<Point2, MAX_BEAMS> = scan
+        .beams()
+        .iter()
+        .filter_map(|b| {
+            let r = b.range_m?;
+            Some(laser.mount.transform_point(Point2::new(
+                r * math::cos(b.angle_rad),
+                r * math::sin(b.angle_rad),
+            )))
+        })
+        .collect();
+    assert!(!search_basin_wins(
+        &grid,
+        &points,
+        &laser,
+        (behind, 200),
+        (truth, 150),
+        true
+    ));
+    assert!(search_basin_wins(
+        &grid,
+        &points,
+        &laser,
+        (behind, 200),
+        (truth, 150),
+        false
+    ));
+    assert!(search_basin_wins(
+        &grid,
+        &points,
+        &laser,
+        (truth, 200),
+        (behind, 150),
+        true
+    ));
+    assert!(!search_basin_wins(
+        &grid,
+        &points,
+        &laser,
+        (truth, 150),
+        (behind, 200),
+        true
+    ));
+}
