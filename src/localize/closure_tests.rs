@@ -298,21 +298,6 @@ fn a_match_the_prediction_explains_as_well_elsewhere_is_ambiguous() {
     );
 }
 
-/// Two rooms either side of a 0.2 m wall, with a door at its north end: the old keyframes
-/// saw the wall from both sides.
-fn thick_wall() -> [super::tests::Segment; 7] {
-    use super::tests::seg;
-    [
-        seg(0.0, 0.0, 6.0, 0.0),
-        seg(6.0, 0.0, 6.0, 4.0),
-        seg(6.0, 4.0, 0.0, 4.0),
-        seg(0.0, 4.0, 0.0, 0.0),
-        seg(2.9, 0.0, 2.9, 2.5),
-        seg(3.1, 0.0, 3.1, 2.5),
-        seg(2.9, 2.5, 3.1, 2.5),
-    ]
-}
-
 /// The free-space test between two basins: a scan of the wall's east face matched a wall's
 /// thickness west puts its returns on the west face, behind the east one; with the ambiguity
 /// test off (it may or may not tell the two apart, by the returns each pairs) that match is
@@ -320,7 +305,7 @@ fn thick_wall() -> [super::tests::Segment; 7] {
 /// with both tests off nothing is refused.
 #[test]
 fn a_match_that_puts_the_returns_behind_a_wall_is_refused() {
-    let walls = thick_wall();
+    let walls = super::tests::thick_wall();
     let laser = LaserConfig::lms1xx();
     let old = [
         Pose2::new(1.5, 1.5, 0.0),

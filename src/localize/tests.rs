@@ -48,6 +48,20 @@ pub(super) fn corridor() -> ([Segment; 2], GridGeometry) {
     )
 }
 
+/// Two rooms, 6 m x 4 m together, either side of a 0.2 m wall (its faces at x = 2.9 and 3.1 m)
+/// with a door at its north end, so a robot sees it from both sides.
+pub(super) fn thick_wall() -> [Segment; 7] {
+    [
+        seg(0.0, 0.0, 6.0, 0.0),
+        seg(6.0, 0.0, 6.0, 4.0),
+        seg(6.0, 4.0, 0.0, 4.0),
+        seg(0.0, 4.0, 0.0, 0.0),
+        seg(2.9, 0.0, 2.9, 2.5),
+        seg(3.1, 0.0, 3.1, 2.5),
+        seg(2.9, 2.5, 3.1, 2.5),
+    ]
+}
+
 /// The map: cells a wall passes through Occupied, cells between `lo` and `hi` Free, the rest
 /// Unknown; and returns every 2 cm along the walls (noiseless).
 fn draw(
@@ -619,15 +633,7 @@ fn the_slide_at_the_end_of_a_move_is_taken_from_the_first_match_at_rest_when_mod
 /// returns (it is without the test); the true pose's basin is taken over that one.
 #[test]
 fn the_search_does_not_take_a_basin_behind_a_wall() {
-    let walls = [
-        seg(0.0, 0.0, 6.0, 0.0),
-        seg(6.0, 0.0, 6.0, 4.0),
-        seg(6.0, 4.0, 0.0, 4.0),
-        seg(0.0, 4.0, 0.0, 0.0),
-        seg(2.9, 0.0, 2.9, 2.5),
-        seg(3.1, 0.0, 3.1, 2.5),
-        seg(2.9, 2.5, 3.1, 2.5),
-    ];
+    let walls = thick_wall();
     let geom = GridGeometry::new(70, 50, 0.1, Point2::new(-0.5, -0.5)).unwrap();
     let (grid, _) = draw(&walls, geom, Point2::new(0.0, 0.0), Point2::new(6.0, 4.0));
     let laser = LaserConfig::lms1xx();
