@@ -96,8 +96,8 @@ pub struct ClosureConfig {
     /// than [`Self::ambiguity_distance_m`] from the match (pairing fewer returns than the
     /// ambiguity test refuses), the match is refused if more of its beams pass through a
     /// wall of the local map before their returns ([`LocalMap::seen_through`]) than at the
-    /// prediction's pose, by more than [`Self::see_through_slack`] of the returns (off: no
-    /// test).
+    /// pose that refinement ends at, by more than [`Self::see_through_slack`] of the returns
+    /// (off: no test).
     pub see_through: bool,
     /// See [`Self::see_through`]: a beam counts when it crosses an Occupied cell more than
     /// this many cells before its return \[cells\].
@@ -111,10 +111,11 @@ impl Default for ClosureConfig {
     /// ±0.2 rad; accepted when the fit constrains all three directions, pairs half the returns
     /// on known ground with a surface, 70 % of the returns are on known ground, and the match
     /// is within 3 σ of the graph's prediction, unless the refinement from the prediction ends
-    /// more than 10 cm away pairing 90 % as many returns (ambiguous) or, ending
-    /// there, with more than 2 % fewer of the beams through a wall of the local map (counted
-    /// from 1.5 cells before the return); as σ 2 cm and 0.57° (the sixth matcher's
-    /// closures are within 2 cm and 0.6° of the true relative pose but for a few; σ 5 cm and
+    /// more than 10 cm away pairing 90 % as many returns (ambiguous), or ends there with the
+    /// match putting more than 2 % more of its beams through a wall of the local map than
+    /// that pose does (counted from 1.5 cells before the return); as σ 2 cm and 0.57° (the
+    /// sixth matcher's closures are within 2 cm and 0.6° of the true relative pose but for a
+    /// few; σ 5 cm and
     /// 1.15°, about the fourth matcher's spread, let the worst of 20 house missions end 47 cm
     /// off against 11.8 cm: docs/experiments.md, tenth measurement).
     fn default() -> Self {
