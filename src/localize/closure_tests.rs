@@ -325,8 +325,9 @@ fn a_match_that_puts_the_returns_behind_a_wall_is_refused() {
     let points = &points[..n];
 
     let margin_m = 0.15;
-    let at_truth = local.seen_through(points, &laser, truth, margin_m);
-    let at_behind = local.seen_through(points, &laser, behind, margin_m);
+    let seen_through =
+        |pose| super::free_space::seen_through(local.grid(), points, &laser, pose, margin_m);
+    let (at_truth, at_behind) = (seen_through(truth), seen_through(behind));
     assert!(
         at_behind > at_truth + 0.1,
         "behind the wall {at_behind}, at the truth {at_truth}"

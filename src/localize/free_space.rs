@@ -56,3 +56,31 @@ pub fn seen_through<const N: usize>(
         through as f32 / counted as f32
     }
 }
+
+/// A beam counts as seen through when it crosses a wall more than this many cells before its
+/// return ([`crosses_more_walls`]'s default margin): a cell and a half, so a return's own
+/// wall cell and the one beside it do not count, while a wall two cells thick does.
+pub const MARGIN_CELLS: f32 = 1.5;
+
+/// How much larger a share of beams through walls must be to count as more
+/// ([`crosses_more_walls`]'s default slack): 2 % of the returns.
+pub const SLACK: f32 = 0.02;
+
+/// Whether `candidate` puts more of `points`' beams through `grid`'s walls than `other` does
+/// by more than `slack` (a share of the returns), a beam counting from `margin_cells` cells
+/// before its return ([`seen_through`]): `Some(share at candidate)` when it does. Where two
+/// poses fit a scan's returns about as well, the one that sees through walls is not where the
+/// scan was taken.
+pub fn crosses_more_walls<const N: usize>(
+    grid: &OccupancyGrid<N>,
+    points: &[Point2],
+    laser: &LaserConfig,
+    candidate: Pose2,
+    other: Pose2,
+    margin_cells: f32,
+    slack: f32,
+) -> Option<f32> {
+    let margin_m = margin_cells * grid.geometry().resolution_m;
+    let through = seen_through(grid, points, laser, candidate, margin_m);
+    (through > seen_through(grid, points, laser, other, margin_m) + slack).then_some(through)
+}

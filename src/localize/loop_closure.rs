@@ -95,9 +95,9 @@ pub struct ClosureConfig {
     /// Free-space test between two basins: when the refinement from the prediction ends more
     /// than [`Self::ambiguity_distance_m`] from the match (pairing fewer returns than the
     /// ambiguity test refuses), the match is refused if more of its beams pass through a
-    /// wall of the local map before their returns ([`LocalMap::seen_through`]) than at the
-    /// pose that refinement ends at, by more than [`Self::see_through_slack`] of the returns
-    /// (off: no test).
+    /// wall of the local map before their returns than at the pose that refinement ends at,
+    /// by more than [`Self::see_through_slack`] of the returns
+    /// ([`super::free_space::crosses_more_walls`]; off: no test).
     pub see_through: bool,
     /// See [`Self::see_through`]: a beam counts when it crosses an Occupied cell more than
     /// this many cells before its return \[cells\].
@@ -135,8 +135,8 @@ impl Default for ClosureConfig {
             ambiguity_distance_m: 0.1,
             ambiguity_ratio: 0.9,
             see_through: true,
-            see_through_margin_cells: 1.5,
-            see_through_slack: 0.02,
+            see_through_margin_cells: super::free_space::MARGIN_CELLS,
+            see_through_slack: super::free_space::SLACK,
         }
     }
 }
@@ -329,16 +329,19 @@ impl<const L: usize> LocalMap<L> {
         if config.ambiguity && rival.ratio >= config.ambiguity_ratio {
             return Some(Refusal::Ambiguous(rival.ratio));
         }
-        if config.see_through {
-            let margin_m = config.see_through_margin_cells * self.grid.geometry().resolution_m;
-            let through = self.seen_through(points, laser, matched, margin_m);
-            if through
-                > self.seen_through(points, laser, rival.pose, margin_m) + config.see_through_slack
-            {
-                return Some(Refusal::SeesThrough(through));
-            }
+        if !config.see_through {
+            return None;
         }
-        None
+        super::free_space::crosses_more_walls(
+            &self.grid,
+            points,
+            laser,
+            matched,
+            rival.pose,
+            config.see_through_margin_cells,
+            config.see_through_slack,
+        )
+        .map(Refusal::SeesThrough)
     }
 
     /// The second basin of a match at `matched` of `points` (robot frame, the returns the
@@ -381,19 +384,6 @@ impl<const L: usize> LocalMap<L> {
             pose: other.pose,
             ratio,
         })
-    }
-
-    /// The share of `points` (robot frame, the returns a match used) whose beam from the
-    /// laser at `pose` crosses a wall of the local map more than `margin_m` before the return
-    /// ([`super::free_space::seen_through`]).
-    pub fn seen_through(
-        &self,
-        points: &[Point2],
-        laser: &LaserConfig,
-        pose: Pose2,
-        margin_m: f32,
-    ) -> f32 {
-        super::free_space::seen_through(&self.grid, points, laser, pose, margin_m)
     }
 
     /// The local grid (for tests and pictures).

@@ -103,7 +103,7 @@ fn window_margin_m(reach_m: f32, res: f32, config: &MatchConfig) -> f32 {
 /// pairs) replaces the one the refinement from the prediction ended in (`kept`): when it pairs
 /// more returns and, with `see_through`, puts no more than 2 % more of `points`' beams (robot
 /// frame) through the map's walls, counted from 1.5 cells before each return
-/// ([`free_space::seen_through`]). A scan of a wall's near face fits its far face, a wall's
+/// ([`free_space::crosses_more_walls`]). A scan of a wall's near face fits its far face, a wall's
 /// thickness behind, about as well; the beams to the far face cross the near one.
 fn search_basin_wins<const N: usize>(
     grid: &OccupancyGrid<N>,
@@ -116,12 +116,17 @@ fn search_basin_wins<const N: usize>(
     if search.1 <= kept.1 {
         return false;
     }
-    if !see_through {
-        return true;
-    }
-    let margin_m = 1.5 * grid.geometry().resolution_m;
-    free_space::seen_through(grid, points, laser, search.0, margin_m)
-        <= free_space::seen_through(grid, points, laser, kept.0, margin_m) + 0.02
+    !see_through
+        || free_space::crosses_more_walls(
+            grid,
+            points,
+            laser,
+            search.0,
+            kept.0,
+            free_space::MARGIN_CELLS,
+            free_space::SLACK,
+        )
+        .is_none()
 }
 
 /// Settings of a match.
