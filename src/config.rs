@@ -428,6 +428,11 @@ pub struct LocalizeBoardConfig {
     /// ([`crate::localize::graph`]); absent: false. Needs `enabled`.
     #[serde(default)]
     pub pose_graph: Option<bool>,
+    /// Estimate the odometry's systematic errors (turn gain, curvature per metre) from the
+    /// matches and correct each odometry increment with them
+    /// ([`crate::localize::odometry_calibration`]); absent: true.
+    #[serde(default)]
+    pub self_calibration: Option<bool>,
 }
 
 /// Which scans go into the map (`$.mapping`, an optional section): with `motion_filter` on,
@@ -760,6 +765,7 @@ impl BoardConfig {
             .search_theta_deg
             .map_or(c.matcher.search_theta_rad, deg_to_rad);
         c.graph.enabled = l.pose_graph.unwrap_or(c.graph.enabled);
+        c.calibration.enabled = l.self_calibration.unwrap_or(c.calibration.enabled);
         c
     }
 

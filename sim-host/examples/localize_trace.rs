@@ -24,16 +24,16 @@
 //! confident wall count within this many cells of its centre; negative: every miss counts), `DIAG=1` (each closure's
 //! error against the truth, with the old keyframe's true position, and each step's).
 //!
-//! Odometry self-calibration (`src/localize/odometry_calibration.rs`): `LOC_CAL=1` (on),
+//! Odometry self-calibration (`src/localize/odometry_calibration.rs`): `LOC_CAL=0` (off; on by default),
 //! `CAL_RANDOM` (the share of the odometry variances kept as random), `CAL_SG`/`CAL_SK` (the
 //! priors' σ of the turn gain and of the curvature, rad/m); with it on, a line before the last
 //! reports the estimate against the wheels the simulator drew (`Ed`, `Eb`). `SLIP_RANDOM=F`
 //! scales the slip model's random walks and fast-turn slip by `F` (0: systematic wheel errors
 //! and the end-of-move slide only).
 //!
-//! `LOC_L` sets the matcher's length scale (`MatchConfig::length_scale_m`); `LOC_SEARCH_SEE=1`
-//! turns on `MatchConfig::search_see_through` (the search's basin only if its beams cross no
-//! more walls).
+//! `LOC_L` sets the matcher's length scale (`MatchConfig::length_scale_m`); `LOC_SEARCH_SEE=0`
+//! turns off `MatchConfig::search_see_through` (on by default: the search's basin only if its
+//! beams cross no more walls).
 //! With `WINDOW`, a second line per scan gives the true, odometry and estimated heading (and distance)
 //! changes since the scan before, the filter's heading σ, the fused match's heading σ and its
 //! null direction `(x, y, θ·1 m)` when it constrains two directions.

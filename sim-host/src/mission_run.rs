@@ -60,6 +60,7 @@ pub fn json_report(setup: &Setup, report: &RunReport) -> serde_json::Value {
         "slip": setup.slip.name(),
         "localize": m.localize.enabled,
         "pose_graph": m.localize.graph.enabled,
+        "self_calibration": m.localize.enabled && m.localize.calibration.enabled,
         "resolution_m": setting(setup.world.geometry().resolution_m),
         "clearance_m": setting(setup.clearance_m),
         "occupied_thresh": setting(setup.occupied_thresh),

@@ -167,6 +167,9 @@ pub struct ScenarioSpec {
     /// Keyframes in a pose graph with loop closures behind the matcher
     /// ([`papillon::localize::graph`]); only with `localize`.
     pub pose_graph: bool,
+    /// The matcher's online estimate of the odometry's systematic errors
+    /// ([`papillon::localize::odometry_calibration`]); only with `localize`.
+    pub self_calibration: bool,
     /// Range noise of the simulated laser, a fraction of the range (standard deviation);
     /// `None`: the mission's laser's (the thesis's 5 %). A SICK LMS1xx is nearer 0.3 %
     /// (about 12 mm at 4 m).
@@ -207,6 +210,7 @@ impl Default for ScenarioSpec {
             slip: Slip::Thesis,
             localize: false,
             pose_graph: false,
+            self_calibration: true,
             laser_noise: None,
             laser_noise_m: None,
             preset: papillon::explore::DEFAULT_PRESET,
@@ -351,6 +355,7 @@ impl Setup {
             return Err("--pose-graph: on needs the scan matcher, --localize on".into());
         }
         run.mission.localize.graph.enabled = spec.pose_graph;
+        run.mission.localize.calibration.enabled = spec.self_calibration;
         if let Some(noise) = spec.laser_noise {
             run.mission.laser.noise_fraction = noise;
         }

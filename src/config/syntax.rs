@@ -167,6 +167,11 @@ pub(super) const SCHEMA: &[(&str, bool, Kind)] = &[
         Kind::Optional(&Kind::Number),
     ),
     ("$.localize.pose_graph", false, Kind::Optional(&Kind::Bool)),
+    (
+        "$.localize.self_calibration",
+        false,
+        Kind::Optional(&Kind::Bool),
+    ),
     ("$.mapping", false, Kind::Object),
     (
         "$.mapping.motion_filter",

@@ -573,6 +573,17 @@ fn the_localize_section_is_optional_and_sets_the_matcher() {
     let l = c.localize_config();
     assert!(l.enabled && l.graph.enabled);
     assert_eq!(l.matcher, LocalizeConfig::default().matcher);
+    // The odometry's self-calibration: on unless the board turns it off.
+    assert!(l.calibration.enabled);
+    let json = SIM.replacen(
+        "\"persistence\"",
+        "\"localize\": {\"enabled\": true, \"self_calibration\": false}, \"persistence\"",
+        1,
+    );
+    let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+    assert_eq!(paths(&c), Vec::<String>::new());
+    let l = c.localize_config();
+    assert!(l.enabled && !l.calibration.enabled);
 }
 
 /// Each bad `$.localize` value is one problem naming its key; a misspelt key and a wrong type
@@ -602,6 +613,9 @@ fn bad_localize_values_name_their_field() {
     // The pose graph without the matcher it sits behind.
     only_problem_at("$.localize.pose_graph", |c| {
         c.localize.pose_graph = Some(true)
+    });
+    only_problem_at("$.localize.self_calibration", |c| {
+        c.localize.self_calibration = Some(true)
     });
     let typo = SIM.replacen(
         "\"persistence\"",

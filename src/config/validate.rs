@@ -450,6 +450,12 @@ impl BoardConfig {
                 "needs the scan matcher: $.localize.enabled true",
             );
         }
+        if l.self_calibration == Some(true) && l.enabled != Some(true) {
+            r(
+                "$.localize.self_calibration",
+                "needs the scan matcher: $.localize.enabled true",
+            );
+        }
         // The matcher's window must hold a whole scan with the search around it, or every
         // match would be refused and the map drawn at the odometry pose without a word.
         let laser = &self.laser;

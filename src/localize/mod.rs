@@ -15,8 +15,8 @@
 //!    [`likelihood`], a blurred local copy of the returns around the scan, and [`correlative`],
 //!    Olson's exhaustive search of a small pose window around the prediction on it (*Real-time
 //!    correlative scan matching*, ICRA 2009), which finds the right basin; the refinement
-//!    starts again from there (with [`MatchConfig::search_see_through`], an experiment, only
-//!    if its beams pass through no more of the map's walls: [`free_space`]);
+//!    starts again from there if its beams pass through no more of the map's walls than at
+//!    the prediction ([`MatchConfig::search_see_through`], [`free_space`]);
 //! 3. [`constraint`]: the eigen-analysis of the information; the correction is kept only along
 //!    directions the scan constrains, and the odometry prediction along the others (a
 //!    featureless corridor).
@@ -178,12 +178,10 @@ pub struct MatchConfig {
     pub min_sigma_m: f32,
     /// The search's basin replaces the prediction's only when no more than 2 % more of its
     /// beams pass through a wall of the map (counted from 1.5 cells before the return) than
-    /// at the prediction's ([`free_space::seen_through`]). An experiment, off: with the
-    /// realistic odometry it took the house check's worst end error from 202.7 to 28.2 cm
-    /// (median 8.4 → 7.3 cm) and the generated set's from 3.2 to 1.9 m (median 6.9 → 5.8 cm,
-    /// runs at 99 % 35 → 37), but it changes every mission with the matcher on, the built-in
-    /// maps' too, and issue 26's binary checks have not been run with it
-    /// (docs/experiments.md, "Issue 18: the tracker's search through a wall").
+    /// at the prediction's ([`free_space::seen_through`]). On by default: with the realistic
+    /// odometry and the odometry self-calibration it took the house's 100 seeds from 8 to 5
+    /// end errors above 15 cm (docs/experiments.md, "Issue 18: the tracker's search through a
+    /// wall" and "the self-calibration and the search's free-space test by default").
     pub search_see_through: bool,
     /// Blur the returns by a Gaussian sum (a density of returns) before normalising, instead
     /// of by Olson's max-convolution after (an experiment, off: measured no better,
@@ -196,7 +194,8 @@ impl Default for MatchConfig {
     /// half of them on known cells, returns beyond 1 m weighted by 1/r² in the search, L = 1 m,
     /// prior 0.02, search gain 0.03; at least 30 % of the returns paired after the fit, the
     /// search only when fewer than 60 % are; the refinement's defaults ([`ndt::NdtConfig`]);
-    /// wall cells at half the local peak, max-convolution.
+    /// wall cells at half the local peak, max-convolution; the search's basin only if its
+    /// beams cross no more walls.
     fn default() -> Self {
         Self {
             search_xy_m: 0.3,
@@ -215,7 +214,7 @@ impl Default for MatchConfig {
             fine: ndt::NdtConfig::default(),
             wall_fraction: likelihood::WALL_FRACTION,
             min_sigma_m: 0.0,
-            search_see_through: false,
+            search_see_through: true,
             smooth: false,
         }
     }

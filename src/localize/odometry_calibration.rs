@@ -48,14 +48,14 @@ pub struct CalibrationConfig {
 }
 
 impl Default for CalibrationConfig {
-    /// Off; priors σ 0.01 for the turn gain and 0.01 rad/m (0.57°/m) for the curvature: an
+    /// On; priors σ 0.01 for the turn gain and 0.01 rad/m (0.57°/m) for the curvature: an
     /// uncalibrated P3-DX's wheelbase uncertain by about a percent and its wheel diameters
     /// unequal by a few tenths of a percent (Borenstein & Feng 1996; `papillon-sim`'s
     /// realistic model draws within ±1 % and ±0.3 %, i.e. up to 0.0084 rad/m); the odometry
     /// model's variances kept in full (`random_scale` 1).
     fn default() -> Self {
         Self {
-            enabled: false,
+            enabled: true,
             turn_gain_sigma: 0.01,
             curvature_sigma_rad_per_m: 0.01,
             random_scale: 1.0,

@@ -115,9 +115,12 @@ pub struct LocalizeConfig {
     pub stop_var_rad2: f32,
     /// Online estimation of the odometry's systematic errors (turn gain and curvature per
     /// metre, [`super::odometry_calibration`]): each odometry increment is corrected with the
-    /// estimate before the prediction. Off by default (off: the prediction is the odometry as
-    /// reported, as before). While on, [`Self::innovation_gate`]'s fading memory (> 0) is not
-    /// applied; its validation gate (< 0) is.
+    /// estimate before the prediction. On by default: on the house's 100 seeds with the
+    /// realistic odometry, map accuracy at 97 % on 84 against 73 and coverage at 99 % on 95
+    /// against 87 (docs/experiments.md, "the self-calibration and the search's free-space test
+    /// by default"); off, the prediction is the odometry as reported. While on,
+    /// [`Self::innovation_gate`]'s fading memory (> 0) is not applied; its validation gate
+    /// (< 0) is.
     pub calibration: super::odometry_calibration::CalibrationConfig,
     /// How far past each return the grid's Occupied evidence reaches, for the pose's own
     /// error ([`crate::sensor::integrate_scan_banded`]; at most half a cell is used): this

@@ -34,6 +34,7 @@ pub fn scenario(spec: &RunSpec) -> Result<ScenarioSpec, String> {
         slip: Slip::Thesis,
         localize: false,
         pose_graph: false,
+        self_calibration: true,
         laser_noise: None,
         laser_noise_m: None,
         preset: preset_from_name(&spec.preset)?,

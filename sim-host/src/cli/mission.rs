@@ -80,6 +80,11 @@ pub struct Args {
     /// $.localize.pose_graph.
     #[arg(long, default_value = "off", value_parser = ["on", "off"])]
     pub pose_graph: String,
+    /// The scan matcher's online estimate of the odometry's systematic errors (turn gain,
+    /// curvature; `src/localize/odometry_calibration.rs`): on or off; only with --localize
+    /// on. Boards: $.localize.self_calibration.
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub self_calibration: String,
     /// Range noise of the simulated laser, as a fraction of the range (standard deviation of
     /// Gaussian noise): default the thesis's 0.05; a SICK LMS1xx is nearer 0.003 (about 12 mm
     /// at 4 m), 0 for noise-free ranges.
@@ -262,6 +267,15 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         "off" => false,
         other => return Err(format!("--pose-graph: expected on or off, got '{other}'")),
     };
+    let self_calibration = match args.self_calibration.as_str() {
+        "on" => true,
+        "off" => false,
+        other => {
+            return Err(format!(
+                "--self-calibration: expected on or off, got '{other}'"
+            ));
+        }
+    };
     Ok(ScenarioSpec {
         map: args.map.clone(),
         resolution_m,
@@ -278,6 +292,7 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         slip,
         localize,
         pose_graph,
+        self_calibration,
         laser_noise,
         laser_noise_m,
         preset,
@@ -371,6 +386,7 @@ mod tests {
             slip: "thesis".into(),
             localize: "off".into(),
             pose_graph: "off".into(),
+            self_calibration: "on".into(),
             laser_noise: None,
             laser_noise_m: None,
             json: false,
@@ -421,6 +437,14 @@ mod tests {
         })
         .unwrap();
         assert!(!matcher.run.mission.localize.graph.enabled);
+        assert!(matcher.run.mission.localize.calibration.enabled);
+        let uncalibrated = setup_from_args(&Args {
+            localize: "on".into(),
+            self_calibration: "off".into(),
+            ..args()
+        })
+        .unwrap();
+        assert!(!uncalibrated.run.mission.localize.calibration.enabled);
         let sick = setup_from_args(&Args {
             laser_noise: Some("0.003".into()),
             ..args()
