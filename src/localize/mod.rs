@@ -27,7 +27,7 @@
 //! based on.
 //!
 //! [`tracker`] applies matches to the mission's map-from-odometry transform; with
-//! [`odometry_calibration`] on (off by default) it also estimates the odometry's systematic
+//! [`odometry_calibration`] (on by default) it also estimates the odometry's systematic
 //! errors from them and corrects each odometry increment before the prediction.
 //!
 //! [`graph`] (off by default, [`graph::GraphConfig`]) keeps keyframes ([`keyframes`]) in a pose
