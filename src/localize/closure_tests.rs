@@ -4,10 +4,10 @@
 
 use super::keyframes::KeyframeStore;
 use super::loop_closure::{ClosureConfig, LOCAL_CELLS, LocalMap, Refusal, candidate};
-use super::tests::{config, corridor, matcher, room, scan_at};
-use crate::geometry::{Point2, Pose2, normalize_angle};
+use super::tests::{config, corridor, matcher, returns, room, scan_at};
+use crate::geometry::{Pose2, normalize_angle};
 use crate::grid::LogOddsBounds;
-use crate::sensor::{LaserConfig, MAX_BEAMS, SensorModel};
+use crate::sensor::{LaserConfig, SensorModel};
 
 type Store = KeyframeStore<8>;
 
@@ -223,22 +223,6 @@ fn jambs() -> [super::tests::Segment; 54] {
         walls[3 + 2 * k] = super::tests::seg(x, 3.0, x, 2.7);
     }
     walls
-}
-
-/// The returns of `scan` in the robot frame (the points a match uses).
-fn returns(scan: &crate::sensor::Scan, laser: &LaserConfig) -> ([Point2; MAX_BEAMS], usize) {
-    let mut points = [Point2::new(0.0, 0.0); MAX_BEAMS];
-    let mut n = 0;
-    for b in scan.beams() {
-        if let Some(r) = b.range_m.filter(|r| *r >= laser.min_range_m) {
-            points[n] = laser.mount.transform_point(Point2::new(
-                r * crate::math::cos(b.angle_rad),
-                r * crate::math::sin(b.angle_rad),
-            ));
-            n += 1;
-        }
-    }
-    (points, n)
 }
 
 /// The closures' ambiguity test: in a corridor of evenly spaced jambs, a match the wide search
