@@ -524,17 +524,23 @@ fn the_simulator_board_runs_the_matcher_and_its_graph() {
 #[test]
 fn the_localize_section_is_optional_and_sets_the_matcher() {
     use crate::localize::LocalizeConfig;
+    // `sim.json` with the `$.localize` section `section`.
+    let with = |section: &str| {
+        let json = SIM.replacen(
+            "\"persistence\"",
+            &format!("\"localize\": {section}, \"persistence\""),
+            1,
+        );
+        BoardConfig::from_json(json.as_bytes()).unwrap()
+    };
     let c = BoardConfig::from_json(SIM.as_bytes()).unwrap();
     assert_eq!(c.localize, LocalizeBoardConfig::default());
     assert_eq!(c.localize_config(), LocalizeConfig::default());
     assert!(!c.localize_config().enabled);
-    let json = SIM.replacen(
-        "\"persistence\"",
-        "\"localize\": {\"enabled\": true, \"every_n_scans\": 2, \"min_travel_m\": 0.25, \
-         \"min_turn_deg\": 10, \"search_xy_m\": 0.4, \"search_theta_deg\": 8}, \"persistence\"",
-        1,
+    let c = with(
+        "{\"enabled\": true, \"every_n_scans\": 2, \"min_travel_m\": 0.25, \
+         \"min_turn_deg\": 10, \"search_xy_m\": 0.4, \"search_theta_deg\": 8}",
     );
-    let c = BoardConfig::from_json(json.as_bytes()).unwrap();
     assert_eq!(paths(&c), Vec::<String>::new());
     let l = c.localize_config();
     assert!(l.enabled);
@@ -549,12 +555,7 @@ fn the_localize_section_is_optional_and_sets_the_matcher() {
     assert_eq!(l.information_scale, d.information_scale);
     assert_eq!(l.matcher.sigma_m, d.matcher.sigma_m);
     // Only `enabled`: the defaults, switched on.
-    let json = SIM.replacen(
-        "\"persistence\"",
-        "\"localize\": {\"enabled\": true}, \"persistence\"",
-        1,
-    );
-    let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+    let c = with("{\"enabled\": true}");
     assert_eq!(
         c.localize_config(),
         LocalizeConfig {
@@ -563,24 +564,14 @@ fn the_localize_section_is_optional_and_sets_the_matcher() {
         }
     );
     // The pose graph behind it.
-    let json = SIM.replacen(
-        "\"persistence\"",
-        "\"localize\": {\"enabled\": true, \"pose_graph\": true}, \"persistence\"",
-        1,
-    );
-    let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+    let c = with("{\"enabled\": true, \"pose_graph\": true}");
     assert_eq!(paths(&c), Vec::<String>::new());
     let l = c.localize_config();
     assert!(l.enabled && l.graph.enabled);
     assert_eq!(l.matcher, LocalizeConfig::default().matcher);
     // The odometry's self-calibration: on unless the board turns it off.
     assert!(l.calibration.enabled);
-    let json = SIM.replacen(
-        "\"persistence\"",
-        "\"localize\": {\"enabled\": true, \"self_calibration\": false}, \"persistence\"",
-        1,
-    );
-    let c = BoardConfig::from_json(json.as_bytes()).unwrap();
+    let c = with("{\"enabled\": true, \"self_calibration\": false}");
     assert_eq!(paths(&c), Vec::<String>::new());
     let l = c.localize_config();
     assert!(l.enabled && !l.calibration.enabled);

@@ -444,17 +444,14 @@ impl BoardConfig {
         {
             r("$.localize.search_theta_deg", "must be in (0, 45] deg");
         }
-        if l.pose_graph == Some(true) && l.enabled != Some(true) {
-            r(
-                "$.localize.pose_graph",
-                "needs the scan matcher: $.localize.enabled true",
-            );
-        }
-        if l.self_calibration == Some(true) && l.enabled != Some(true) {
-            r(
-                "$.localize.self_calibration",
-                "needs the scan matcher: $.localize.enabled true",
-            );
+        // What sits behind the matcher, asked for without it.
+        for (path, on) in [
+            ("$.localize.pose_graph", l.pose_graph),
+            ("$.localize.self_calibration", l.self_calibration),
+        ] {
+            if on == Some(true) && l.enabled != Some(true) {
+                r(path, "needs the scan matcher: $.localize.enabled true");
+            }
         }
         // The matcher's window must hold a whole scan with the search around it, or every
         // match would be refused and the map drawn at the odometry pose without a word.

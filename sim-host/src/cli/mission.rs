@@ -201,6 +201,16 @@ fn number<T: std::str::FromStr>(option: &str, text: &str, what: &str) -> Result<
         .map_err(|_| format!("{option}: expected {what}, got '{text}'"))
 }
 
+/// A switch's value: `on` or `off` (clap has checked it; a caller building `Args` by hand
+/// gets the error naming `flag`).
+fn on_off(flag: &str, value: &str) -> Result<bool, String> {
+    match value {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        other => Err(format!("{flag}: expected on or off, got '{other}'")),
+    }
+}
+
 /// The scenario the options describe; the error is one line naming the option.
 pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
     let robots = number("--robots", &args.robots, "a whole number of robots")?;
@@ -251,31 +261,15 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         Some(t) => Some(super::range_sigma_m(t).map_err(|e| format!("--laser-noise-m: {e}"))?),
         None => None,
     };
-    let localize = match args.localize.as_str() {
-        "on" => true,
-        "off" => false,
-        other => return Err(format!("--localize: expected on or off, got '{other}'")),
-    };
-    let pose_graph = match args.pose_graph.as_str() {
-        "on" if !localize => {
-            return Err(
-                "--pose-graph: on needs the scan matcher, --localize on (the graph's keyframes are its matched scans)"
-                    .into(),
-            );
-        }
-        "on" => true,
-        "off" => false,
-        other => return Err(format!("--pose-graph: expected on or off, got '{other}'")),
-    };
-    let self_calibration = match args.self_calibration.as_str() {
-        "on" => true,
-        "off" => false,
-        other => {
-            return Err(format!(
-                "--self-calibration: expected on or off, got '{other}'"
-            ));
-        }
-    };
+    let localize = on_off("--localize", &args.localize)?;
+    let pose_graph = on_off("--pose-graph", &args.pose_graph)?;
+    if pose_graph && !localize {
+        return Err(
+            "--pose-graph: on needs the scan matcher, --localize on (the graph's keyframes are its matched scans)"
+                .into(),
+        );
+    }
+    let self_calibration = on_off("--self-calibration", &args.self_calibration)?;
     Ok(ScenarioSpec {
         map: args.map.clone(),
         resolution_m,
@@ -718,6 +712,13 @@ mod tests {
                     ..args()
                 },
                 "--pose-graph:",
+            ),
+            (
+                Args {
+                    self_calibration: "maybe".into(),
+                    ..args()
+                },
+                "--self-calibration: expected on or off, got 'maybe'",
             ),
             (
                 Args {
