@@ -31,6 +31,20 @@
 //! scales the slip model's random walks and fast-turn slip by `F` (0: systematic wheel errors
 //! and the end-of-move slide only).
 //!
+//! Where the error comes from (2026-12-08): `LASER_BEAMS=N` spreads N beams over the laser's
+//! field of view (the thesis's 181 by default; with more than `LOC_POINTS`, 270, raise that
+//! too); `LOC_MAXSIG` sets the refinement's `max_sigma_m` (a direction is constrained when
+//! pinned to this); `GRAPH_NB`, `GRAPH_MAXD`, `GRAPH_MINPATH` a closure's neighbours drawn,
+//! its candidates' largest distance and least path. `MATCH_ERR=1` prints, per number of
+//! constrained directions, the mean and RMS of the trusted matches' corrections in the
+//! robot's frame (forward, left, heading): with `LOC_INFO=0` the map is drawn at the
+//! odometry's pose, so with `none` each correction is the match's own error against a map
+//! drawn at the true poses. `POSE=1` adds to each printed line a `q` line (the estimate's
+//! error in the robot's frame and in the map's, the tracker's σ and heading-x correlation,
+//! the last correction) and a `p` line (the true pose, the last match's known fraction and
+//! constrained directions, the keyframes so far). With `ATTRIB=1`, `STEPS=FILE` writes every
+//! step's heading and position error change to `FILE`.
+//!
 //! `LOC_L` sets the matcher's length scale (`MatchConfig::length_scale_m`); `LOC_SEARCH_SEE=0`
 //! turns off `MatchConfig::search_see_through` (on by default: the search's basin only if its
 //! beams cross no more walls).
@@ -76,6 +90,24 @@ fn main() {
     }
     if let Some(v) = env("NOISE") {
         m.laser.noise_fraction = v;
+    }
+    if let Some(v) = env("LASER_BEAMS") {
+        // The same field of view, `v` beams.
+        let span = m.laser.step_rad * f32::from(m.laser.beam_count.saturating_sub(1));
+        m.laser.beam_count = v as u16;
+        m.laser.step_rad = span / (v - 1.0).max(1.0);
+    }
+    if let Some(v) = env("LOC_MAXSIG") {
+        m.localize.matcher.fine.max_sigma_m = v;
+    }
+    if let Some(v) = env("GRAPH_NB") {
+        m.localize.graph.closure.neighbours = v as usize;
+    }
+    if let Some(v) = env("GRAPH_MAXD") {
+        m.localize.graph.closure.max_distance_m = v;
+    }
+    if let Some(v) = env("GRAPH_MINPATH") {
+        m.localize.graph.closure.min_path_m = v;
     }
     if let Some(v) = env("LOC_N") {
         m.localize.every_n_scans = v as u32;
@@ -271,6 +303,12 @@ fn main() {
         papillon::geometry::Pose2,
         papillon::geometry::Pose2,
     )> = None;
+    // MATCH_ERR=1: per number of constrained directions (0..=3), the trusted matches' count
+    // and the sums of their corrections (forward, left, heading) and of their squares.
+    let match_err = std::env::var("MATCH_ERR").is_ok();
+    let mut corrections = [[0.0f64; 7]; 4];
+    let mut last_counted = 0;
+    let pose_lines = std::env::var("POSE").is_ok();
     while !r.finished() {
         let before = r.map().graph.stats().redraws;
         let keys = r.map().graph.keyframes().len();
@@ -297,6 +335,23 @@ fn main() {
             let o = r.body(0).odometry_in_map();
             odo_max_m = odo_max_m.max(o.position().distance(tp.position()));
             odo_max_rad = odo_max_rad.max(normalize_angle(o.theta - tp.theta).abs());
+        }
+        if match_err
+            && r.mission(0).localizer().matches() != last_counted
+            && let Some(q) = r.mission(0).localizer().last()
+        {
+            last_counted = r.mission(0).localizer().matches();
+            if q.trusted() {
+                let (sin, cos) = r.body(0).true_pose().theta.sin_cos();
+                let [dx, dy, dth] = q.correction;
+                let c = [cos * dx + sin * dy, -sin * dx + cos * dy, dth];
+                let s = &mut corrections[usize::from(q.constrained).min(3)];
+                s[0] += 1.0;
+                for k in 0..3 {
+                    s[1 + k] += f64::from(c[k]);
+                    s[4 + k] += f64::from(c[k] * c[k]);
+                }
+            }
         }
         if attrib {
             let tp = r.body(0).true_pose();
@@ -346,6 +401,36 @@ fn main() {
             let e = ms.pose_map();
             let o = b.odometry_in_map();
             let l = ms.localizer();
+            if pose_lines {
+                let (sin, cos) = tp.theta.sin_cos();
+                let (ex, ey) = (e.x - tp.x, e.y - tp.y);
+                let eh = normalize_angle(e.theta - tp.theta).to_degrees();
+                let cov = l.covariance();
+                let sd = |i: usize| cov[i][i].max(0.0).sqrt();
+                let c = l.last().map_or([0.0; 3], |q| q.correction);
+                println!(
+                    "q {t:7.1} fwd {:+.3} left {:+.3} dth {eh:+.3} | ex {ex:+.3} ey {ey:+.3} sx {:.3} sy {:.3} sth {:.3} cxth {:+.2} | corr {:+.4} {:+.4} {:+.3}",
+                    cos * ex + sin * ey,
+                    -sin * ex + cos * ey,
+                    sd(0),
+                    sd(1),
+                    sd(2).to_degrees(),
+                    cov[0][2] / (sd(0) * sd(2)).max(1e-30),
+                    c[0],
+                    c[1],
+                    c[2].to_degrees(),
+                );
+                println!(
+                    "p {t:7.1} true {:6.2} {:6.2} {:7.1} err {:.3} {eh:+.2} known {:.2} c {} keys {}",
+                    tp.x,
+                    tp.y,
+                    tp.theta.to_degrees(),
+                    e.position().distance(tp.position()),
+                    l.last().map_or(0.0, |q| q.known_fraction),
+                    l.last().map_or(0, |q| q.constrained),
+                    r.map().graph.keyframes().len(),
+                );
+            }
             println!(
                 "t {:7.1} err {:.3} m {:6.2} deg | odo {:.2} m {:6.1} deg | trusted {}/{} (+{}) last {:?}",
                 t,
@@ -429,6 +514,18 @@ fn main() {
         for (k, (n, dp, dh, ah)) in &sums {
             println!("{k} | {n:6} | {dp:+8.3} | {dh:+8.2} | {ah:8.2}");
         }
+        if let Ok(path) = std::env::var("STEPS") {
+            use std::io::Write;
+            let mut f = std::io::BufWriter::new(std::fs::File::create(&path).unwrap());
+            for (t, dh, dp, k) in &jumps {
+                writeln!(
+                    f,
+                    "{t:.1} {dh:.5} {dp:.5} {}",
+                    k.split_whitespace().collect::<Vec<_>>().join("_")
+                )
+                .unwrap();
+            }
+        }
         jumps.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
         for (t, dh, dp, k) in jumps.iter().take(8) {
             println!("jump t {t:7.1} heading {dh:+.2} deg pos {dp:+.3} m {k}");
@@ -440,6 +537,22 @@ fn main() {
     let e = ms.pose_map();
     let rep = r.report();
     let g = *r.map().graph.stats();
+    if match_err {
+        for (k, s) in corrections.iter().enumerate().filter(|(_, s)| s[0] > 0.0) {
+            let n = s[0];
+            let mean = |i: usize| s[1 + i] / n;
+            let rms = |i: usize| (s[4 + i] / n).sqrt();
+            println!(
+                "match error, {k} directions constrained: {n} matches; forward mean {:+.5} rms {:.5} m, left mean {:+.5} rms {:.5} m, heading mean {:+.5} rms {:.5} deg",
+                mean(0),
+                rms(0),
+                mean(1),
+                rms(1),
+                mean(2).to_degrees(),
+                rms(2).to_degrees(),
+            );
+        }
+    }
     if std::env::var("DIAG").is_ok() {
         let graph = r.map().graph.graph();
         for e in graph.edges() {
