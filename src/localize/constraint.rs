@@ -190,4 +190,17 @@ mod tests {
         assert!(p[0].abs() < 1e-6);
         assert!((p[1] + 0.05).abs() < 1e-6 && (p[2] - 0.01).abs() < 1e-6);
     }
+
+    #[test]
+    fn a_direction_pinned_to_millimetres_beside_a_far_held_heading_is_constrained() {
+        // Seed 34's stretch (docs/experiments.md, "seed 34's turned map"): y pinned to 5 mm
+        // (4·10⁴ m⁻²) beside a heading held by walls 3–4 m away (2.5·10⁶ in θ·1 m), 1.6 % of
+        // it; nothing along x (a corridor). With the matcher's settings y is kept, x is not.
+        let h = Matrix3::new(1e-4, 0.0, 0.0, 0.0, 4.0e4, 0.0, 0.0, 0.0, 2.5e6);
+        let fine = crate::localize::ndt::NdtConfig::default();
+        let min_eigenvalue = 1.0 / (fine.max_sigma_m * fine.max_sigma_m);
+        let c = Constraint::analyse(&h, &h, min_eigenvalue, fine.min_information_ratio);
+        assert_eq!(c.constrained, [false, true, true]);
+        assert!(c.directions[1][1].abs() > 0.99, "{:?}", c.directions);
+    }
 }

@@ -14,7 +14,7 @@
 //! A closure is accepted only when the point-to-line fit itself vouches for it:
 //! - the matcher's own refusals (too few returns, mostly unknown, poor fit);
 //! - all three directions constrained by the fit's information matrix (each pinned to 10 cm
-//!   or better and at least 2 % of the strongest, the information its map's uncertain
+//!   or better and at least 1 % of the strongest, the information its map's uncertain
 //!   normals could fake taken off: [`super::constraint`]), not only two (a corridor);
 //! - an inlier test at the matched pose: at least [`ClosureConfig::min_score`] of the returns
 //!   on known ground lie on a surface of the local map within the fit's gate (4 σ of their
