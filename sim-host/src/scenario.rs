@@ -352,7 +352,10 @@ impl Setup {
         run.body.slip = spec.slip.config();
         run.mission.localize.enabled = spec.localize;
         if spec.pose_graph && !spec.localize {
-            return Err("--pose-graph: on needs the scan matcher, --localize on".into());
+            return Err(
+                "--pose-graph: on needs the scan matcher, --localize on (the graph's keyframes are its matched scans)"
+                    .into(),
+            );
         }
         run.mission.localize.graph.enabled = spec.pose_graph;
         run.mission.localize.calibration.enabled = spec.self_calibration;

@@ -262,13 +262,8 @@ pub fn spec_from_args(args: &Args) -> Result<ScenarioSpec, String> {
         None => None,
     };
     let localize = on_off("--localize", &args.localize)?;
+    // `--pose-graph on` without `--localize on` is refused by `Setup::new`.
     let pose_graph = on_off("--pose-graph", &args.pose_graph)?;
-    if pose_graph && !localize {
-        return Err(
-            "--pose-graph: on needs the scan matcher, --localize on (the graph's keyframes are its matched scans)"
-                .into(),
-        );
-    }
     let self_calibration = on_off("--self-calibration", &args.self_calibration)?;
     Ok(ScenarioSpec {
         map: args.map.clone(),
