@@ -45,6 +45,12 @@
 //! constrained directions, the keyframes so far). With `ATTRIB=1`, `STEPS=FILE` writes every
 //! step's heading and position error change to `FILE`.
 //!
+//! What in the laser's noise makes the drift (2026-12-08, second session): `SIM_SIGMA=M` adds
+//! `M` metres of range noise that does not grow with the range to the simulated laser, which
+//! the core is not told about (with `NOISE=0`: a laser whose noise the core ignores);
+//! `LOC_MINW` and `LOC_THICK` set the refinement's `min_block_weight` and
+//! `max_thickness_ratio`.
+//!
 //! `LOC_L` sets the matcher's length scale (`MatchConfig::length_scale_m`); `LOC_SEARCH_SEE=0`
 //! turns off `MatchConfig::search_see_through` (on by default: the search's basin only if its
 //! beams cross no more walls).
@@ -232,6 +238,12 @@ fn main() {
     if let Some(v) = env("LOC_REST") {
         m.localize.match_at_rest = v != 0.0;
     }
+    if let Some(v) = env("LOC_MINW") {
+        m.localize.matcher.fine.min_block_weight = v;
+    }
+    if let Some(v) = env("LOC_THICK") {
+        m.localize.matcher.fine.max_thickness_ratio = v;
+    }
     if let Some(v) = env("LOC_CAL") {
         m.localize.calibration.enabled = v != 0.0;
     }
@@ -276,6 +288,9 @@ fn main() {
         cfg.body.slip.rotation_var_rad2_per_rad *= v;
         cfg.body.slip.drift_var_rad2_per_m *= v;
         cfg.body.slip.wheels.fast_turn_var_rad2_per_rad *= v;
+    }
+    if let Some(v) = env("SIM_SIGMA") {
+        cfg.laser_range_sigma_m = v;
     }
     let mut r = Runner::new(world, Dynamics::new(), cfg).unwrap();
     let mut last = -1.0;
