@@ -922,12 +922,29 @@ mod tests {
     use crate::grid::LogOddsBounds;
     use crate::random::{below, seeded};
 
-    fn temp_dir(name: &str) -> PathBuf {
+    /// A directory of the test's own under the system's temporary directory, removed with
+    /// what the test wrote into it when the test ends (passed or failed).
+    struct TempDir(PathBuf);
+
+    impl core::ops::Deref for TempDir {
+        type Target = Path;
+        fn deref(&self) -> &Path {
+            &self.0
+        }
+    }
+
+    impl Drop for TempDir {
+        fn drop(&mut self) {
+            let _ = fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn temp_dir(name: &str) -> TempDir {
         let d =
             std::env::temp_dir().join(format!("papillon-mapfile-{name}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&d);
         fs::create_dir_all(&d).unwrap();
-        d
+        TempDir(d)
     }
 
     #[test]

@@ -135,7 +135,10 @@ fn a_mission_recorded_as_mcap_reads_back_with_every_channel() {
     let target = &decision["targets"][0];
     let sphere = &topics["/targets"].3[0]["entities"][0]["spheres"][0]["pose"]["position"];
     assert_eq!((&sphere["x"], &sphere["y"]), (&target[0], &target[1]));
-    let _ = std::fs::remove_file(&path);
+    // The recording and the directory of this run's own that holds it.
+    if let Some(dir) = path.parent() {
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }
 
 #[test]
